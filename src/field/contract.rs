@@ -1,0 +1,86 @@
+//! The one contract every node of the field answers (DESIGN.md "What every node can answer").
+
+use glam::{Vec2, Vec3};
+
+use super::bounds::{Aabb, Interval, Rect, ZBands};
+use super::falloff::T;
+
+/// A scalar field `f: R³ → R` in the BlobTree convention: solid where `f > T`.
+///
+/// Every bound must be **sound**: the true values lie inside the reported interval, the true
+/// slope never exceeds the reported Lipschitz bound, and the surface never lies outside the
+/// reported z-bands. Tests sample every implementation to check it.
+pub trait Field: Send + Sync {
+    /// `f(p)`.
+    fn value(&self, p: Vec3) -> f32;
+
+    /// `(f(p), ∇f(p))`; analytic where the maths allows.
+    fn value_grad(&self, p: Vec3) -> (f32, Vec3);
+
+    /// A box outside which `f = 0`.
+    fn support(&self) -> Aabb;
+
+    /// A range containing `f(p)` for every `p` in `b`.
+    fn interval(&self, b: &Aabb) -> Interval;
+
+    /// A global Lipschitz bound: `|f(p) − f(q)| ≤ λ‖p − q‖`.
+    fn lipschitz(&self) -> f32;
+
+    /// A Lipschitz bound valid for pairs of points inside `b`.
+    fn lipschitz_box(&self, b: &Aabb) -> f32;
+
+    /// A Lipschitz bound valid on the segment `[a, b]`.
+    fn lipschitz_segment(&self, a: Vec3, b: Vec3) -> f32 {
+        self.lipschitz_box(&Aabb::new(a, b))
+    }
+
+    /// Adds to `out` the z-intervals where the surface `f = T` can lie over the footprint
+    /// `fp`, searched inside `z`. The default subdivides `z` with [`Field::interval`].
+    fn z_bands(&self, fp: &Rect, z: Interval, out: &mut ZBands) {
+        z_bands_by_interval(self, fp, z, out);
+    }
+
+    /// When, over the footprint `fp`, the field is a heightfield's, returns it: for
+    /// `p` in `fp × e.z`, `f(p) > T ⇔ p.z < e.height(p.xy)` and the surface is `z = h`.
+    /// The mesher then places vertices straight on the elevation (seed 002 §7).
+    fn elevation(&self, _fp: &Rect) -> Option<Elevation<'_>> {
+        None
+    }
+}
+
+/// An elevation function `h(x, y)` in the tree's frame (metres).
+pub trait ElevationSource: Send + Sync {
+    /// `h(xy)`; may be NaN outside the source's domain.
+    fn height(&self, xy: Vec2) -> f32;
+}
+
+/// Answer of [`Field::elevation`]: the field is a heightfield `h` inside `fp × z`.
+#[derive(Clone, Copy)]
+pub struct Elevation<'a> {
+    /// The elevation.
+    pub source: &'a dyn ElevationSource,
+    /// Where the equivalence holds.
+    pub z: Interval,
+}
+
+/// Depth of the generic z-band search: bands are resolved to `z.width() / 2^depth`.
+const Z_BAND_DEPTH: u32 = 6;
+
+/// Sound z-bands by interval subdivision: keeps every slab whose interval contains `T`.
+pub fn z_bands_by_interval<F: Field + ?Sized>(f: &F, fp: &Rect, z: Interval, out: &mut ZBands) {
+    fn rec<F: Field + ?Sized>(f: &F, fp: &Rect, z: Interval, depth: u32, out: &mut ZBands) {
+        if !f.interval(&fp.extrude(z)).contains(T) {
+            return;
+        }
+        if depth == 0 {
+            out.push(z);
+            return;
+        }
+        let m = z.mid();
+        rec(f, fp, Interval::new(z.lo, m), depth - 1, out);
+        rec(f, fp, Interval::new(m, z.hi), depth - 1, out);
+    }
+    if !z.is_empty() {
+        rec(f, fp, z, Z_BAND_DEPTH, out);
+    }
+}

@@ -1,0 +1,9 @@
+//! The compiled implicit construction tree and what its nodes answer.
+
+pub mod bounds;
+pub mod contract;
+pub mod falloff;
+
+pub use bounds::{Aabb, Interval, Rect, ZBands};
+pub use contract::{Elevation, ElevationSource, Field};
+pub use falloff::T;

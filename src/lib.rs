@@ -1,0 +1,7 @@
+//! karstic: terrain modelling with implicit construction trees.
+//!
+//! A DEM becomes an implicit primitive, Feature Curves become an S-field primitive, and
+//! both combine with skeletal primitives through blend, carve and warp nodes. The compiled
+//! [`field`] tree is the single thing the mesher and the tracers consume.
+
+pub mod field;
