@@ -5,3 +5,4 @@
 //! [`field`] tree is the single thing the mesher and the tracers consume.
 
 pub mod field;
+pub mod scene;

@@ -1,0 +1,164 @@
+//! Validated numbers for tree files.
+//!
+//! These check themselves while the file is parsed, so RON reports a bad value with the
+//! line and column where it stands ("expected a finite number", "radius must be > 0").
+//! Spec types of every node use them instead of bare `f32`.
+
+use std::fmt;
+
+use glam::{Vec2, Vec3};
+use serde::de::Error as _;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+fn finite<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
+    let v = f64::deserialize(d)?;
+    if !v.is_finite() || v.abs() > f32::MAX as f64 {
+        return Err(D::Error::custom(format!("expected a finite number, found {v}")));
+    }
+    Ok(v as f32)
+}
+
+macro_rules! checked_scalar {
+    ($(#[$doc:meta])* $name:ident, $ok:expr, $what:literal) => {
+        $(#[$doc])*
+        #[derive(Clone, Copy, Debug, PartialEq, PartialOrd, Default)]
+        pub struct $name(pub f32);
+
+        impl $name {
+            /// The value, after a check that panics only on programmer error.
+            pub fn new(v: f32) -> Self {
+                assert!(v.is_finite() && $ok(v), concat!("expected ", $what));
+                $name(v)
+            }
+
+            /// The number.
+            pub fn get(self) -> f32 {
+                self.0
+            }
+        }
+
+        impl<'de> Deserialize<'de> for $name {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                let v = finite(d)?;
+                if !$ok(v) {
+                    return Err(D::Error::custom(format!(concat!("expected ", $what, ", found {}"), v)));
+                }
+                Ok($name(v))
+            }
+        }
+
+        impl Serialize for $name {
+            fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                s.serialize_f32(self.0)
+            }
+        }
+
+        impl fmt::Display for $name {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                self.0.fmt(f)
+            }
+        }
+    };
+}
+
+checked_scalar!(
+    /// Any finite number.
+    Finite,
+    |_v: f32| true,
+    "a finite number"
+);
+checked_scalar!(
+    /// A finite number `> 0` (radii, falloffs, sizes, wavelengths).
+    Positive,
+    |v: f32| v > 0.0,
+    "a number > 0"
+);
+checked_scalar!(
+    /// A finite number `≥ 0` (amplitudes, depths).
+    NonNegative,
+    |v: f32| v >= 0.0,
+    "a number >= 0"
+);
+checked_scalar!(
+    /// A number in `[0, 1]` (weights, fractions).
+    Unit,
+    |v: f32| (0.0..=1.0).contains(&v),
+    "a number in [0, 1]"
+);
+
+/// A point or vector `(x, y, z)` with finite coordinates, in metres.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct P3(pub Vec3);
+
+impl<'de> Deserialize<'de> for P3 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let [x, y, z] = <[Finite; 3]>::deserialize(d)?;
+        Ok(P3(Vec3::new(x.0, y.0, z.0)))
+    }
+}
+
+impl Serialize for P3 {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        (self.0.x, self.0.y, self.0.z).serialize(s)
+    }
+}
+
+/// A 2D point `(x, y)` with finite coordinates, in metres.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct P2(pub Vec2);
+
+impl<'de> Deserialize<'de> for P2 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let [x, y] = <[Finite; 2]>::deserialize(d)?;
+        Ok(P2(Vec2::new(x.0, y.0)))
+    }
+}
+
+impl Serialize for P2 {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        (self.0.x, self.0.y).serialize(s)
+    }
+}
+
+/// A non-zero direction `(x, y, z)`; normalised when used.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Dir3(pub Vec3);
+
+impl<'de> Deserialize<'de> for Dir3 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let P3(v) = P3::deserialize(d)?;
+        if v.length_squared() < 1e-12 {
+            return Err(D::Error::custom("expected a non-zero direction"));
+        }
+        Ok(Dir3(v))
+    }
+}
+
+impl Serialize for Dir3 {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        P3(self.0).serialize(s)
+    }
+}
+
+impl Dir3 {
+    /// The unit vector.
+    pub fn unit(self) -> Vec3 {
+        self.0.normalize()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rejects_bad_numbers_with_position() {
+        let e = ron::from_str::<Positive>("\n  -2.0").unwrap_err();
+        assert_eq!(e.span.start.line, 2);
+        assert!(e.to_string().contains("expected a number > 0"), "{e}");
+        assert!(ron::from_str::<Finite>("NaN").is_err());
+        assert!(ron::from_str::<Finite>("inf").is_err());
+        assert!(ron::from_str::<Dir3>("(0, 0, 0)").is_err());
+        assert_eq!(ron::from_str::<P3>("(1, 2.5, -3)").unwrap().0, Vec3::new(1.0, 2.5, -3.0));
+    }
+}
