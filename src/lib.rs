@@ -4,5 +4,7 @@
 //! both combine with skeletal primitives through blend, carve and warp nodes. The compiled
 //! [`field`] tree is the single thing the mesher and the tracers consume.
 
+pub mod cli;
 pub mod field;
+pub mod io;
 pub mod scene;

@@ -1,10 +1,9 @@
 //! Boxes, intervals and the 2D footprints used by every bound in the field contract.
 
 use glam::{Vec2, Vec3};
-use serde::{Deserialize, Serialize};
 
 /// An axis-aligned box in metres. An *empty* box has `min > max` on some axis.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
     /// Lower corner.
     pub min: Vec3,

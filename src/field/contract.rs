@@ -40,6 +40,26 @@ pub trait Field: Send + Sync {
         z_bands_by_interval(self, fp, z, out);
     }
 
+    /// A field equal to this one inside `region` and cheaper to evaluate there (children
+    /// that cannot matter in `region` dropped), or `None` when nothing can be dropped.
+    fn prune(&self, _region: &Aabb) -> Option<Box<dyn Field + '_>> {
+        None
+    }
+
+    /// Values on a block of grid points: `out[i + nx·(j + ny·k)] = f(origin + (i, j, k)·step)`
+    /// for `dims = [nx, ny, nz]`. Trees override it to prune once per block.
+    fn eval_block(&self, origin: Vec3, step: Vec3, dims: [usize; 3], out: &mut [f32]) {
+        let [nx, ny, nz] = dims;
+        for k in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    let p = origin + Vec3::new(i as f32, j as f32, k as f32) * step;
+                    out[i + nx * (j + ny * k)] = self.value(p);
+                }
+            }
+        }
+    }
+
     /// When, over the footprint `fp`, the field is a heightfield's, returns it: for
     /// `p` in `fp × e.z`, `f(p) > T ⇔ p.z < e.height(p.xy)` and the surface is `z = h`.
     /// The mesher then places vertices straight on the elevation (seed 002 §7).
