@@ -1,9 +1,26 @@
 //! The compiled implicit construction tree and what its nodes answer.
+//!
+//! Layout follows fidget's split: building ([`TreeBuilder`], the scene compiler), the flat
+//! arena ([`Tree`], [`node`]), and the evaluators (point values and gradients in `eval`,
+//! box bounds in `box_bounds`, z-bands in `zband`, pruning in `prune`, grids in [`grid`]).
 
 pub mod bounds;
+mod box_bounds;
+pub mod bvh;
 pub mod contract;
+mod eval;
 pub mod falloff;
+pub mod grid;
+pub mod node;
+mod prune;
+mod tree;
+mod zband;
 
 pub use bounds::{Aabb, Interval, Rect, ZBands};
+pub use box_bounds::map_box;
 pub use contract::{Elevation, ElevationSource, Field};
 pub use falloff::T;
+pub use grid::{Grid, eval_grid, eval_grid_naive};
+pub use node::{Node, NodeId};
+pub use prune::BRICK;
+pub use tree::{NodeInfo, SubTree, Tree, TreeBuilder};

@@ -1,0 +1,92 @@
+//! Bounds of the tree over a box: sound value intervals and local Lipschitz constants.
+
+use glam::Affine3A;
+
+use super::bounds::{Aabb, Interval};
+use super::falloff::T;
+use super::node::{Node, NodeId};
+use super::tree::Tree;
+
+/// The box of `b`'s corners mapped by `m`: contains the image of `b`.
+pub fn map_box(m: &Affine3A, b: &Aabb) -> Aabb {
+    Aabb::from_points(b.corners().map(|c| m.transform_point3(c)))
+}
+
+impl Tree {
+    /// Calls `visit` for each child of the blend `children` whose support overlaps `b`.
+    pub(super) fn blend_children_in(
+        &self,
+        children: &[NodeId],
+        bvh: &Option<super::bvh::ChildBvh>,
+        b: &Aabb,
+        mut visit: impl FnMut(NodeId),
+    ) {
+        match bvh {
+            Some(bvh) => bvh.overlapping(b, |i| visit(children[i])),
+            None => children
+                .iter()
+                .filter(|&&c| self.info[c as usize].support.overlaps(b))
+                .for_each(|&c| visit(c)),
+        }
+    }
+
+    /// A range containing every value of node `id` over `b`.
+    pub fn interval_at(&self, id: NodeId, b: &Aabb) -> Interval {
+        let info = &self.info[id as usize];
+        if !info.support.overlaps(b) {
+            return Interval::ZERO;
+        }
+        let r = match &self.nodes[id as usize] {
+            Node::Constant(v) => Interval::point(*v),
+            Node::Leaf(f) => f.interval(b),
+            Node::Blend { children, bvh } => {
+                let mut sum = Interval::ZERO;
+                self.blend_children_in(children, bvh, b, |c| sum = sum.add(self.interval_at(c, b)));
+                sum
+            }
+            Node::Union(children) => children
+                .iter()
+                .map(|&c| self.interval_at(c, b))
+                .reduce(Interval::max)
+                .unwrap_or(Interval::ZERO),
+            Node::Intersection(children) => children
+                .iter()
+                .map(|&c| self.interval_at(c, b))
+                .reduce(Interval::min)
+                .unwrap_or(Interval::ZERO),
+            Node::Difference { base, carves } => carves.iter().fold(self.interval_at(*base, b), |r, &c| {
+                let ci = self.interval_at(c, b);
+                r.min(Interval::new(2.0 * T - ci.hi, 2.0 * T - ci.lo))
+            }),
+            Node::Affine { child, to_child, .. } => self.interval_at(*child, &map_box(to_child, b)),
+        };
+        if info.support.contains_box(b) { r } else { r.hull(Interval::ZERO) }
+    }
+
+    /// A Lipschitz bound of node `id` valid inside `b`.
+    pub fn lipschitz_box_at(&self, id: NodeId, b: &Aabb) -> f32 {
+        if !self.info[id as usize].support.overlaps(b) {
+            return 0.0;
+        }
+        let max_of = |children: &[NodeId]| {
+            children
+                .iter()
+                .map(|&c| self.lipschitz_box_at(c, b))
+                .fold(0.0, f32::max)
+        };
+        match &self.nodes[id as usize] {
+            Node::Constant(_) => 0.0,
+            Node::Leaf(f) => f.lipschitz_box(b),
+            Node::Blend { children, bvh } => {
+                let mut sum = 0.0;
+                self.blend_children_in(children, bvh, b, |c| sum += self.lipschitz_box_at(c, b));
+                sum
+            }
+            Node::Union(children) | Node::Intersection(children) => max_of(children),
+            Node::Difference { base, carves } => max_of(carves).max(self.lipschitz_box_at(*base, b)),
+            Node::Affine { child, to_child, stretch } => {
+                self.lipschitz_box_at(*child, &map_box(to_child, b)) * stretch
+            }
+        }
+    }
+}

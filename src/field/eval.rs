@@ -1,0 +1,87 @@
+//! Point evaluation of the tree: values and analytic gradients.
+
+use glam::Vec3;
+
+use super::falloff::T;
+use super::node::{Node, NodeId};
+use super::tree::Tree;
+
+impl Tree {
+    /// `f(p)` of node `id`.
+    pub fn value_at(&self, id: NodeId, p: Vec3) -> f32 {
+        let info = &self.info[id as usize];
+        if !info.support.contains(p) {
+            return 0.0;
+        }
+        match &self.nodes[id as usize] {
+            Node::Constant(v) => *v,
+            Node::Leaf(f) => f.value(p),
+            Node::Blend { children, bvh } => match bvh {
+                Some(bvh) => {
+                    let mut sum = 0.0;
+                    bvh.at_point(p, |i| sum += self.value_at(children[i], p));
+                    sum
+                }
+                None => children.iter().map(|&c| self.value_at(c, p)).sum(),
+            },
+            Node::Union(children) => children.iter().map(|&c| self.value_at(c, p)).fold(f32::NEG_INFINITY, f32::max),
+            Node::Intersection(children) => children.iter().map(|&c| self.value_at(c, p)).fold(f32::INFINITY, f32::min),
+            Node::Difference { base, carves } => carves
+                .iter()
+                .fold(self.value_at(*base, p), |v, &c| v.min(2.0 * T - self.value_at(c, p))),
+            Node::Affine { child, to_child, .. } => self.value_at(*child, to_child.transform_point3(p)),
+        }
+    }
+
+    /// `(f(p), ∇f(p))` of node `id`. At the kinks of min/max the gradient of the selected
+    /// child is returned.
+    pub fn value_grad_at(&self, id: NodeId, p: Vec3) -> (f32, Vec3) {
+        let info = &self.info[id as usize];
+        if !info.support.contains(p) {
+            return (0.0, Vec3::ZERO);
+        }
+        let pick = |children: &[NodeId], better: fn(f32, f32) -> bool| {
+            let mut best = self.value_grad_at(children[0], p);
+            for &c in &children[1..] {
+                let vg = self.value_grad_at(c, p);
+                if better(vg.0, best.0) {
+                    best = vg;
+                }
+            }
+            best
+        };
+        match &self.nodes[id as usize] {
+            Node::Constant(v) => (*v, Vec3::ZERO),
+            Node::Leaf(f) => f.value_grad(p),
+            Node::Blend { children, bvh } => {
+                let mut acc = (0.0, Vec3::ZERO);
+                let mut add = |c: NodeId| {
+                    let (v, g) = self.value_grad_at(c, p);
+                    acc.0 += v;
+                    acc.1 += g;
+                };
+                match bvh {
+                    Some(bvh) => bvh.at_point(p, |i| add(children[i])),
+                    None => children.iter().for_each(|&c| add(c)),
+                }
+                acc
+            }
+            Node::Union(children) => pick(children, |a, b| a > b),
+            Node::Intersection(children) => pick(children, |a, b| a < b),
+            Node::Difference { base, carves } => {
+                let mut best = self.value_grad_at(*base, p);
+                for &c in carves.iter() {
+                    let (v, g) = self.value_grad_at(c, p);
+                    if 2.0 * T - v < best.0 {
+                        best = (2.0 * T - v, -g);
+                    }
+                }
+                best
+            }
+            Node::Affine { child, to_child, .. } => {
+                let (v, g) = self.value_grad_at(*child, to_child.transform_point3(p));
+                (v, Vec3::from(to_child.matrix3.transpose() * glam::Vec3A::from(g)))
+            }
+        }
+    }
+}

@@ -1,0 +1,302 @@
+//! The compiled tree: a flat arena of nodes in post-order with their cached bounds.
+
+use std::sync::Arc;
+
+use glam::{Affine3A, Vec3};
+
+use super::bounds::{Aabb, Interval, Rect, ZBands};
+use super::bvh::{BVH_MIN_CHILDREN, ChildBvh};
+use super::contract::{Elevation, Field};
+use super::falloff::T;
+use super::node::{Node, NodeId, spectral_norm};
+
+/// What the compiler caches for every node.
+#[derive(Clone, Debug)]
+pub struct NodeInfo {
+    /// Where the node can be non-zero.
+    pub support: Aabb,
+    /// A range containing every value of the node.
+    pub range: Interval,
+    /// Global Lipschitz bound.
+    pub lipschitz: f32,
+    /// The user's name for the node, if any.
+    pub name: Option<String>,
+}
+
+/// A compiled implicit construction tree: the single thing the mesher, the tracers and the
+/// editor consume. It answers the whole [`Field`] contract.
+pub struct Tree {
+    pub(super) nodes: Vec<Node>,
+    pub(super) info: Vec<NodeInfo>,
+    pub(super) root: NodeId,
+}
+
+/// Builds a [`Tree`] bottom-up: children first, then their parents.
+#[derive(Default)]
+pub struct TreeBuilder {
+    nodes: Vec<Node>,
+    info: Vec<NodeInfo>,
+}
+
+impl TreeBuilder {
+    /// An empty builder.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn push(&mut self, node: Node, name: Option<String>) -> NodeId {
+        let info = self.compute_info(&node, name);
+        self.nodes.push(node);
+        self.info.push(info);
+        (self.nodes.len() - 1) as NodeId
+    }
+
+    /// A leaf field.
+    pub fn leaf(&mut self, field: Arc<dyn Field>, name: Option<String>) -> NodeId {
+        self.push(Node::Leaf(field), name)
+    }
+
+    /// A constant field (its support is everything when non-zero).
+    pub fn constant(&mut self, v: f32, name: Option<String>) -> NodeId {
+        self.push(Node::Constant(v), name)
+    }
+
+    /// `Σ children`.
+    pub fn blend(&mut self, children: Vec<NodeId>, name: Option<String>) -> NodeId {
+        let bvh = (children.len() >= BVH_MIN_CHILDREN).then(|| {
+            let supports: Vec<Aabb> = children.iter().map(|&c| self.info[c as usize].support).collect();
+            ChildBvh::new(&supports)
+        });
+        self.push(
+            Node::Blend {
+                children: children.into(),
+                bvh,
+            },
+            name,
+        )
+    }
+
+    /// `max children`.
+    pub fn union(&mut self, children: Vec<NodeId>, name: Option<String>) -> NodeId {
+        self.push(Node::Union(children.into()), name)
+    }
+
+    /// `min children`.
+    pub fn intersection(&mut self, children: Vec<NodeId>, name: Option<String>) -> NodeId {
+        self.push(Node::Intersection(children.into()), name)
+    }
+
+    /// `base` with every `carves` subtree removed.
+    pub fn difference(&mut self, base: NodeId, carves: Vec<NodeId>, name: Option<String>) -> NodeId {
+        self.push(
+            Node::Difference {
+                base,
+                carves: carves.into(),
+            },
+            name,
+        )
+    }
+
+    /// `child` moved by `to_parent` (child space → parent space); must be invertible.
+    pub fn transform(&mut self, child: NodeId, to_parent: Affine3A, name: Option<String>) -> NodeId {
+        let to_child = to_parent.inverse();
+        let stretch = spectral_norm(to_child.matrix3);
+        self.push(
+            Node::Affine {
+                child,
+                to_child,
+                stretch,
+            },
+            name,
+        )
+    }
+
+    /// Finishes the tree with `root` as its root.
+    pub fn build(self, root: NodeId) -> Tree {
+        Tree {
+            nodes: self.nodes,
+            info: self.info,
+            root,
+        }
+    }
+
+    fn compute_info(&self, node: &Node, name: Option<String>) -> NodeInfo {
+        let info = |c: &NodeId| &self.info[*c as usize];
+        let everywhere = Aabb::new(Vec3::splat(-f32::MAX), Vec3::splat(f32::MAX));
+        let (support, range, lipschitz) = match node {
+            Node::Constant(v) => (
+                if *v == 0.0 { Aabb::EMPTY } else { everywhere },
+                Interval::point(*v),
+                0.0,
+            ),
+            Node::Leaf(f) => {
+                let s = f.support();
+                (s, f.interval(&s).hull(Interval::ZERO), f.lipschitz())
+            }
+            Node::Blend { children, bvh } => {
+                let support = children.iter().fold(Aabb::EMPTY, |b, c| b.union(info(c).support));
+                let range = children.iter().fold(Interval::ZERO, |r, c| r.add(info(c).range));
+                // ∇ of a sum is the sum of the gradients of the children non-zero at a point:
+                // bound it by the heaviest group of mutually overlapping supports.
+                let lipschitz = match bvh {
+                    Some(bvh) => children
+                        .iter()
+                        .map(|c| {
+                            let mut sum = 0.0;
+                            bvh.overlapping(&info(c).support, |j| sum += info(&children[j]).lipschitz);
+                            sum
+                        })
+                        .fold(0.0, f32::max),
+                    None => children.iter().map(|c| info(c).lipschitz).sum(),
+                };
+                (support, range, lipschitz)
+            }
+            Node::Union(children) | Node::Intersection(children) => {
+                let is_union = matches!(node, Node::Union(_));
+                let ranges = children.iter().map(|c| info(c).range);
+                let range = if is_union {
+                    ranges.reduce(Interval::max)
+                } else {
+                    ranges.reduce(Interval::min)
+                }
+                .unwrap_or(Interval::ZERO);
+                let any_negative = children.iter().any(|c| info(c).range.lo < 0.0);
+                let hull = children.iter().fold(Aabb::EMPTY, |b, c| b.union(info(c).support));
+                let support = if is_union || any_negative {
+                    hull
+                } else {
+                    children.iter().fold(hull, |b, c| b.intersection(info(c).support))
+                };
+                let lipschitz = children.iter().map(|c| info(c).lipschitz).fold(0.0, f32::max);
+                (support, range.hull(Interval::ZERO), lipschitz)
+            }
+            Node::Difference { base, carves } => {
+                let carve_range = carves.iter().fold(Interval::ZERO, |r, c| r.max(info(c).range));
+                let range = info(base).range.min(Interval::new(2.0 * T - carve_range.hi, 2.0 * T - carve_range.lo));
+                let support = if carve_range.hi > 2.0 * T {
+                    carves.iter().fold(info(base).support, |b, c| b.union(info(c).support))
+                } else {
+                    info(base).support
+                };
+                let lipschitz = carves.iter().map(|c| info(c).lipschitz).fold(info(base).lipschitz, f32::max);
+                (support, range.hull(Interval::ZERO), lipschitz)
+            }
+            Node::Affine { child, to_child, stretch } => {
+                let s = info(child).support;
+                let to_parent = to_child.inverse();
+                let support = if s.is_empty() {
+                    s
+                } else {
+                    Aabb::from_points(s.corners().map(|c| to_parent.transform_point3(c)))
+                };
+                (support, info(child).range, info(child).lipschitz * stretch)
+            }
+        };
+        NodeInfo {
+            support,
+            range,
+            lipschitz,
+            name,
+        }
+    }
+}
+
+impl Tree {
+    /// The root node.
+    pub fn root(&self) -> NodeId {
+        self.root
+    }
+
+    /// All nodes, children before parents.
+    pub fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+
+    /// Cached bounds and name of a node.
+    pub fn info(&self, id: NodeId) -> &NodeInfo {
+        &self.info[id as usize]
+    }
+
+    /// The node with the user name `name`.
+    pub fn find(&self, name: &str) -> Option<NodeId> {
+        self.info.iter().position(|i| i.name.as_deref() == Some(name)).map(|i| i as NodeId)
+    }
+
+    /// The subtree rooted at `id` as a tree of its own (shares leaves, no copy of data).
+    pub fn subtree(&self, id: NodeId) -> SubTree<'_> {
+        SubTree { tree: self, id }
+    }
+}
+
+/// A view of one node of a tree as a [`Field`].
+#[derive(Clone, Copy)]
+pub struct SubTree<'t> {
+    pub(super) tree: &'t Tree,
+    pub(super) id: NodeId,
+}
+
+impl Field for SubTree<'_> {
+    fn value(&self, p: Vec3) -> f32 {
+        self.tree.value_at(self.id, p)
+    }
+    fn value_grad(&self, p: Vec3) -> (f32, Vec3) {
+        self.tree.value_grad_at(self.id, p)
+    }
+    fn support(&self) -> Aabb {
+        self.tree.info(self.id).support
+    }
+    fn interval(&self, b: &Aabb) -> Interval {
+        self.tree.interval_at(self.id, b)
+    }
+    fn lipschitz(&self) -> f32 {
+        self.tree.info(self.id).lipschitz
+    }
+    fn lipschitz_box(&self, b: &Aabb) -> f32 {
+        self.tree.lipschitz_box_at(self.id, b)
+    }
+    fn z_bands(&self, fp: &Rect, z: Interval, out: &mut ZBands) {
+        self.tree.z_bands_at(self.id, fp, z, out)
+    }
+    fn elevation(&self, fp: &Rect) -> Option<Elevation<'_>> {
+        self.tree.elevation_at(self.id, fp)
+    }
+    fn prune(&self, region: &Aabb) -> Option<Box<dyn Field + '_>> {
+        Some(Box::new(self.tree.pruned(self.id, region)))
+    }
+    fn eval_block(&self, origin: Vec3, step: Vec3, dims: [usize; 3], out: &mut [f32]) {
+        self.tree.eval_block_at(self.id, origin, step, dims, out)
+    }
+}
+
+impl Field for Tree {
+    fn value(&self, p: Vec3) -> f32 {
+        self.value_at(self.root, p)
+    }
+    fn value_grad(&self, p: Vec3) -> (f32, Vec3) {
+        self.value_grad_at(self.root, p)
+    }
+    fn support(&self) -> Aabb {
+        self.info(self.root).support
+    }
+    fn interval(&self, b: &Aabb) -> Interval {
+        self.interval_at(self.root, b)
+    }
+    fn lipschitz(&self) -> f32 {
+        self.info(self.root).lipschitz
+    }
+    fn lipschitz_box(&self, b: &Aabb) -> f32 {
+        self.lipschitz_box_at(self.root, b)
+    }
+    fn z_bands(&self, fp: &Rect, z: Interval, out: &mut ZBands) {
+        self.z_bands_at(self.root, fp, z, out)
+    }
+    fn elevation(&self, fp: &Rect) -> Option<Elevation<'_>> {
+        self.elevation_at(self.root, fp)
+    }
+    fn prune(&self, region: &Aabb) -> Option<Box<dyn Field + '_>> {
+        Some(Box::new(self.pruned(self.root, region)))
+    }
+    fn eval_block(&self, origin: Vec3, step: Vec3, dims: [usize; 3], out: &mut [f32]) {
+        self.eval_block_at(self.root, origin, step, dims, out)
+    }
+}
