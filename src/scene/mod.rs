@@ -1,5 +1,12 @@
-//! Tree files: the RON format users edit, its validation and its round trip.
+//! Tree files: the RON format users edit, its validation, compilation and edits.
 
+pub mod compile;
+pub mod edit;
+pub mod load;
+pub mod spec;
 pub mod value;
 
+pub use compile::{Compiled, compile_scene};
+pub use load::{SceneError, SceneFile, load, parse_scene, ron_options};
+pub use spec::{FORMAT_VERSION, NodeSpec, Scene};
 pub use value::{Dir3, Finite, NonNegative, P2, P3, Positive, Unit};

@@ -1,0 +1,143 @@
+//! Compiling a scene into the flat [`Tree`] the evaluators run.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use glam::{Affine3A, Quat};
+
+use super::load::{SceneError, SceneFile};
+use super::spec::{NodeSpec, Scene};
+use crate::field::{NodeId, Tree, TreeBuilder};
+
+/// A compiled scene: the tree, and for each node of the scene's root (pre-order, the order
+/// of [`NodeSpec::walk`]) the compiled node it became.
+pub struct Compiled {
+    /// The tree.
+    pub tree: Tree,
+    /// `(depth, node)` for each scene node of the root, in pre-order.
+    pub outline: Vec<(usize, NodeId)>,
+}
+
+struct Compiler<'s> {
+    scene: &'s Scene,
+    path: &'s Path,
+    base_dir: &'s Path,
+    builder: TreeBuilder,
+    named: BTreeMap<String, NodeId>,
+    outline: Vec<(usize, NodeId)>,
+    record: bool,
+}
+
+impl Compiler<'_> {
+    fn error(&self, node: &NodeSpec, message: impl Into<String>) -> SceneError {
+        SceneError::Node {
+            path: self.path.to_path_buf(),
+            node: node.name().map_or_else(|| node.kind().to_string(), |n| format!("{n:?}")),
+            message: message.into(),
+        }
+    }
+
+    fn node(&mut self, n: &NodeSpec, depth: usize) -> Result<NodeId, SceneError> {
+        if let Some(&id) = n.name().and_then(|name| self.named.get(name)) {
+            // Already compiled for an instance: share it.
+            if self.record {
+                self.outline.push((depth, id));
+            }
+            return Ok(id);
+        }
+        let slot = self.record.then(|| {
+            self.outline.push((depth, 0));
+            self.outline.len() - 1
+        });
+        let id = self.node_inner(n, depth)?;
+        if let Some(name) = n.name() {
+            self.named.insert(name.to_string(), id);
+        }
+        if let Some(slot) = slot {
+            self.outline[slot].1 = id;
+        }
+        Ok(id)
+    }
+
+    fn children(&mut self, cs: &[NodeSpec], depth: usize) -> Result<Vec<NodeId>, SceneError> {
+        cs.iter().map(|c| self.node(c, depth + 1)).collect()
+    }
+
+    fn node_inner(&mut self, n: &NodeSpec, depth: usize) -> Result<NodeId, SceneError> {
+        let name = n.name().map(str::to_string);
+        Ok(match n {
+            NodeSpec::Blend(x) => {
+                let cs = self.children(&x.children, depth)?;
+                self.builder.blend(cs, name)
+            }
+            NodeSpec::Union(x) | NodeSpec::Intersection(x) => {
+                if x.children.is_empty() {
+                    return Err(self.error(n, "needs at least one child"));
+                }
+                let cs = self.children(&x.children, depth)?;
+                if matches!(n, NodeSpec::Union(_)) {
+                    self.builder.union(cs, name)
+                } else {
+                    self.builder.intersection(cs, name)
+                }
+            }
+            NodeSpec::Difference(d) => {
+                let base = self.node(&d.base, depth + 1)?;
+                let carves = self.children(&d.carves, depth)?;
+                self.builder.difference(base, carves, name)
+            }
+            NodeSpec::Transform(t) => {
+                if t.scale.0.abs().min_element() < 1e-6 {
+                    return Err(self.error(n, "scale factors must be non-zero"));
+                }
+                let rotation = t
+                    .rotate
+                    .map_or(Quat::IDENTITY, |r| Quat::from_axis_angle(r.axis.unit(), r.degrees.0.to_radians()));
+                let m = Affine3A::from_scale_rotation_translation(t.scale.0, rotation, t.translate.0);
+                let child = self.node(&t.child, depth + 1)?;
+                self.builder.transform(child, m, name)
+            }
+            NodeSpec::Instance(i) => {
+                if let Some(&id) = self.named.get(&i.of) {
+                    return Ok(id);
+                }
+                let target = self
+                    .scene
+                    .find(&i.of)
+                    .ok_or_else(|| self.error(n, format!("unknown node referenced: {:?}", i.of)))?;
+                // Compile the referenced subtree once, outside the outline.
+                let record = std::mem::replace(&mut self.record, false);
+                let id = self.node(target, depth + 1);
+                self.record = record;
+                id?
+            }
+        })
+    }
+}
+
+impl SceneFile {
+    /// Compiles the scene into a tree.
+    pub fn compile(&self) -> Result<Compiled, SceneError> {
+        compile_scene(&self.scene, &self.path, &self.base_dir)
+    }
+}
+
+/// Compiles `scene`; asset paths are relative to `base_dir`, `path` names the file in errors.
+pub fn compile_scene(scene: &Scene, path: &Path, base_dir: &Path) -> Result<Compiled, SceneError> {
+    let mut c = Compiler {
+        scene,
+        path,
+        base_dir,
+        builder: TreeBuilder::new(),
+        named: BTreeMap::new(),
+        outline: Vec::new(),
+        record: true,
+    };
+    let _ = c.base_dir;
+    let root = c.node(&scene.root, 0)?;
+    let tree = c.builder.build(root);
+    Ok(Compiled {
+        tree,
+        outline: c.outline,
+    })
+}

@@ -1,0 +1,190 @@
+//! The serde types of a tree file: the scene and its node kinds.
+
+use serde::{Deserialize, Serialize};
+
+use super::value::{Dir3, Finite, P3};
+
+/// The tree-file format version this build reads and writes.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// A whole tree file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Format version; must be [`FORMAT_VERSION`].
+    pub version: u32,
+    /// Optional scene name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Global seed: every noise of the scene derives from it.
+    #[serde(default)]
+    pub seed: u32,
+    /// Named subtrees that are not drawn themselves but can be instanced.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub defs: Vec<NodeSpec>,
+    /// The tree.
+    pub root: NodeSpec,
+}
+
+/// One node of a tree file. In RON: `Blend(name: "root", children: [...])`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum NodeSpec {
+    /// Sum of the children (Wyvill blend).
+    Blend(Nary),
+    /// Max of the children.
+    Union(Nary),
+    /// Min of the children.
+    Intersection(Nary),
+    /// The base with the carves removed: `min(f_base, 2T − f_carve, …)`.
+    Difference(DifferenceSpec),
+    /// Affine placement of a subtree: scale, then rotate, then translate.
+    Transform(TransformSpec),
+    /// A reference to a named node (in `defs` or the tree), so it can be reused.
+    Instance(InstanceSpec),
+}
+
+/// An n-ary operator node.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Nary {
+    /// Unique node name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Children.
+    pub children: Vec<NodeSpec>,
+}
+
+/// A difference (carve) node.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DifferenceSpec {
+    /// Unique node name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// What is carved.
+    pub base: Box<NodeSpec>,
+    /// What carves it away.
+    pub carves: Vec<NodeSpec>,
+}
+
+/// A rotation by `degrees` about `axis` (right-handed).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rotation {
+    /// Rotation axis.
+    pub axis: Dir3,
+    /// Angle in degrees.
+    pub degrees: Finite,
+}
+
+/// An affine placement node.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransformSpec {
+    /// Unique node name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Translation in metres.
+    #[serde(default)]
+    pub translate: P3,
+    /// Rotation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotate: Option<Rotation>,
+    /// Per-axis scale; a negative factor mirrors (e.g. `(1, 1, -1)` turns a terrain upside
+    /// down). No factor may be 0.
+    #[serde(default = "unit_scale")]
+    pub scale: P3,
+    /// The placed subtree.
+    pub child: Box<NodeSpec>,
+}
+
+fn unit_scale() -> P3 {
+    P3(glam::Vec3::ONE)
+}
+
+/// A reference to another named node.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InstanceSpec {
+    /// Unique node name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Name of the referenced node.
+    pub of: String,
+}
+
+impl NodeSpec {
+    /// The node's kind as written in the file.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            NodeSpec::Blend(_) => "Blend",
+            NodeSpec::Union(_) => "Union",
+            NodeSpec::Intersection(_) => "Intersection",
+            NodeSpec::Difference(_) => "Difference",
+            NodeSpec::Transform(_) => "Transform",
+            NodeSpec::Instance(_) => "Instance",
+        }
+    }
+
+    /// The node's name.
+    pub fn name(&self) -> Option<&str> {
+        match self {
+            NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => n.name.as_deref(),
+            NodeSpec::Difference(n) => n.name.as_deref(),
+            NodeSpec::Transform(n) => n.name.as_deref(),
+            NodeSpec::Instance(n) => n.name.as_deref(),
+        }
+    }
+
+    /// Children, in order (the base of a difference first).
+    pub fn children(&self) -> Vec<&NodeSpec> {
+        match self {
+            NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => n.children.iter().collect(),
+            NodeSpec::Difference(d) => std::iter::once(&*d.base).chain(&d.carves).collect(),
+            NodeSpec::Transform(t) => vec![&*t.child],
+            NodeSpec::Instance(_) => Vec::new(),
+        }
+    }
+
+    /// Mutable access to the list a new child is appended to, if the node has one.
+    pub fn child_list_mut(&mut self) -> Option<&mut Vec<NodeSpec>> {
+        match self {
+            NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => Some(&mut n.children),
+            NodeSpec::Difference(d) => Some(&mut d.carves),
+            _ => None,
+        }
+    }
+
+    /// Mutable children, in the order of [`NodeSpec::children`].
+    pub fn children_mut(&mut self) -> Vec<&mut NodeSpec> {
+        match self {
+            NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => n.children.iter_mut().collect(),
+            NodeSpec::Difference(d) => std::iter::once(&mut *d.base).chain(d.carves.iter_mut()).collect(),
+            NodeSpec::Transform(t) => vec![&mut *t.child],
+            NodeSpec::Instance(_) => Vec::new(),
+        }
+    }
+
+    /// Visits this node and its descendants, parents first.
+    pub fn walk<'a>(&'a self, visit: &mut impl FnMut(&'a NodeSpec, usize)) {
+        fn rec<'a>(n: &'a NodeSpec, depth: usize, visit: &mut impl FnMut(&'a NodeSpec, usize)) {
+            visit(n, depth);
+            for c in n.children() {
+                rec(c, depth + 1, visit);
+            }
+        }
+        rec(self, 0, visit)
+    }
+}
+
+impl Scene {
+    /// Every node of the scene, `defs` first, parents before children.
+    pub fn all_nodes(&self) -> Vec<&NodeSpec> {
+        let mut v = Vec::new();
+        for d in &self.defs {
+            d.walk(&mut |n, _| v.push(n));
+        }
+        self.root.walk(&mut |n, _| v.push(n));
+        v
+    }
+}
