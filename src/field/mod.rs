@@ -3,7 +3,9 @@
 pub mod bounds;
 pub mod contract;
 pub mod falloff;
+pub mod noise;
 
 pub use bounds::{Aabb, Interval, Rect, ZBands};
 pub use contract::{Elevation, ElevationSource, Field};
 pub use falloff::T;
+pub use noise::{Fbm, NoiseSpec};
