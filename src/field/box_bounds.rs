@@ -59,6 +59,7 @@ impl Tree {
                 r.min(Interval::new(2.0 * T - ci.hi, 2.0 * T - ci.lo))
             }),
             Node::Affine { child, to_child, .. } => self.interval_at(*child, &map_box(to_child, b)),
+            Node::Warp { child, warp } => self.interval_at(*child, &b.dilate(warp.reach())),
         };
         if info.support.contains_box(b) { r } else { r.hull(Interval::ZERO) }
     }
@@ -87,6 +88,7 @@ impl Tree {
             Node::Affine { child, to_child, stretch } => {
                 self.lipschitz_box_at(*child, &map_box(to_child, b)) * stretch
             }
+            Node::Warp { child, warp } => self.lipschitz_box_at(*child, &b.dilate(warp.reach())) * warp.lipschitz(),
         }
     }
 }

@@ -30,6 +30,7 @@ impl Tree {
                 .iter()
                 .fold(self.value_at(*base, p), |v, &c| v.min(2.0 * T - self.value_at(c, p))),
             Node::Affine { child, to_child, .. } => self.value_at(*child, to_child.transform_point3(p)),
+            Node::Warp { child, warp } => self.value_at(*child, warp.apply(p)),
         }
     }
 
@@ -81,6 +82,11 @@ impl Tree {
             Node::Affine { child, to_child, .. } => {
                 let (v, g) = self.value_grad_at(*child, to_child.transform_point3(p));
                 (v, Vec3::from(to_child.matrix3.transpose() * glam::Vec3A::from(g)))
+            }
+            Node::Warp { child, warp } => {
+                let (q, j) = warp.apply_jacobian(p);
+                let (v, g) = self.value_grad_at(*child, q);
+                (v, j.transpose() * g)
             }
         }
     }

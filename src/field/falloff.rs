@@ -133,7 +133,10 @@ mod tests {
             let x = i as f32 * 0.01;
             let v = sigma(x, r);
             assert!(v >= last);
-            assert!((sigma(-x, r) - (2.0 * T - v)).abs() < 1e-6, "odd about (0, T)");
+            assert!(
+                (sigma(-x, r) - (2.0 * T - v)).abs() < 1e-6,
+                "odd about (0, T)"
+            );
             last = v;
         }
     }

@@ -12,8 +12,10 @@ mod eval;
 pub mod falloff;
 pub mod grid;
 pub mod node;
+pub mod noise;
 mod prune;
 mod tree;
+pub mod warp;
 mod zband;
 
 pub use bounds::{Aabb, Interval, Rect, ZBands};
@@ -22,5 +24,7 @@ pub use contract::{Elevation, ElevationSource, Field};
 pub use falloff::T;
 pub use grid::{Grid, eval_grid, eval_grid_naive};
 pub use node::{Node, NodeId};
+pub use noise::{Fbm, NoiseSpec};
 pub use prune::BRICK;
 pub use tree::{NodeInfo, SubTree, Tree, TreeBuilder};
+pub use warp::Warp;

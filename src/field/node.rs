@@ -6,6 +6,7 @@ use glam::{Affine3A, Mat3A};
 
 use super::bvh::ChildBvh;
 use super::contract::Field;
+use super::warp::Warp;
 
 /// Index of a node in a [`super::Tree`] arena. Children always have smaller ids than their
 /// parents (post-order), and a node may have several parents (instancing).
@@ -44,6 +45,13 @@ pub enum Node {
         /// `‖M⁻¹‖₂`, the factor on the child's Lipschitz bounds.
         stretch: f32,
     },
+    /// Localized turbulence warp `f(p) = f_child(p + δ(p)·f_D(p))` (seed 002 §5.3).
+    Warp {
+        /// The warped subtree.
+        child: NodeId,
+        /// δ and f_D.
+        warp: Box<Warp>,
+    },
 }
 
 impl Node {
@@ -55,7 +63,7 @@ impl Node {
                 children.to_vec()
             }
             Node::Difference { base, carves } => std::iter::once(*base).chain(carves.iter().copied()).collect(),
-            Node::Affine { child, .. } => vec![*child],
+            Node::Affine { child, .. } | Node::Warp { child, .. } => vec![*child],
         }
     }
 
@@ -69,6 +77,7 @@ impl Node {
             Node::Intersection(_) => "intersection",
             Node::Difference { .. } => "difference",
             Node::Affine { .. } => "transform",
+            Node::Warp { .. } => "warp",
         }
     }
 }

@@ -132,6 +132,10 @@ impl Pruner<'_> {
                 let child = self.node(*child, &map_box(to_child, b))?;
                 Some(self.out.transform(child, to_child.inverse(), name))
             }
+            Node::Warp { child, warp } => {
+                let child = self.node(*child, &b.dilate(warp.reach()))?;
+                Some(self.out.warp(child, (**warp).clone(), name))
+            }
         }
     }
 }

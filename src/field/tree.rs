@@ -9,6 +9,7 @@ use super::bvh::{BVH_MIN_CHILDREN, ChildBvh};
 use super::contract::{Elevation, Field};
 use super::falloff::T;
 use super::node::{Node, NodeId, spectral_norm};
+use super::warp::Warp;
 
 /// What the compiler caches for every node.
 #[derive(Clone, Debug)]
@@ -111,6 +112,17 @@ impl TreeBuilder {
         )
     }
 
+    /// `child` seen through the turbulence warp `warp`.
+    pub fn warp(&mut self, child: NodeId, warp: Warp, name: Option<String>) -> NodeId {
+        self.push(
+            Node::Warp {
+                child,
+                warp: Box::new(warp),
+            },
+            name,
+        )
+    }
+
     /// Finishes the tree with `root` as its root.
     pub fn build(self, root: NodeId) -> Tree {
         Tree {
@@ -190,6 +202,11 @@ impl TreeBuilder {
                     Aabb::from_points(s.corners().map(|c| to_parent.transform_point3(c)))
                 };
                 (support, info(child).range, info(child).lipschitz * stretch)
+            }
+            Node::Warp { child, warp } => {
+                let s = info(child).support;
+                let support = if s.is_empty() { s } else { s.dilate(warp.reach()) };
+                (support, info(child).range, info(child).lipschitz * warp.lipschitz())
             }
         };
         NodeInfo {

@@ -70,6 +70,15 @@ impl Tree {
                     self.z_bands_at(c, fp, z, out);
                 }
             }
+            Node::Warp { child, warp } => {
+                // The child is evaluated at most `r` away: its bands, widened by `r`.
+                let r = warp.reach();
+                let mut child_bands = ZBands::new();
+                self.z_bands_at(*child, &fp.dilate(r), z.dilate(r), &mut child_bands);
+                for b in child_bands.as_slice() {
+                    out.push(b.dilate(r).intersect(z));
+                }
+            }
             Node::Affine { child, to_child, .. } => {
                 let m = to_child.matrix3;
                 let vertical_only = m.x_axis.z == 0.0 && m.y_axis.z == 0.0 && m.z_axis.x == 0.0 && m.z_axis.y == 0.0;

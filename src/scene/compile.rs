@@ -7,7 +7,7 @@ use glam::{Affine3A, Quat};
 
 use super::load::{SceneError, SceneFile};
 use super::spec::{NodeSpec, Scene};
-use crate::field::{NodeId, Tree, TreeBuilder};
+use crate::field::{Aabb, Fbm, NodeId, Tree, TreeBuilder, Warp};
 
 /// A compiled scene: the tree, and for each node of the scene's root (pre-order, the order
 /// of [`NodeSpec::walk`]) the compiled node it became.
@@ -96,6 +96,13 @@ impl Compiler<'_> {
                 let m = Affine3A::from_scale_rotation_translation(t.scale.0, rotation, t.translate.0);
                 let child = self.node(&t.child, depth + 1)?;
                 self.builder.transform(child, m, name)
+            }
+            NodeSpec::Warp(w) => {
+                let child = self.node(&w.child, depth + 1)?;
+                let region = w.region.map(|r| (Aabb::new(r.min.0, r.max.0), r.falloff.0));
+                let noise = Fbm::new(&w.turbulence, self.scene.seed);
+                let seed = self.scene.seed ^ w.turbulence.seed_offset.rotate_left(16);
+                self.builder.warp(child, Warp::new(noise, seed, w.turbulence.amplitude.0, region), name)
             }
             NodeSpec::Instance(i) => {
                 if let Some(&id) = self.named.get(&i.of) {

@@ -2,7 +2,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::value::{Dir3, Finite, P3};
+use super::value::{Dir3, Finite, P3, Positive};
+use crate::field::NoiseSpec;
 
 /// The tree-file format version this build reads and writes.
 pub const FORMAT_VERSION: u32 = 1;
@@ -41,6 +42,8 @@ pub enum NodeSpec {
     Transform(TransformSpec),
     /// A reference to a named node (in `defs` or the tree), so it can be reused.
     Instance(InstanceSpec),
+    /// Localized turbulence warp of a subtree (seed 002 §5.3).
+    Warp(WarpSpec),
 }
 
 /// An n-ary operator node.
@@ -102,6 +105,56 @@ fn unit_scale() -> P3 {
     P3(glam::Vec3::ONE)
 }
 
+/// A box region with a falloff around it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, try_from = "RawRegion")]
+pub struct Region {
+    /// Lower corner.
+    pub min: P3,
+    /// Upper corner.
+    pub max: P3,
+    /// Width of the falloff around the box, in metres.
+    pub falloff: Positive,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRegion {
+    min: P3,
+    max: P3,
+    falloff: Positive,
+}
+
+impl TryFrom<RawRegion> for Region {
+    type Error = String;
+    fn try_from(r: RawRegion) -> Result<Self, String> {
+        if r.min.0.cmpgt(r.max.0).any() {
+            return Err(format!("region min {:?} must be <= max {:?} on every axis", r.min.0, r.max.0));
+        }
+        Ok(Region {
+            min: r.min,
+            max: r.max,
+            falloff: r.falloff,
+        })
+    }
+}
+
+/// A turbulence warp node: `child` evaluated at `p + δ(p)·f_D(p)`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WarpSpec {
+    /// Unique node name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The displacement: `amplitude` metres per axis, fBm of `wavelength` and `octaves`.
+    pub turbulence: NoiseSpec,
+    /// Where the warp applies (full strength inside the box); everywhere when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub region: Option<Region>,
+    /// The warped subtree.
+    pub child: Box<NodeSpec>,
+}
+
 /// A reference to another named node.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -123,6 +176,7 @@ impl NodeSpec {
             NodeSpec::Difference(_) => "Difference",
             NodeSpec::Transform(_) => "Transform",
             NodeSpec::Instance(_) => "Instance",
+            NodeSpec::Warp(_) => "Warp",
         }
     }
 
@@ -133,6 +187,7 @@ impl NodeSpec {
             NodeSpec::Difference(n) => n.name.as_deref(),
             NodeSpec::Transform(n) => n.name.as_deref(),
             NodeSpec::Instance(n) => n.name.as_deref(),
+            NodeSpec::Warp(n) => n.name.as_deref(),
         }
     }
 
@@ -142,6 +197,7 @@ impl NodeSpec {
             NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => n.children.iter().collect(),
             NodeSpec::Difference(d) => std::iter::once(&*d.base).chain(&d.carves).collect(),
             NodeSpec::Transform(t) => vec![&*t.child],
+            NodeSpec::Warp(w) => vec![&*w.child],
             NodeSpec::Instance(_) => Vec::new(),
         }
     }
@@ -161,6 +217,7 @@ impl NodeSpec {
             NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => n.children.iter_mut().collect(),
             NodeSpec::Difference(d) => std::iter::once(&mut *d.base).chain(d.carves.iter_mut()).collect(),
             NodeSpec::Transform(t) => vec![&mut *t.child],
+            NodeSpec::Warp(w) => vec![&mut *w.child],
             NodeSpec::Instance(_) => Vec::new(),
         }
     }

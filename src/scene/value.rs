@@ -13,7 +13,9 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 fn finite<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
     let v = f64::deserialize(d)?;
     if !v.is_finite() || v.abs() > f32::MAX as f64 {
-        return Err(D::Error::custom(format!("expected a finite number, found {v}")));
+        return Err(D::Error::custom(format!(
+            "expected a finite number, found {v}"
+        )));
     }
     Ok(v as f32)
 }
@@ -159,6 +161,9 @@ mod tests {
         assert!(ron::from_str::<Finite>("NaN").is_err());
         assert!(ron::from_str::<Finite>("inf").is_err());
         assert!(ron::from_str::<Dir3>("(0, 0, 0)").is_err());
-        assert_eq!(ron::from_str::<P3>("(1, 2.5, -3)").unwrap().0, Vec3::new(1.0, 2.5, -3.0));
+        assert_eq!(
+            ron::from_str::<P3>("(1, 2.5, -3)").unwrap().0,
+            Vec3::new(1.0, 2.5, -3.0)
+        );
     }
 }
