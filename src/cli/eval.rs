@@ -27,9 +27,15 @@ pub fn parse_point(line: &str) -> Option<Result<Vec3, String>> {
     if line.is_empty() || line.starts_with('#') {
         return None;
     }
-    let parts: Vec<&str> = line.split(|c: char| c == ',' || c.is_whitespace()).filter(|s| !s.is_empty()).collect();
+    let parts: Vec<&str> = line
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|s| !s.is_empty())
+        .collect();
     if parts.len() != 3 {
-        return Some(Err(format!("expected 3 numbers x,y,z, found {} fields", parts.len())));
+        return Some(Err(format!(
+            "expected 3 numbers x,y,z, found {} fields",
+            parts.len()
+        )));
     }
     let mut v = [0f32; 3];
     for (slot, s) in v.iter_mut().zip(&parts) {

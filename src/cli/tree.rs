@@ -82,11 +82,19 @@ pub fn run(args: TreeArgs) -> anyhow::Result<()> {
                     }
                 }
             }
-            anyhow::ensure!(failed == 0, "{failed} of {} tree files are invalid", files.len());
+            anyhow::ensure!(
+                failed == 0,
+                "{failed} of {} tree files are invalid",
+                files.len()
+            );
             Ok(())
         }
         TreeCommand::Show { file } => show(&file),
-        TreeCommand::Set { file, target, value } => {
+        TreeCommand::Set {
+            file,
+            target,
+            value,
+        } => {
             edit::set_param(&file, &target, &value)?;
             println!("{}: set {target} = {value}", file.display());
             Ok(())
@@ -106,7 +114,9 @@ pub fn run(args: TreeArgs) -> anyhow::Result<()> {
 
 fn show(file: &PathBuf) -> anyhow::Result<()> {
     let sf = scene::load(file)?;
-    let compiled = sf.compile().with_context(|| format!("compiling {}", file.display()))?;
+    let compiled = sf
+        .compile()
+        .with_context(|| format!("compiling {}", file.display()))?;
     let tree = &compiled.tree;
     let mut specs = Vec::new();
     sf.scene.root.walk(&mut |n, _| specs.push(n));

@@ -54,14 +54,22 @@ impl Tree {
                 .map(|&c| self.interval_at(c, b))
                 .reduce(Interval::min)
                 .unwrap_or(Interval::ZERO),
-            Node::Difference { base, carves } => carves.iter().fold(self.interval_at(*base, b), |r, &c| {
-                let ci = self.interval_at(c, b);
-                r.min(Interval::new(2.0 * T - ci.hi, 2.0 * T - ci.lo))
-            }),
-            Node::Affine { child, to_child, .. } => self.interval_at(*child, &map_box(to_child, b)),
+            Node::Difference { base, carves } => {
+                carves.iter().fold(self.interval_at(*base, b), |r, &c| {
+                    let ci = self.interval_at(c, b);
+                    r.min(Interval::new(2.0 * T - ci.hi, 2.0 * T - ci.lo))
+                })
+            }
+            Node::Affine {
+                child, to_child, ..
+            } => self.interval_at(*child, &map_box(to_child, b)),
             Node::Warp { child, warp } => self.interval_at(*child, &b.dilate(warp.reach())),
         };
-        if info.support.contains_box(b) { r } else { r.hull(Interval::ZERO) }
+        if info.support.contains_box(b) {
+            r
+        } else {
+            r.hull(Interval::ZERO)
+        }
     }
 
     /// A Lipschitz bound of node `id` valid inside `b`.
@@ -84,11 +92,17 @@ impl Tree {
                 sum
             }
             Node::Union(children) | Node::Intersection(children) => max_of(children),
-            Node::Difference { base, carves } => max_of(carves).max(self.lipschitz_box_at(*base, b)),
-            Node::Affine { child, to_child, stretch } => {
-                self.lipschitz_box_at(*child, &map_box(to_child, b)) * stretch
+            Node::Difference { base, carves } => {
+                max_of(carves).max(self.lipschitz_box_at(*base, b))
             }
-            Node::Warp { child, warp } => self.lipschitz_box_at(*child, &b.dilate(warp.reach())) * warp.lipschitz(),
+            Node::Affine {
+                child,
+                to_child,
+                stretch,
+            } => self.lipschitz_box_at(*child, &map_box(to_child, b)) * stretch,
+            Node::Warp { child, warp } => {
+                self.lipschitz_box_at(*child, &b.dilate(warp.reach())) * warp.lipschitz()
+            }
         }
     }
 }

@@ -24,12 +24,22 @@ impl Tree {
                 }
                 None => children.iter().map(|&c| self.value_at(c, p)).sum(),
             },
-            Node::Union(children) => children.iter().map(|&c| self.value_at(c, p)).fold(f32::NEG_INFINITY, f32::max),
-            Node::Intersection(children) => children.iter().map(|&c| self.value_at(c, p)).fold(f32::INFINITY, f32::min),
-            Node::Difference { base, carves } => carves
+            Node::Union(children) => children
                 .iter()
-                .fold(self.value_at(*base, p), |v, &c| v.min(2.0 * T - self.value_at(c, p))),
-            Node::Affine { child, to_child, .. } => self.value_at(*child, to_child.transform_point3(p)),
+                .map(|&c| self.value_at(c, p))
+                .fold(f32::NEG_INFINITY, f32::max),
+            Node::Intersection(children) => children
+                .iter()
+                .map(|&c| self.value_at(c, p))
+                .fold(f32::INFINITY, f32::min),
+            Node::Difference { base, carves } => {
+                carves.iter().fold(self.value_at(*base, p), |v, &c| {
+                    v.min(2.0 * T - self.value_at(c, p))
+                })
+            }
+            Node::Affine {
+                child, to_child, ..
+            } => self.value_at(*child, to_child.transform_point3(p)),
             Node::Warp { child, warp } => self.value_at(*child, warp.apply(p)),
         }
     }
@@ -79,9 +89,14 @@ impl Tree {
                 }
                 best
             }
-            Node::Affine { child, to_child, .. } => {
+            Node::Affine {
+                child, to_child, ..
+            } => {
                 let (v, g) = self.value_grad_at(*child, to_child.transform_point3(p));
-                (v, Vec3::from(to_child.matrix3.transpose() * glam::Vec3A::from(g)))
+                (
+                    v,
+                    Vec3::from(to_child.matrix3.transpose() * glam::Vec3A::from(g)),
+                )
             }
             Node::Warp { child, warp } => {
                 let (q, j) = warp.apply_jacobian(p);

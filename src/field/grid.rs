@@ -60,12 +60,14 @@ pub fn eval_grid(field: &dyn Field, grid: &Grid) -> Vec<f32> {
 pub fn eval_grid_naive(field: &dyn Field, grid: &Grid) -> Vec<f32> {
     let [nx, ny, _] = grid.dims;
     let mut out = vec![0.0f32; grid.len()];
-    out.par_chunks_mut(nx * ny).enumerate().for_each(|(k, layer)| {
-        for j in 0..ny {
-            for i in 0..nx {
-                layer[i + nx * j] = field.value(grid.point(i, j, k));
+    out.par_chunks_mut(nx * ny)
+        .enumerate()
+        .for_each(|(k, layer)| {
+            for j in 0..ny {
+                for i in 0..nx {
+                    layer[i + nx * j] = field.value(grid.point(i, j, k));
+                }
             }
-        }
-    });
+        });
     out
 }

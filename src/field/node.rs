@@ -62,7 +62,9 @@ impl Node {
             Node::Blend { children, .. } | Node::Union(children) | Node::Intersection(children) => {
                 children.to_vec()
             }
-            Node::Difference { base, carves } => std::iter::once(*base).chain(carves.iter().copied()).collect(),
+            Node::Difference { base, carves } => std::iter::once(*base)
+                .chain(carves.iter().copied())
+                .collect(),
             Node::Affine { child, .. } | Node::Warp { child, .. } => vec![*child],
         }
     }
@@ -97,7 +99,8 @@ pub fn spectral_norm(m: Mat3A) -> f32 {
         let p = (p2 / 6.0).sqrt();
         let (b00, b11, b22) = ((a00 - q) / p, (a11 - q) / p, (a22 - q) / p);
         let (b01, b02, b12) = (a01 / p, a02 / p, a12 / p);
-        let det = b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) + b02 * (b01 * b12 - b11 * b02);
+        let det = b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02)
+            + b02 * (b01 * b12 - b11 * b02);
         let phi = (det / 2.0).clamp(-1.0, 1.0).acos() / 3.0;
         q + 2.0 * p * phi.cos()
     };

@@ -128,7 +128,9 @@ impl Pruner<'_> {
                     }
                 }
             }
-            Node::Affine { child, to_child, .. } => {
+            Node::Affine {
+                child, to_child, ..
+            } => {
                 let child = self.node(*child, &map_box(to_child, b))?;
                 Some(self.out.transform(child, to_child.inverse(), name))
             }
@@ -166,15 +168,28 @@ impl Tree {
     }
 
     /// Values of node `id` on a block of grid points, pruned per [`BRICK`]³ brick.
-    pub fn eval_block_at(&self, id: NodeId, origin: Vec3, step: Vec3, dims: [usize; 3], out: &mut [f32]) {
+    pub fn eval_block_at(
+        &self,
+        id: NodeId,
+        origin: Vec3,
+        step: Vec3,
+        dims: [usize; 3],
+        out: &mut [f32],
+    ) {
         let [nx, ny, nz] = dims;
         assert!(out.len() >= nx * ny * nz, "eval_block: output too small");
         for k0 in (0..nz).step_by(BRICK) {
             for j0 in (0..ny).step_by(BRICK) {
                 for i0 in (0..nx).step_by(BRICK) {
-                    let hi = [(i0 + BRICK).min(nx), (j0 + BRICK).min(ny), (k0 + BRICK).min(nz)];
+                    let hi = [
+                        (i0 + BRICK).min(nx),
+                        (j0 + BRICK).min(ny),
+                        (k0 + BRICK).min(nz),
+                    ];
                     let lo_p = origin + Vec3::new(i0 as f32, j0 as f32, k0 as f32) * step;
-                    let hi_p = origin + Vec3::new((hi[0] - 1) as f32, (hi[1] - 1) as f32, (hi[2] - 1) as f32) * step;
+                    let hi_p = origin
+                        + Vec3::new((hi[0] - 1) as f32, (hi[1] - 1) as f32, (hi[2] - 1) as f32)
+                            * step;
                     let brick = Aabb::new(lo_p, hi_p);
                     let pruned = self.pruned(id, &brick);
                     let constant = pruned.as_constant();

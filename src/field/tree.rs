@@ -65,7 +65,10 @@ impl TreeBuilder {
     /// `Σ children`.
     pub fn blend(&mut self, children: Vec<NodeId>, name: Option<String>) -> NodeId {
         let bvh = (children.len() >= BVH_MIN_CHILDREN).then(|| {
-            let supports: Vec<Aabb> = children.iter().map(|&c| self.info[c as usize].support).collect();
+            let supports: Vec<Aabb> = children
+                .iter()
+                .map(|&c| self.info[c as usize].support)
+                .collect();
             ChildBvh::new(&supports)
         });
         self.push(
@@ -88,7 +91,12 @@ impl TreeBuilder {
     }
 
     /// `base` with every `carves` subtree removed.
-    pub fn difference(&mut self, base: NodeId, carves: Vec<NodeId>, name: Option<String>) -> NodeId {
+    pub fn difference(
+        &mut self,
+        base: NodeId,
+        carves: Vec<NodeId>,
+        name: Option<String>,
+    ) -> NodeId {
         self.push(
             Node::Difference {
                 base,
@@ -99,7 +107,12 @@ impl TreeBuilder {
     }
 
     /// `child` moved by `to_parent` (child space → parent space); must be invertible.
-    pub fn transform(&mut self, child: NodeId, to_parent: Affine3A, name: Option<String>) -> NodeId {
+    pub fn transform(
+        &mut self,
+        child: NodeId,
+        to_parent: Affine3A,
+        name: Option<String>,
+    ) -> NodeId {
         let to_child = to_parent.inverse();
         let stretch = spectral_norm(to_child.matrix3);
         self.push(
@@ -146,8 +159,12 @@ impl TreeBuilder {
                 (s, f.interval(&s).hull(Interval::ZERO), f.lipschitz())
             }
             Node::Blend { children, bvh } => {
-                let support = children.iter().fold(Aabb::EMPTY, |b, c| b.union(info(c).support));
-                let range = children.iter().fold(Interval::ZERO, |r, c| r.add(info(c).range));
+                let support = children
+                    .iter()
+                    .fold(Aabb::EMPTY, |b, c| b.union(info(c).support));
+                let range = children
+                    .iter()
+                    .fold(Interval::ZERO, |r, c| r.add(info(c).range));
                 // ∇ of a sum is the sum of the gradients of the children non-zero at a point:
                 // bound it by the heaviest group of mutually overlapping supports.
                 let lipschitz = match bvh {
@@ -155,7 +172,9 @@ impl TreeBuilder {
                         .iter()
                         .map(|c| {
                             let mut sum = 0.0;
-                            bvh.overlapping(&info(c).support, |j| sum += info(&children[j]).lipschitz);
+                            bvh.overlapping(&info(c).support, |j| {
+                                sum += info(&children[j]).lipschitz
+                            });
                             sum
                         })
                         .fold(0.0, f32::max),
@@ -173,27 +192,48 @@ impl TreeBuilder {
                 }
                 .unwrap_or(Interval::ZERO);
                 let any_negative = children.iter().any(|c| info(c).range.lo < 0.0);
-                let hull = children.iter().fold(Aabb::EMPTY, |b, c| b.union(info(c).support));
+                let hull = children
+                    .iter()
+                    .fold(Aabb::EMPTY, |b, c| b.union(info(c).support));
                 let support = if is_union || any_negative {
                     hull
                 } else {
-                    children.iter().fold(hull, |b, c| b.intersection(info(c).support))
+                    children
+                        .iter()
+                        .fold(hull, |b, c| b.intersection(info(c).support))
                 };
-                let lipschitz = children.iter().map(|c| info(c).lipschitz).fold(0.0, f32::max);
+                let lipschitz = children
+                    .iter()
+                    .map(|c| info(c).lipschitz)
+                    .fold(0.0, f32::max);
                 (support, range.hull(Interval::ZERO), lipschitz)
             }
             Node::Difference { base, carves } => {
-                let carve_range = carves.iter().fold(Interval::ZERO, |r, c| r.max(info(c).range));
-                let range = info(base).range.min(Interval::new(2.0 * T - carve_range.hi, 2.0 * T - carve_range.lo));
+                let carve_range = carves
+                    .iter()
+                    .fold(Interval::ZERO, |r, c| r.max(info(c).range));
+                let range = info(base).range.min(Interval::new(
+                    2.0 * T - carve_range.hi,
+                    2.0 * T - carve_range.lo,
+                ));
                 let support = if carve_range.hi > 2.0 * T {
-                    carves.iter().fold(info(base).support, |b, c| b.union(info(c).support))
+                    carves
+                        .iter()
+                        .fold(info(base).support, |b, c| b.union(info(c).support))
                 } else {
                     info(base).support
                 };
-                let lipschitz = carves.iter().map(|c| info(c).lipschitz).fold(info(base).lipschitz, f32::max);
+                let lipschitz = carves
+                    .iter()
+                    .map(|c| info(c).lipschitz)
+                    .fold(info(base).lipschitz, f32::max);
                 (support, range.hull(Interval::ZERO), lipschitz)
             }
-            Node::Affine { child, to_child, stretch } => {
+            Node::Affine {
+                child,
+                to_child,
+                stretch,
+            } => {
                 let s = info(child).support;
                 let to_parent = to_child.inverse();
                 let support = if s.is_empty() {
@@ -205,8 +245,16 @@ impl TreeBuilder {
             }
             Node::Warp { child, warp } => {
                 let s = info(child).support;
-                let support = if s.is_empty() { s } else { s.dilate(warp.reach()) };
-                (support, info(child).range, info(child).lipschitz * warp.lipschitz())
+                let support = if s.is_empty() {
+                    s
+                } else {
+                    s.dilate(warp.reach())
+                };
+                (
+                    support,
+                    info(child).range,
+                    info(child).lipschitz * warp.lipschitz(),
+                )
             }
         };
         NodeInfo {
@@ -236,7 +284,10 @@ impl Tree {
 
     /// The node with the user name `name`.
     pub fn find(&self, name: &str) -> Option<NodeId> {
-        self.info.iter().position(|i| i.name.as_deref() == Some(name)).map(|i| i as NodeId)
+        self.info
+            .iter()
+            .position(|i| i.name.as_deref() == Some(name))
+            .map(|i| i as NodeId)
     }
 
     /// The subtree rooted at `id` as a tree of its own (shares leaves, no copy of data).

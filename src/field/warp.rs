@@ -21,7 +21,13 @@ impl Warp {
     /// A warp of displacement amplitude `amplitude` (metres per axis) made of `noise`
     /// reseeded per axis, applied in `region` (a box and its falloff width) or everywhere.
     pub fn new(noise: Fbm, seed: u32, amplitude: f32, region: Option<(Aabb, f32)>) -> Self {
-        let axis = |k: u32| Fbm::with(seed.wrapping_add(0x632b_e5ab_u32.wrapping_mul(k + 1)), noise.wavelength(), noise.octaves());
+        let axis = |k: u32| {
+            Fbm::with(
+                seed.wrapping_add(0x632b_e5ab_u32.wrapping_mul(k + 1)),
+                noise.wavelength(),
+                noise.octaves(),
+            )
+        };
         Warp {
             turbulence: [axis(0), axis(1), axis(2)],
             amplitude,
@@ -84,7 +90,11 @@ impl Warp {
 
     /// Lipschitz bound of `ω⁻¹`: `1 + A·√3·L_t + A·√3·max|∇f_D|`.
     pub fn lipschitz(&self) -> f32 {
-        let lt = self.turbulence.iter().map(Fbm::lipschitz).fold(0.0, f32::max);
+        let lt = self
+            .turbulence
+            .iter()
+            .map(Fbm::lipschitz)
+            .fold(0.0, f32::max);
         let ld = self.region.map_or(0.0, |(_, r)| WYVILL_MAX_SLOPE / r);
         1.0 + self.reach() * (lt + ld)
     }
@@ -117,7 +127,11 @@ mod tests {
             for axis in 0..3 {
                 let e = Vec3::AXES[axis] * h;
                 let fd = (w.apply(p + e) - w.apply(p - e)) / (2.0 * h);
-                assert!((fd - j.col(axis)).length() < 2e-2 * l, "column {axis} at {p}: {fd} vs {}", j.col(axis));
+                assert!(
+                    (fd - j.col(axis)).length() < 2e-2 * l,
+                    "column {axis} at {p}: {fd} vs {}",
+                    j.col(axis)
+                );
             }
             let p2 = p + Vec3::new(rnd(), rnd(), rnd()) * 0.05;
             assert!((w.apply(p) - w.apply(p2)).length() <= l * (p - p2).length() + 1e-5);

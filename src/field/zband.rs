@@ -79,23 +79,38 @@ impl Tree {
                     out.push(b.dilate(r).intersect(z));
                 }
             }
-            Node::Affine { child, to_child, .. } => {
+            Node::Affine {
+                child, to_child, ..
+            } => {
                 let m = to_child.matrix3;
-                let vertical_only = m.x_axis.z == 0.0 && m.y_axis.z == 0.0 && m.z_axis.x == 0.0 && m.z_axis.y == 0.0;
+                let vertical_only = m.x_axis.z == 0.0
+                    && m.y_axis.z == 0.0
+                    && m.z_axis.x == 0.0
+                    && m.z_axis.y == 0.0;
                 if !vertical_only || m.z_axis.z == 0.0 {
                     z_bands_by_interval(&self.subtree(id), fp, z, out);
                     return;
                 }
                 // z' = a·z + c and (x', y') does not depend on z: map the column and back.
                 let (a, c) = (m.z_axis.z, to_child.translation.z);
-                let corners = [fp.min, glam::Vec2::new(fp.max.x, fp.min.y), glam::Vec2::new(fp.min.x, fp.max.y), fp.max];
+                let corners = [
+                    fp.min,
+                    glam::Vec2::new(fp.max.x, fp.min.y),
+                    glam::Vec2::new(fp.min.x, fp.max.y),
+                    fp.max,
+                ];
                 let mapped = corners.map(|q| to_child.transform_point3(q.extend(0.0)).truncate());
                 let child_fp = Rect::new(
                     mapped.iter().copied().reduce(glam::Vec2::min).unwrap(),
                     mapped.iter().copied().reduce(glam::Vec2::max).unwrap(),
                 );
                 let mut child_bands = ZBands::new();
-                self.z_bands_at(*child, &child_fp, Interval::new(a * z.lo + c, a * z.hi + c), &mut child_bands);
+                self.z_bands_at(
+                    *child,
+                    &child_fp,
+                    Interval::new(a * z.lo + c, a * z.hi + c),
+                    &mut child_bands,
+                );
                 for b in child_bands.as_slice() {
                     out.push(Interval::new((b.lo - c) / a, (b.hi - c) / a));
                 }
@@ -111,11 +126,15 @@ impl Tree {
             Node::Blend { .. } | Node::Union(_) | Node::Difference { .. } => {
                 let children = self.children_in_column(id, fp, support.z());
                 let (base, others): (NodeId, Vec<NodeId>) = match &self.nodes[id as usize] {
-                    Node::Difference { base, .. } => (*base, children.into_iter().filter(|c| c != base).collect()),
+                    Node::Difference { base, .. } => {
+                        (*base, children.into_iter().filter(|c| c != base).collect())
+                    }
                     _ => {
                         // The one child that is a heightfield here; the others must vanish
                         // in the band we keep.
-                        let hf = *children.iter().find(|&&c| self.elevation_at(c, fp).is_some())?;
+                        let hf = *children
+                            .iter()
+                            .find(|&&c| self.elevation_at(c, fp).is_some())?;
                         (hf, children.into_iter().filter(|&c| c != hf).collect())
                     }
                 };
@@ -128,8 +147,16 @@ impl Tree {
                     // Keep the larger piece of e.z outside the other child's support.
                     let below = Interval::new(e.z.lo, cz.lo.min(e.z.hi));
                     let above = Interval::new(cz.hi.max(e.z.lo), e.z.hi);
-                    let below = if cz.lo > e.z.lo { below } else { Interval::EMPTY };
-                    let above = if cz.hi < e.z.hi { above } else { Interval::EMPTY };
+                    let below = if cz.lo > e.z.lo {
+                        below
+                    } else {
+                        Interval::EMPTY
+                    };
+                    let above = if cz.hi < e.z.hi {
+                        above
+                    } else {
+                        Interval::EMPTY
+                    };
                     e.z = match (below.is_empty(), above.is_empty()) {
                         (true, true) => return None,
                         (false, true) => below,
@@ -152,11 +179,20 @@ mod tests {
     #[test]
     fn overlap_sweep_finds_double_coverage() {
         let mut out = ZBands::new();
-        let mut r = vec![Interval::new(0.0, 2.0), Interval::new(5.0, 6.0), Interval::new(1.0, 3.0), Interval::new(2.5, 5.5)];
+        let mut r = vec![
+            Interval::new(0.0, 2.0),
+            Interval::new(5.0, 6.0),
+            Interval::new(1.0, 3.0),
+            Interval::new(2.5, 5.5),
+        ];
         overlaps_of(&mut r, &mut out);
         assert_eq!(
             out.as_slice(),
-            &[Interval::new(1.0, 2.0), Interval::new(2.5, 3.0), Interval::new(5.0, 5.5)]
+            &[
+                Interval::new(1.0, 2.0),
+                Interval::new(2.5, 3.0),
+                Interval::new(5.0, 5.5)
+            ]
         );
     }
 }

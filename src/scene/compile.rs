@@ -32,7 +32,9 @@ impl Compiler<'_> {
     fn error(&self, node: &NodeSpec, message: impl Into<String>) -> SceneError {
         SceneError::Node {
             path: self.path.to_path_buf(),
-            node: node.name().map_or_else(|| node.kind().to_string(), |n| format!("{n:?}")),
+            node: node
+                .name()
+                .map_or_else(|| node.kind().to_string(), |n| format!("{n:?}")),
             message: message.into(),
         }
     }
@@ -90,10 +92,11 @@ impl Compiler<'_> {
                 if t.scale.0.abs().min_element() < 1e-6 {
                     return Err(self.error(n, "scale factors must be non-zero"));
                 }
-                let rotation = t
-                    .rotate
-                    .map_or(Quat::IDENTITY, |r| Quat::from_axis_angle(r.axis.unit(), r.degrees.0.to_radians()));
-                let m = Affine3A::from_scale_rotation_translation(t.scale.0, rotation, t.translate.0);
+                let rotation = t.rotate.map_or(Quat::IDENTITY, |r| {
+                    Quat::from_axis_angle(r.axis.unit(), r.degrees.0.to_radians())
+                });
+                let m =
+                    Affine3A::from_scale_rotation_translation(t.scale.0, rotation, t.translate.0);
                 let child = self.node(&t.child, depth + 1)?;
                 self.builder.transform(child, m, name)
             }
@@ -102,7 +105,11 @@ impl Compiler<'_> {
                 let region = w.region.map(|r| (Aabb::new(r.min.0, r.max.0), r.falloff.0));
                 let noise = Fbm::new(&w.turbulence, self.scene.seed);
                 let seed = self.scene.seed ^ w.turbulence.seed_offset.rotate_left(16);
-                self.builder.warp(child, Warp::new(noise, seed, w.turbulence.amplitude.0, region), name)
+                self.builder.warp(
+                    child,
+                    Warp::new(noise, seed, w.turbulence.amplitude.0, region),
+                    name,
+                )
             }
             NodeSpec::Instance(i) => {
                 if let Some(&id) = self.named.get(&i.of) {

@@ -21,7 +21,10 @@ fn edit_error(path: &Path, message: impl Into<String>) -> SceneError {
 }
 
 /// Applies `change` to the scene in `path`, validates, keeps a `.bak`, writes atomically.
-fn edit_file(path: &Path, change: impl FnOnce(&mut Scene) -> Result<(), SceneError>) -> Result<(), SceneError> {
+fn edit_file(
+    path: &Path,
+    change: impl FnOnce(&mut Scene) -> Result<(), SceneError>,
+) -> Result<(), SceneError> {
     let file = load(path)?;
     let mut scene = file.scene.clone();
     change(&mut scene)?;
@@ -41,7 +44,9 @@ fn find_mut<'a>(node: &'a mut NodeSpec, name: &str) -> Option<&'a mut NodeSpec> 
     if node.name() == Some(name) {
         return Some(node);
     }
-    node.children_mut().into_iter().find_map(|c| find_mut(c, name))
+    node.children_mut()
+        .into_iter()
+        .find_map(|c| find_mut(c, name))
 }
 
 fn scene_find_mut<'a>(scene: &'a mut Scene, name: &str) -> Option<&'a mut NodeSpec> {
@@ -67,7 +72,8 @@ pub fn set_param(path: &Path, target: &str, value: &str) -> Result<(), SceneErro
         .ok_or_else(|| edit_error(path, format!("expected NAME.PARAM, found {target:?}")))?;
     let new_value = parse_value(path, value)?;
     edit_file(path, |scene| {
-        let node = scene_find_mut(scene, name).ok_or_else(|| edit_error(path, format!("no node named {name:?}")))?;
+        let node = scene_find_mut(scene, name)
+            .ok_or_else(|| edit_error(path, format!("no node named {name:?}")))?;
         let mut json = serde_json::to_value(&*node).map_err(|e| edit_error(path, e.to_string()))?;
         let kind = node.kind();
         let mut slot = json
@@ -104,17 +110,25 @@ pub fn set_param(path: &Path, target: &str, value: &str) -> Result<(), SceneErro
 /// `karstic tree add FILE PARENT NODE_RON`: appends a node to the children (the carves of
 /// a difference) of the node named `PARENT`.
 pub fn add_node(path: &Path, parent: &str, node_ron: &str) -> Result<(), SceneError> {
-    let node: NodeSpec = ron_options().from_str(node_ron).map_err(|e| SceneError::Syntax {
-        path: PathBuf::from("<node>"),
-        line: e.span.start.line,
-        col: e.span.start.col,
-        message: e.code.to_string(),
-    })?;
+    let node: NodeSpec = ron_options()
+        .from_str(node_ron)
+        .map_err(|e| SceneError::Syntax {
+            path: PathBuf::from("<node>"),
+            line: e.span.start.line,
+            col: e.span.start.col,
+            message: e.code.to_string(),
+        })?;
     edit_file(path, |scene| {
-        let p = scene_find_mut(scene, parent).ok_or_else(|| edit_error(path, format!("no node named {parent:?}")))?;
+        let p = scene_find_mut(scene, parent)
+            .ok_or_else(|| edit_error(path, format!("no node named {parent:?}")))?;
         let kind = p.kind();
         p.child_list_mut()
-            .ok_or_else(|| edit_error(path, format!("node {parent:?} ({kind}) cannot take more children")))?
+            .ok_or_else(|| {
+                edit_error(
+                    path,
+                    format!("node {parent:?} ({kind}) cannot take more children"),
+                )
+            })?
             .push(node);
         Ok(())
     })
@@ -124,7 +138,10 @@ pub fn add_node(path: &Path, parent: &str, node_ron: &str) -> Result<(), SceneEr
 pub fn remove_node(path: &Path, name: &str) -> Result<(), SceneError> {
     edit_file(path, |scene| {
         if scene.root.name() == Some(name) {
-            return Err(edit_error(path, format!("{name:?} is the root and cannot be removed")));
+            return Err(edit_error(
+                path,
+                format!("{name:?} is the root and cannot be removed"),
+            ));
         }
         if let Some(at) = scene.defs.iter().position(|d| d.name() == Some(name)) {
             scene.defs.remove(at);
@@ -140,7 +157,9 @@ pub fn remove_node(path: &Path, name: &str) -> Result<(), SceneError> {
             let kind = n.kind();
             for c in n.children_mut() {
                 if c.name() == Some(name) {
-                    return Err(format!("{name:?} is the only required child of a {kind} and cannot be removed"));
+                    return Err(format!(
+                        "{name:?} is the only required child of a {kind} and cannot be removed"
+                    ));
                 }
                 if rec(c, name)? {
                     return Ok(true);

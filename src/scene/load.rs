@@ -110,17 +110,22 @@ impl SceneError {
 
 /// A node name must be a simple identifier so `NAME.PARAM` paths stay unambiguous.
 fn valid_name(name: &str) -> bool {
-    !name.is_empty() && name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    !name.is_empty()
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
 }
 
 /// Parses and validates tree-file text (`path` only names it in errors).
 pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
-    let scene: Scene = ron_options().from_str(text).map_err(|e| SceneError::Syntax {
-        path: path.to_path_buf(),
-        line: e.span.start.line,
-        col: e.span.start.col,
-        message: e.code.to_string(),
-    })?;
+    let scene: Scene = ron_options()
+        .from_str(text)
+        .map_err(|e| SceneError::Syntax {
+            path: path.to_path_buf(),
+            line: e.span.start.line,
+            col: e.span.start.col,
+            message: e.code.to_string(),
+        })?;
     if scene.version != FORMAT_VERSION {
         return Err(SceneError::at(
             path,
@@ -155,7 +160,11 @@ fn validate_names(scene: &Scene, text: &str, path: &Path) -> Result<(), SceneErr
             ));
         }
         if *nth > 0 {
-            return Err(SceneError::at(path, pos, format!("duplicate node name {name:?}")));
+            return Err(SceneError::at(
+                path,
+                pos,
+                format!("duplicate node name {name:?}"),
+            ));
         }
         *nth += 1;
     }
@@ -170,14 +179,21 @@ fn validate_names(scene: &Scene, text: &str, path: &Path) -> Result<(), SceneErr
             return Err(SceneError::at(
                 path,
                 pos,
-                format!("unknown node referenced: {:?} (named nodes: {})", i.of, names.join(", ")),
+                format!(
+                    "unknown node referenced: {:?} (named nodes: {})",
+                    i.of,
+                    names.join(", ")
+                ),
             ));
         };
         if reaches(scene, target, &i.of, &mut BTreeSet::new()) {
             return Err(SceneError::at(
                 path,
                 pos,
-                format!("instance of {:?} is inside the node it instances (a cycle)", i.of),
+                format!(
+                    "instance of {:?} is inside the node it instances (a cycle)",
+                    i.of
+                ),
             ));
         }
     }
@@ -185,7 +201,12 @@ fn validate_names(scene: &Scene, text: &str, path: &Path) -> Result<(), SceneErr
 }
 
 /// True when `node`'s subtree, following instances, contains an instance of `name`.
-fn reaches<'a>(scene: &'a Scene, node: &'a NodeSpec, name: &str, visiting: &mut BTreeSet<&'a str>) -> bool {
+fn reaches<'a>(
+    scene: &'a Scene,
+    node: &'a NodeSpec,
+    name: &str,
+    visiting: &mut BTreeSet<&'a str>,
+) -> bool {
     let mut found = false;
     node.walk(&mut |n, _| {
         if found {
@@ -207,7 +228,9 @@ fn reaches<'a>(scene: &'a Scene, node: &'a NodeSpec, name: &str, visiting: &mut 
 impl Scene {
     /// The node named `name` (in `defs` or the tree).
     pub fn find(&self, name: &str) -> Option<&NodeSpec> {
-        self.all_nodes().into_iter().find(|n| n.name() == Some(name))
+        self.all_nodes()
+            .into_iter()
+            .find(|n| n.name() == Some(name))
     }
 
     /// The scene as tree-file text (canonical layout; comments are not kept).
@@ -243,6 +266,9 @@ mod tests {
     #[test]
     fn positions_are_one_based() {
         assert_eq!(line_col("ab\ncd", 4), (2, 2));
-        assert_eq!(find_field("x\n  name: \"a\", of: \"a\"", "of", "a", 0), Some((2, 20)));
+        assert_eq!(
+            find_field("x\n  name: \"a\", of: \"a\"", "of", "a", 0),
+            Some((2, 20))
+        );
     }
 }

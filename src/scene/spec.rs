@@ -129,7 +129,10 @@ impl TryFrom<RawRegion> for Region {
     type Error = String;
     fn try_from(r: RawRegion) -> Result<Self, String> {
         if r.min.0.cmpgt(r.max.0).any() {
-            return Err(format!("region min {:?} must be <= max {:?} on every axis", r.min.0, r.max.0));
+            return Err(format!(
+                "region min {:?} must be <= max {:?} on every axis",
+                r.min.0, r.max.0
+            ));
         }
         Ok(Region {
             min: r.min,
@@ -183,7 +186,9 @@ impl NodeSpec {
     /// The node's name.
     pub fn name(&self) -> Option<&str> {
         match self {
-            NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => n.name.as_deref(),
+            NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => {
+                n.name.as_deref()
+            }
             NodeSpec::Difference(n) => n.name.as_deref(),
             NodeSpec::Transform(n) => n.name.as_deref(),
             NodeSpec::Instance(n) => n.name.as_deref(),
@@ -194,7 +199,9 @@ impl NodeSpec {
     /// Children, in order (the base of a difference first).
     pub fn children(&self) -> Vec<&NodeSpec> {
         match self {
-            NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => n.children.iter().collect(),
+            NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => {
+                n.children.iter().collect()
+            }
             NodeSpec::Difference(d) => std::iter::once(&*d.base).chain(&d.carves).collect(),
             NodeSpec::Transform(t) => vec![&*t.child],
             NodeSpec::Warp(w) => vec![&*w.child],
@@ -205,7 +212,9 @@ impl NodeSpec {
     /// Mutable access to the list a new child is appended to, if the node has one.
     pub fn child_list_mut(&mut self) -> Option<&mut Vec<NodeSpec>> {
         match self {
-            NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => Some(&mut n.children),
+            NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => {
+                Some(&mut n.children)
+            }
             NodeSpec::Difference(d) => Some(&mut d.carves),
             _ => None,
         }
@@ -214,8 +223,12 @@ impl NodeSpec {
     /// Mutable children, in the order of [`NodeSpec::children`].
     pub fn children_mut(&mut self) -> Vec<&mut NodeSpec> {
         match self {
-            NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => n.children.iter_mut().collect(),
-            NodeSpec::Difference(d) => std::iter::once(&mut *d.base).chain(d.carves.iter_mut()).collect(),
+            NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => {
+                n.children.iter_mut().collect()
+            }
+            NodeSpec::Difference(d) => std::iter::once(&mut *d.base)
+                .chain(d.carves.iter_mut())
+                .collect(),
             NodeSpec::Transform(t) => vec![&mut *t.child],
             NodeSpec::Warp(w) => vec![&mut *w.child],
             NodeSpec::Instance(_) => Vec::new(),

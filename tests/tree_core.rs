@@ -1,0 +1,319 @@
+//! Soundness of the compiled tree's operators on random trees (proptest): intervals,
+//! Lipschitz bounds, gradients, z-bands, pruning and grid evaluation.
+//!
+//! The leaves are a minimal exact ball field defined here, so these tests check the tree
+//! logic alone; `tests/primitives.rs` checks the real primitives.
+
+use std::sync::Arc;
+
+use glam::{Affine3A, Quat, Vec3};
+use karstic::field::falloff::{WYVILL_MAX_SLOPE, wyvill, wyvill_d, wyvill_interval, wyvill_slope};
+use karstic::field::{
+    Aabb, Fbm, Field, Grid, Interval, NodeId, Rect, T, Tree, TreeBuilder, Warp, ZBands, eval_grid,
+    eval_grid_naive,
+};
+use proptest::prelude::*;
+
+/// `energy · g(|p − c| / r)`.
+struct Ball {
+    c: Vec3,
+    r: f32,
+    e: f32,
+}
+
+impl Ball {
+    fn d_range(&self, b: &Aabb) -> Interval {
+        let lo = b.distance(self.c);
+        let far = b
+            .corners()
+            .iter()
+            .map(|q| (*q - self.c).length())
+            .fold(0.0, f32::max);
+        Interval::new(lo / self.r, far / self.r)
+    }
+}
+
+impl Field for Ball {
+    fn value(&self, p: Vec3) -> f32 {
+        self.e * wyvill((p - self.c).length() / self.r)
+    }
+    fn value_grad(&self, p: Vec3) -> (f32, Vec3) {
+        let v = p - self.c;
+        let d = v.length();
+        let (g, dg) = wyvill_d(d / self.r);
+        let dir = if d > 0.0 { v / d } else { Vec3::ZERO };
+        (self.e * g, dir * (self.e * dg / self.r))
+    }
+    fn support(&self) -> Aabb {
+        Aabb::around(self.c, self.r)
+    }
+    fn interval(&self, b: &Aabb) -> Interval {
+        wyvill_interval(self.d_range(b)).scale(self.e)
+    }
+    fn lipschitz(&self) -> f32 {
+        self.e.abs() * WYVILL_MAX_SLOPE / self.r
+    }
+    fn lipschitz_box(&self, b: &Aabb) -> f32 {
+        self.e.abs() * wyvill_slope(self.d_range(b)) / self.r
+    }
+}
+
+#[derive(Clone, Debug)]
+enum Shape {
+    Ball(Vec3, f32, f32),
+    Blend(Vec<Shape>),
+    Union(Vec<Shape>),
+    Inter(Vec<Shape>),
+    Diff(Box<Shape>, Vec<Shape>),
+    Move(Box<Shape>, Vec3, f32, f32),
+    Warp(Box<Shape>, f32, u32),
+}
+
+fn shape() -> impl Strategy<Value = Shape> {
+    let v = || (-6.0f32..6.0, -6.0f32..6.0, -6.0f32..6.0).prop_map(|(x, y, z)| Vec3::new(x, y, z));
+    let leaf = (v(), 1.0f32..5.0, prop_oneof![0.6f32..1.6, -1.0f32..-0.3])
+        .prop_map(|(c, r, e)| Shape::Ball(c, r, e));
+    leaf.prop_recursive(3, 24, 4, move |inner| {
+        prop_oneof![
+            prop::collection::vec(inner.clone(), 1..20).prop_map(Shape::Blend),
+            prop::collection::vec(inner.clone(), 1..4).prop_map(Shape::Union),
+            prop::collection::vec(inner.clone(), 1..3).prop_map(Shape::Inter),
+            (inner.clone(), prop::collection::vec(inner.clone(), 1..3))
+                .prop_map(|(a, b)| Shape::Diff(Box::new(a), b)),
+            (inner.clone(), v(), 0.5f32..2.0, -3.0f32..3.0).prop_map(|(a, t, s, r)| Shape::Move(
+                Box::new(a),
+                t,
+                s,
+                r
+            )),
+            (inner, 0.1f32..1.0, 0u32..100).prop_map(|(a, amp, seed)| Shape::Warp(
+                Box::new(a),
+                amp,
+                seed
+            )),
+        ]
+    })
+}
+
+fn build(s: &Shape, b: &mut TreeBuilder) -> NodeId {
+    let all = |v: &[Shape], b: &mut TreeBuilder| v.iter().map(|c| build(c, b)).collect::<Vec<_>>();
+    match s {
+        Shape::Ball(c, r, e) => b.leaf(
+            Arc::new(Ball {
+                c: *c,
+                r: *r,
+                e: *e,
+            }),
+            None,
+        ),
+        Shape::Blend(v) => {
+            let cs = all(v, b);
+            b.blend(cs, None)
+        }
+        Shape::Union(v) => {
+            let cs = all(v, b);
+            b.union(cs, None)
+        }
+        Shape::Inter(v) => {
+            let cs = all(v, b);
+            b.intersection(cs, None)
+        }
+        Shape::Diff(a, v) => {
+            let a = build(a, b);
+            let cs = all(v, b);
+            b.difference(a, cs, None)
+        }
+        Shape::Move(a, t, s, r) => {
+            let a = build(a, b);
+            let m = Affine3A::from_scale_rotation_translation(
+                Vec3::new(*s, 1.0, 1.0 / s),
+                Quat::from_rotation_z(*r),
+                *t,
+            );
+            b.transform(a, m, None)
+        }
+        Shape::Warp(a, amp, seed) => {
+            let a = build(a, b);
+            let region = Aabb::new(Vec3::splat(-3.0), Vec3::splat(3.0));
+            b.warp(
+                a,
+                Warp::new(Fbm::with(*seed, 3.0, 2), *seed, *amp, Some((region, 2.0))),
+                None,
+            )
+        }
+    }
+}
+
+fn tree(s: &Shape) -> Tree {
+    let mut b = TreeBuilder::new();
+    let root = build(s, &mut b);
+    b.build(root)
+}
+
+/// Deterministic points in a box.
+fn points(b: &Aabb, n: usize, seed: u32) -> Vec<Vec3> {
+    let mut s = seed.wrapping_mul(2_654_435_761).wrapping_add(1);
+    let mut r = move || {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        (s >> 8) as f32 / (1u32 << 24) as f32
+    };
+    let mut v: Vec<Vec3> = b.corners().to_vec();
+    while v.len() < n {
+        v.push(b.min + b.size() * Vec3::new(r(), r(), r()));
+    }
+    v
+}
+
+fn test_box() -> impl Strategy<Value = Aabb> {
+    (-9.0f32..9.0, -9.0f32..9.0, -9.0f32..9.0, 0.05f32..6.0).prop_map(|(x, y, z, s)| {
+        Aabb::new(
+            Vec3::new(x, y, z),
+            Vec3::new(x + s, y + s * 0.7, z + s * 1.3),
+        )
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, .. ProptestConfig::default() })]
+
+    #[test]
+    fn intervals_contain_samples(s in shape(), b in test_box()) {
+        // Every node of the tree, not only the root.
+        let t = tree(&s);
+        for id in 0..t.nodes().len() as NodeId {
+            let n = t.subtree(id);
+            let iv = n.interval(&b);
+            for p in points(&b, 64, 1) {
+                let v = n.value(p);
+                prop_assert!(iv.lo - 1e-4 <= v && v <= iv.hi + 1e-4, "{v} not in {iv:?} at {p}");
+            }
+        }
+    }
+
+    #[test]
+    fn lipschitz_bounds_hold(s in shape(), b in test_box()) {
+        let t = tree(&s);
+        let ps = points(&b, 40, 2);
+        for id in 0..t.nodes().len() as NodeId {
+            let n = t.subtree(id);
+            let (lg, lb) = (n.lipschitz(), n.lipschitz_box(&b));
+            for w in ps.windows(2) {
+                let (p, q) = (w[0], w[1]);
+                let df = (n.value(p) - n.value(q)).abs();
+                let d = (p - q).length();
+                prop_assert!(df <= lb * d + 1e-4, "local: {df} > {lb}·{d}");
+                prop_assert!(df <= lg * d + 1e-4, "global: {df} > {lg}·{d}");
+            }
+        }
+    }
+
+    #[test]
+    fn support_is_where_the_field_lives(s in shape(), b in test_box()) {
+        let t = tree(&s);
+        let sup = t.support();
+        for p in points(&b, 32, 3) {
+            if !sup.contains(p) {
+                prop_assert_eq!(t.value(p), 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn z_bands_contain_every_crossing(s in shape(), x in -8.0f32..8.0, y in -8.0f32..8.0, w in 0.1f32..3.0) {
+        let t = tree(&s);
+        let fp = Rect::new(glam::Vec2::new(x, y), glam::Vec2::new(x + w, y + w));
+        let mut bands = ZBands::new();
+        t.z_bands(&fp, Interval::new(-20.0, 20.0), &mut bands);
+        for (i, j) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.5, 0.5), (1.0, 1.0)] {
+            let (px, py) = (x + w * i, y + w * j);
+            let mut last = t.value(Vec3::new(px, py, -20.0)) - T;
+            for k in 1..=800 {
+                let z = -20.0 + k as f32 * 0.05;
+                let v = t.value(Vec3::new(px, py, z)) - T;
+                if (v > 0.0) != (last > 0.0) {
+                    prop_assert!(bands.contains(z) || bands.contains(z - 0.05), "crossing at z={z} outside {bands:?}");
+                }
+                last = v;
+            }
+        }
+    }
+
+    #[test]
+    fn gradients_match_finite_differences(s in shape(), b in test_box()) {
+        let t = tree(&s);
+        let h = 1e-3;
+        for p in points(&b, 24, 4) {
+            let (v, g) = t.value_grad(p);
+            prop_assert!((v - t.value(p)).abs() < 1e-5);
+            let fd = Vec3::new(
+                t.value(p + Vec3::X * h) - t.value(p - Vec3::X * h),
+                t.value(p + Vec3::Y * h) - t.value(p - Vec3::Y * h),
+                t.value(p + Vec3::Z * h) - t.value(p - Vec3::Z * h),
+            ) / (2.0 * h);
+            // min/max kinks and the skeleton are non-smooth: skip points where the two
+            // one-sided estimates disagree.
+            let smooth = (0..3).all(|a| {
+                let e = Vec3::AXES[a] * h;
+                let fwd = (t.value(p + e) - v) / h;
+                let bwd = (v - t.value(p - e)) / h;
+                (fwd - bwd).abs() < 1e-2 * (1.0 + t.lipschitz())
+            });
+            if smooth {
+                prop_assert!((g - fd).length() < 2e-2 * (1.0 + t.lipschitz()), "∇ {g} vs FD {fd} at {p}");
+            }
+        }
+    }
+
+    #[test]
+    fn pruning_preserves_values(s in shape(), b in test_box()) {
+        let t = tree(&s);
+        let pruned = t.prune(&b).unwrap();
+        for p in points(&b, 48, 5) {
+            prop_assert!((t.value(p) - pruned.value(p)).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn grid_evaluation_matches_point_evaluation(s in shape()) {
+        let t = tree(&s);
+        let grid = Grid { origin: Vec3::new(-9.0, -8.5, -9.3), step: Vec3::new(0.9, 0.8, 0.85), dims: [21, 19, 23] };
+        let fast = eval_grid(&t, &grid);
+        let naive = eval_grid_naive(&t, &grid);
+        for (a, b) in fast.iter().zip(&naive) {
+            prop_assert!((a - b).abs() < 1e-5, "{a} vs {b}");
+        }
+    }
+}
+
+#[test]
+fn blend_bvh_answers_like_a_linear_scan() {
+    // 400 balls: the blend gets a BVH; compare with the same sum evaluated leaf by leaf.
+    let balls: Vec<Ball> = points(&Aabb::new(Vec3::splat(-50.0), Vec3::splat(50.0)), 400, 9)
+        .into_iter()
+        .map(|c| Ball { c, r: 4.0, e: 1.0 })
+        .collect();
+    let mut b = TreeBuilder::new();
+    let ids: Vec<NodeId> = balls
+        .iter()
+        .map(|x| {
+            b.leaf(
+                Arc::new(Ball {
+                    c: x.c,
+                    r: x.r,
+                    e: x.e,
+                }),
+                None,
+            )
+        })
+        .collect();
+    let root = b.blend(ids, None);
+    let t = b.build(root);
+    // The global bound uses overlap groups: far below the sum of all 400 slopes.
+    assert!(t.lipschitz() < 400.0 * balls[0].lipschitz() / 4.0);
+    for p in points(&Aabb::new(Vec3::splat(-55.0), Vec3::splat(55.0)), 5000, 10) {
+        let direct: f32 = balls.iter().map(|x| x.value(p)).sum();
+        assert!((t.value(p) - direct).abs() < 1e-5);
+    }
+}
