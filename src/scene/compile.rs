@@ -89,9 +89,6 @@ impl Compiler<'_> {
                 self.builder.difference(base, carves, name)
             }
             NodeSpec::Transform(t) => {
-                if t.scale.0.abs().min_element() < 1e-6 {
-                    return Err(self.error(n, "scale factors must be non-zero"));
-                }
                 let rotation = t.rotate.map_or(Quat::IDENTITY, |r| {
                     Quat::from_axis_angle(r.axis.unit(), r.degrees.0.to_radians())
                 });

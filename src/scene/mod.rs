@@ -9,4 +9,4 @@ pub mod value;
 pub use compile::{Compiled, compile_scene};
 pub use load::{SceneError, SceneFile, load, parse_scene, ron_options};
 pub use spec::{FORMAT_VERSION, NodeSpec, Scene};
-pub use value::{Dir3, Finite, NonNegative, P2, P3, Positive, Unit};
+pub use value::{Dir3, Finite, NonNegative, P2, P3, Positive, Scale3, Unit};

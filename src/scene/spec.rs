@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::value::{Dir3, Finite, P3, Positive};
+use super::value::{Dir3, Finite, P3, Positive, Scale3};
 use crate::field::NoiseSpec;
 
 /// The tree-file format version this build reads and writes.
@@ -95,14 +95,10 @@ pub struct TransformSpec {
     pub rotate: Option<Rotation>,
     /// Per-axis scale; a negative factor mirrors (e.g. `(1, 1, -1)` turns a terrain upside
     /// down). No factor may be 0.
-    #[serde(default = "unit_scale")]
-    pub scale: P3,
+    #[serde(default)]
+    pub scale: Scale3,
     /// The placed subtree.
     pub child: Box<NodeSpec>,
-}
-
-fn unit_scale() -> P3 {
-    P3(glam::Vec3::ONE)
 }
 
 /// A box region with a falloff around it.

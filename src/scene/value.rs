@@ -122,6 +122,32 @@ impl Serialize for P2 {
     }
 }
 
+/// Per-axis factors `(x, y, z)`, none of them 0 (negative mirrors).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Scale3(pub Vec3);
+
+impl<'de> Deserialize<'de> for Scale3 {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let P3(v) = P3::deserialize(d)?;
+        if v.abs().min_element() < 1e-6 {
+            return Err(D::Error::custom(format!("expected non-zero scale factors, found {v}")));
+        }
+        Ok(Scale3(v))
+    }
+}
+
+impl Serialize for Scale3 {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        P3(self.0).serialize(s)
+    }
+}
+
+impl Default for Scale3 {
+    fn default() -> Self {
+        Scale3(Vec3::ONE)
+    }
+}
+
 /// A non-zero direction `(x, y, z)`; normalised when used.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Dir3(pub Vec3);
