@@ -4,6 +4,7 @@ pub mod bounds;
 pub mod contract;
 pub mod falloff;
 pub mod noise;
+pub mod skeleton;
 
 pub use bounds::{Aabb, Interval, Rect, ZBands};
 pub use contract::{Elevation, ElevationSource, Field};
