@@ -7,7 +7,9 @@ use glam::{Affine3A, Quat};
 
 use super::load::{SceneError, SceneFile};
 use super::spec::{NodeSpec, Scene};
-use crate::field::{Aabb, Fbm, NodeId, Tree, TreeBuilder, Warp};
+use std::sync::Arc;
+
+use crate::field::{Aabb, Fbm, NodeId, Primitive, Tree, TreeBuilder, Warp};
 
 /// A compiled scene: the tree, and for each node of the scene's root (pre-order, the order
 /// of [`NodeSpec::walk`]) the compiled node it became.
@@ -68,6 +70,10 @@ impl Compiler<'_> {
     fn node_inner(&mut self, n: &NodeSpec, depth: usize) -> Result<NodeId, SceneError> {
         let name = n.name().map(str::to_string);
         Ok(match n {
+            NodeSpec::Primitive(p) => {
+                let leaf = Primitive::from_spec(p, self.scene.seed);
+                self.builder.leaf(Arc::new(leaf), name)
+            }
             NodeSpec::Blend(x) => {
                 let cs = self.children(&x.children, depth)?;
                 self.builder.blend(cs, name)

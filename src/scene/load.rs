@@ -140,8 +140,11 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
     Ok(scene)
 }
 
+/// Position of the `version:` field (not a mention of the word in a comment).
 fn find_version(text: &str) -> Option<(usize, usize)> {
-    text.find("version").map(|at| line_col(text, at))
+    text.match_indices("version")
+        .find(|(at, w)| text[at + w.len()..].trim_start().starts_with(':'))
+        .map(|(at, _)| line_col(text, at))
 }
 
 /// Names are valid and unique; every instance refers to an existing node and no instance

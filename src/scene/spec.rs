@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::value::{Dir3, Finite, P3, Positive, Scale3};
-use crate::field::NoiseSpec;
+use crate::field::{NoiseSpec, PrimitiveSpec};
 
 /// The tree-file format version this build reads and writes.
 pub const FORMAT_VERSION: u32 = 1;
@@ -30,6 +30,8 @@ pub struct Scene {
 /// One node of a tree file. In RON: `Blend(name: "root", children: [...])`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum NodeSpec {
+    /// A skeletal primitive (seed 002 §5.2): `energy · g(d̃ / R)` around a skeleton.
+    Primitive(PrimitiveSpec),
     /// Sum of the children (Wyvill blend).
     Blend(Nary),
     /// Max of the children.
@@ -169,6 +171,7 @@ impl NodeSpec {
     /// The node's kind as written in the file.
     pub fn kind(&self) -> &'static str {
         match self {
+            NodeSpec::Primitive(_) => "Primitive",
             NodeSpec::Blend(_) => "Blend",
             NodeSpec::Union(_) => "Union",
             NodeSpec::Intersection(_) => "Intersection",
@@ -182,6 +185,7 @@ impl NodeSpec {
     /// The node's name.
     pub fn name(&self) -> Option<&str> {
         match self {
+            NodeSpec::Primitive(n) => n.name.as_deref(),
             NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => {
                 n.name.as_deref()
             }
@@ -201,7 +205,7 @@ impl NodeSpec {
             NodeSpec::Difference(d) => std::iter::once(&*d.base).chain(&d.carves).collect(),
             NodeSpec::Transform(t) => vec![&*t.child],
             NodeSpec::Warp(w) => vec![&*w.child],
-            NodeSpec::Instance(_) => Vec::new(),
+            NodeSpec::Instance(_) | NodeSpec::Primitive(_) => Vec::new(),
         }
     }
 
@@ -227,7 +231,7 @@ impl NodeSpec {
                 .collect(),
             NodeSpec::Transform(t) => vec![&mut *t.child],
             NodeSpec::Warp(w) => vec![&mut *w.child],
-            NodeSpec::Instance(_) => Vec::new(),
+            NodeSpec::Instance(_) | NodeSpec::Primitive(_) => Vec::new(),
         }
     }
 

@@ -130,7 +130,9 @@ impl<'de> Deserialize<'de> for Scale3 {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         let P3(v) = P3::deserialize(d)?;
         if v.abs().min_element() < 1e-6 {
-            return Err(D::Error::custom(format!("expected non-zero scale factors, found {v}")));
+            return Err(D::Error::custom(format!(
+                "expected non-zero scale factors, found {v}"
+            )));
         }
         Ok(Scale3(v))
     }
