@@ -105,7 +105,8 @@ impl Primitive {
             }
         }
         let a = noise.map_or(0.0, |n| n.amplitude);
-        let support = skeleton.bounds().dilate(radius + a);
+        // Grown by one part in 10⁵ so rounding never puts a non-zero value outside.
+        let support = skeleton.bounds().dilate((radius + a) * 1.000_01);
         let mut p = Primitive {
             skeleton,
             radius,
@@ -179,7 +180,14 @@ impl Primitive {
     #[inline]
     pub fn normalized_distance(&self, p: Vec3) -> f32 {
         match self.noise {
-            None => self.skeleton.distance_capped(p, self.radius) * self.inv_radius,
+            None => {
+                let d = self.skeleton.distance_capped(p, self.radius);
+                if d >= self.radius {
+                    1.0
+                } else {
+                    d * self.inv_radius
+                }
+            }
             Some(n) => self.noisy::<false>(&n, p).0,
         }
     }
@@ -478,7 +486,10 @@ mod tests {
         let x: f32 = 1.5 / 3.0;
         let expect = 2.0 * (1.0 - x * x).powi(3);
         assert!((p.value(Vec3::new(1.0, 2.0, 6.5)) - expect).abs() < 1e-6);
-        assert_eq!(p.support(), Aabb::around(Vec3::new(1.0, 2.0, 3.0), 5.0));
+        assert!(
+            p.support()
+                .contains_box(&Aabb::around(Vec3::new(1.0, 2.0, 3.0), 5.0))
+        );
         let carve = sphere(-1.0, None);
         assert_eq!(carve.value(Vec3::new(1.0, 2.0, 3.0)), -1.0);
         let mut bands = ZBands::new();
