@@ -97,7 +97,7 @@ impl Primitive {
         let noise = noise.filter(|n| n.amplitude > 0.0);
         if let Some(n) = noise {
             let max = MAX_AMPLITUDE_RATIO * radius;
-            if !(n.amplitude <= max) {
+            if n.amplitude.is_nan() || n.amplitude > max {
                 return Err(PrimitiveError::Amplitude {
                     amplitude: n.amplitude,
                     max,
