@@ -239,6 +239,12 @@ impl Skeleton {
         1.0
     }
 
+    /// The skeleton as one convex set, or `None` for the many-piece kinds (polyline,
+    /// curve, prism).
+    pub fn convex(&self) -> Option<&dyn Project> {
+        dispatch!(self, s => Some(s as &dyn Project), _c => None, _pr => None)
+    }
+
     /// Calls `f(piece, ρ)` for the convex pieces whose distance `ρ` to `p` is below
     /// `reach`; `f` returns the new reach (pieces beyond it are skipped). A convex kind is
     /// its own single piece; a chain's pieces are its segments, a prism's the triangular

@@ -121,13 +121,13 @@ impl SkeletonSpec {
     /// The checks serde cannot make field by field: a cone's apex must not lie on its
     /// base. (Everything else is validated while parsing.)
     pub fn check(&self) -> Result<(), String> {
-        if let SkeletonSpec::Cone { base, apex, radius } = self {
-            if super::Cone::new(base.0, apex.0, radius.get()).is_none() {
-                return Err(format!(
-                    "a cone's apex must differ from its base, both are at {}",
-                    base.0
-                ));
-            }
+        if let SkeletonSpec::Cone { base, apex, radius } = self
+            && super::Cone::new(base.0, apex.0, radius.get()).is_none()
+        {
+            return Err(format!(
+                "a cone's apex must differ from its base, both are at {}",
+                base.0
+            ));
         }
         Ok(())
     }
