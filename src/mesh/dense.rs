@@ -20,7 +20,7 @@ use super::cell::{ambiguity_mask, edge_t};
 use super::mesh::Mesh;
 use super::stats::MeshStats;
 use super::tables::{EDGE_AXIS, EDGE_CORNERS, TABLES};
-use super::MeshError;
+use super::{MeshError, split_parts};
 
 /// Cell layers per parallel slab (a constant, so the output never depends on threads).
 pub const SLAB_LAYERS: usize = 16;
@@ -158,17 +158,6 @@ pub fn mc_dense(grid: &DenseGrid<'_>, iso: f32) -> (Mesh, MeshStats) {
         ..MeshStats::default()
     };
     (mesh, stats)
-}
-
-/// Splits `v` into consecutive mutable parts of the given lengths.
-fn split_parts<'v, T>(mut v: &'v mut [T], lens: &[usize]) -> Vec<&'v mut [T]> {
-    let mut parts = Vec::with_capacity(lens.len());
-    for &n in lens {
-        let (head, tail) = v.split_at_mut(n);
-        parts.push(head);
-        v = tail;
-    }
-    parts
 }
 
 /// What one slab produces, with slab-local vertex indices.

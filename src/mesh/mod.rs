@@ -10,15 +10,20 @@
 //! `docs/meshing.md`.
 
 pub mod cell;
+pub mod columns;
 pub mod dense;
 // pub mod export;
+pub mod grid;
 pub mod mesh;
 pub mod npy;
+pub mod polygonize;
 pub mod stats;
 pub mod tables;
 
 pub use dense::{DenseGrid, mc_dense};
+pub use grid::GridSpec;
 pub use mesh::{Attribute, Mesh, Topology, TopologyError};
+pub use polygonize::{MeshOptions, polygonize};
 pub use stats::MeshStats;
 
 /// Errors of the mesher and its exporters.
@@ -30,4 +35,15 @@ pub enum MeshError {
     /// The extraction would exceed the memory budget.
     #[error(transparent)]
     Budget(#[from] crate::io::IoError),
+}
+
+/// Splits `v` into consecutive mutable parts of the given lengths.
+pub(crate) fn split_parts<'v, T>(mut v: &'v mut [T], lens: &[usize]) -> Vec<&'v mut [T]> {
+    let mut parts = Vec::with_capacity(lens.len());
+    for &n in lens {
+        let (head, tail) = v.split_at_mut(n);
+        parts.push(head);
+        v = tail;
+    }
+    parts
 }

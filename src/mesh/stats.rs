@@ -19,8 +19,11 @@ pub struct MeshStats {
     pub elevation_columns: u64,
     /// Field evaluations at grid samples (#C).
     pub field_evaluations: u64,
-    /// Elevation evaluations `h(x, y)` (direct extraction, its normals).
+    /// Elevation evaluations `h(x, y)` for samples (direct extraction): one per
+    /// elevation column.
     pub height_evaluations: u64,
+    /// Elevation evaluations spent on vertices (normals, refinement).
+    pub vertex_height_evaluations: u64,
     /// Field evaluations spent placing vertices (refinement, mixed edges).
     pub vertex_evaluations: u64,
     /// Gradient evaluations for normals.
@@ -70,8 +73,8 @@ impl fmt::Display for MeshStats {
             )?;
             writeln!(
                 f,
-                "vertex evals      {:>14}   gradient evals {}",
-                self.vertex_evaluations, self.gradient_evaluations
+                "vertex evals      {:>14}   gradient evals {}   vertex height evals {}",
+                self.vertex_evaluations, self.gradient_evaluations, self.vertex_height_evaluations
             )?;
         }
         writeln!(f, "vertices          {:>14}   triangles {}", self.vertices, self.triangles)?;
