@@ -12,7 +12,7 @@
 pub mod cell;
 pub mod columns;
 pub mod dense;
-// pub mod export;
+pub mod export;
 pub mod grid;
 pub mod mesh;
 pub mod npy;
