@@ -1,5 +1,8 @@
 //! The command line: a thin layer over the library. Each subcommand lives in its own file.
 
+pub mod build;
+pub mod sample;
+
 use clap::{Parser, Subcommand};
 
 /// karstic: implicit terrain modelling — DEMs amplified with caves, arches and overhangs.
@@ -13,9 +16,17 @@ pub struct Cli {
 
 /// All subcommands.
 #[derive(Subcommand, Debug)]
-pub enum Command {}
+pub enum Command {
+    /// Build a mesh (.glb, .gltf, .obj, .ply) from a tree with bound-pruned Marching Cubes.
+    Build(build::BuildArgs),
+    /// Sample a tree's field on a grid as a float32 .npy with a JSON sidecar.
+    Sample(sample::SampleArgs),
+}
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
-    match cli.command {}
+    match cli.command {
+        Command::Build(a) => build::run(a),
+        Command::Sample(a) => sample::run(a),
+    }
 }

@@ -17,6 +17,7 @@ pub mod grid;
 pub mod mesh;
 pub mod npy;
 pub mod polygonize;
+pub mod sample;
 pub mod stats;
 pub mod tables;
 

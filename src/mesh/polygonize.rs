@@ -73,7 +73,13 @@ impl Default for MeshOptions {
 }
 
 /// Number of stages that advance [`MeshOptions::progress`] once per tile.
-pub const PROGRESS_STAGES: u64 = 4;
+const PROGRESS_STAGES: u64 = 4;
+
+/// The length to give [`MeshOptions::progress`] for an extraction on `grid`.
+pub fn progress_steps(grid: &GridSpec) -> u64 {
+    let tiles = |cells: usize| (cells + 1).div_ceil(TILE) as u64;
+    tiles(grid.cells[0]) * tiles(grid.cells[1]) * PROGRESS_STAGES
+}
 
 /// Extracts the surface `f = T` of `field` on `grid` (solid where `f > T`): a welded,
 /// crack-free, 2-manifold mesh wound counter-clockwise from outside, with outward
