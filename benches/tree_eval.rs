@@ -86,7 +86,9 @@ fn bench(c: &mut Criterion) {
         let mut g = c.benchmark_group(format!("grid_256_{name}"));
         g.throughput(Throughput::Elements(grid.len() as u64));
         g.sample_size(10);
-        g.bench_function("pruned", |b| b.iter(|| black_box(eval_grid(tree, &grid))));
+        g.bench_function("pruned", |b| {
+            b.iter(|| black_box(eval_grid(tree, &grid, None)))
+        });
         g.bench_function("naive", |b| {
             b.iter(|| black_box(eval_grid_naive(tree, &grid)))
         });

@@ -279,7 +279,7 @@ proptest! {
     fn grid_evaluation_matches_point_evaluation(s in shape()) {
         let t = tree(&s);
         let grid = Grid { origin: Vec3::new(-9.0, -8.5, -9.3), step: Vec3::new(0.9, 0.8, 0.85), dims: [21, 19, 23] };
-        let fast = eval_grid(&t, &grid);
+        let fast = eval_grid(&t, &grid, None);
         let naive = eval_grid_naive(&t, &grid);
         for (a, b) in fast.iter().zip(&naive) {
             prop_assert!((a - b).abs() < 1e-5, "{a} vs {b}");

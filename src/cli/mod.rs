@@ -1,6 +1,8 @@
 //! The command line: a thin layer over the library. Each subcommand lives in its own file.
 
+pub mod build;
 pub mod eval;
+pub mod sample;
 pub mod tree;
 
 use clap::{Parser, Subcommand};
@@ -17,16 +19,27 @@ pub struct Cli {
 /// All subcommands.
 #[derive(Subcommand, Debug)]
 pub enum Command {
+    /// Build a mesh (.glb, .gltf, .obj, .ply) from a tree with bound-pruned Marching Cubes.
+    Build(build::BuildArgs),
     /// Validate, inspect and edit tree files.
     Tree(tree::TreeArgs),
     /// Print field values and gradients at points (CSV `x,y,z` from a file or stdin).
     Eval(eval::EvalArgs),
+    /// Sample a tree's field on a grid as a float32 .npy with a JSON sidecar.
+    Sample(sample::SampleArgs),
+}
+
+/// Loads and compiles a tree file.
+pub fn load_tree(path: &std::path::Path) -> anyhow::Result<crate::field::Tree> {
+    Ok(crate::scene::load(path)?.compile()?.tree)
 }
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Build(a) => build::run(a),
         Command::Tree(a) => tree::run(a),
         Command::Eval(a) => eval::run(a),
+        Command::Sample(a) => sample::run(a),
     }
 }

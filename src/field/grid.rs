@@ -39,9 +39,19 @@ impl Grid {
     }
 }
 
+/// Number of z-slabs [`eval_grid`] reports progress for.
+pub fn slab_count(grid: &Grid) -> u64 {
+    grid.dims[2].div_ceil(BRICK) as u64
+}
+
 /// Values of `field` on `grid` (x fastest, then y, then z), pruned per brick through
 /// [`Field::eval_block`], in parallel. The result does not depend on the thread count.
-pub fn eval_grid(field: &dyn Field, grid: &Grid) -> Vec<f32> {
+/// `progress` advances once per slab of [`BRICK`] layers ([`slab_count`] in all).
+pub fn eval_grid(
+    field: &dyn Field,
+    grid: &Grid,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Vec<f32> {
     let [nx, ny, nz] = grid.dims;
     let mut out = vec![0.0f32; grid.len()];
     let slab = nx * ny * BRICK;
@@ -52,6 +62,9 @@ pub fn eval_grid(field: &dyn Field, grid: &Grid) -> Vec<f32> {
         let k0 = s * BRICK;
         let dims = [nx, ny, (nz - k0).min(BRICK)];
         field.eval_block(grid.point(0, 0, k0), grid.step, dims, chunk);
+        if let Some(p) = progress {
+            p.inc(1);
+        }
     });
     out
 }

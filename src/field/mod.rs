@@ -24,7 +24,7 @@ pub use bounds::{Aabb, Interval, Rect, ZBands};
 pub use box_bounds::map_box;
 pub use contract::{Elevation, ElevationSource, Field};
 pub use falloff::T;
-pub use grid::{Grid, eval_grid, eval_grid_naive};
+pub use grid::{Grid, eval_grid, eval_grid_naive, slab_count};
 pub use node::{Node, NodeId};
 pub use noise::{Fbm, NoiseSpec};
 pub use primitive::{Noise, Primitive, PrimitiveError, PrimitiveSpec};

@@ -1,0 +1,62 @@
+//! Stanford PLY export, binary little-endian, in karstic's Z-up frame: positions,
+//! normals, optional `red green blue` bytes, custom attributes as lower-case float
+//! properties, and triangles as `uchar`-counted `uint` lists.
+
+use std::path::Path;
+
+use super::{ExportError, ExportOptions, vertex_colors};
+use crate::io::write_atomic;
+use crate::mesh::Mesh;
+
+/// Writes `mesh` as a binary PLY file.
+pub fn write_ply(mesh: &Mesh, path: &Path, opts: &ExportOptions) -> Result<(), ExportError> {
+    let colors = opts.color.then(|| vertex_colors(mesh));
+    write_atomic(path, |w| {
+        writeln!(w, "ply\nformat binary_little_endian 1.0")?;
+        writeln!(
+            w,
+            "comment karstic {} (Z up, metres)",
+            env!("CARGO_PKG_VERSION")
+        )?;
+        writeln!(w, "element vertex {}", mesh.positions.len())?;
+        for p in ["x", "y", "z", "nx", "ny", "nz"] {
+            writeln!(w, "property float {p}")?;
+        }
+        if colors.is_some() {
+            writeln!(
+                w,
+                "property uchar red\nproperty uchar green\nproperty uchar blue"
+            )?;
+        }
+        for a in &mesh.attributes {
+            writeln!(w, "property float {}", a.name.to_ascii_lowercase())?;
+        }
+        writeln!(w, "element face {}", mesh.triangles.len())?;
+        writeln!(w, "property list uchar uint vertex_indices\nend_header")?;
+        let mut rec = Vec::with_capacity(64);
+        for i in 0..mesh.positions.len() {
+            rec.clear();
+            for v in mesh.positions[i].iter().chain(&mesh.normals[i]) {
+                rec.extend_from_slice(&v.to_le_bytes());
+            }
+            if let Some(c) = &colors {
+                // Linear colour to 8-bit sRGB.
+                rec.extend(c[i].map(|x| (x.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0).round() as u8));
+            }
+            for a in &mesh.attributes {
+                rec.extend_from_slice(&a.values[i].to_le_bytes());
+            }
+            w.write_all(&rec)?;
+        }
+        for t in &mesh.triangles {
+            rec.clear();
+            rec.push(3);
+            for v in t {
+                rec.extend_from_slice(&v.to_le_bytes());
+            }
+            w.write_all(&rec)?;
+        }
+        Ok(())
+    })?;
+    Ok(())
+}

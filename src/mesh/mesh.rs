@@ -1,0 +1,252 @@
+//! The indexed triangle mesh the extractors produce, its measures and topology checks.
+
+use glam::Vec3;
+
+use crate::field::Aabb;
+
+/// A per-vertex scalar attribute (exported to glTF as `_NAME`, e.g. `_AMPLITUDE`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Attribute {
+    /// Upper-case name without the leading underscore, e.g. `AMPLITUDE`.
+    pub name: String,
+    /// One value per vertex.
+    pub values: Vec<f32>,
+}
+
+/// An indexed triangle mesh in the tree's frame (Z up, metres). Triangles are wound
+/// counter-clockwise seen from outside the solid; normals point out of it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Vertex positions.
+    pub positions: Vec<[f32; 3]>,
+    /// Unit vertex normals.
+    pub normals: Vec<[f32; 3]>,
+    /// Triangles as vertex indices.
+    pub triangles: Vec<[u32; 3]>,
+    /// Extra per-vertex data.
+    pub attributes: Vec<Attribute>,
+}
+
+/// A topology defect found by [`Mesh::check_topology`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TopologyError {
+    /// A triangle repeats a vertex or has no area.
+    #[error("triangle {0} is degenerate")]
+    Degenerate(usize),
+    /// An edge is used more than twice, or twice in the same direction.
+    #[error("edge ({0}, {1}) is not 2-manifold or is inconsistently oriented")]
+    NonManifold(u32, u32),
+    /// An edge used once lies inside the allowed box, not on its faces.
+    #[error("boundary edge ({0}, {1}) is not on the box faces")]
+    Boundary(u32, u32),
+    /// A triangle refers to a vertex that does not exist.
+    #[error("triangle {0} refers to a missing vertex")]
+    Index(usize),
+}
+
+/// Counts from a successful [`Mesh::check_topology`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Topology {
+    /// Vertices referenced by triangles.
+    pub vertices: usize,
+    /// Distinct undirected edges.
+    pub edges: usize,
+    /// Triangles.
+    pub faces: usize,
+    /// Edges used by one triangle only.
+    pub boundary_edges: usize,
+}
+
+impl Topology {
+    /// `V − E + F`.
+    pub fn euler_characteristic(&self) -> i64 {
+        self.vertices as i64 - self.edges as i64 + self.faces as i64
+    }
+}
+
+impl Mesh {
+    /// Number of vertices.
+    pub fn vertex_count(&self) -> usize {
+        self.positions.len()
+    }
+
+    /// Vertex `i` as a vector.
+    #[inline]
+    pub fn position(&self, i: u32) -> Vec3 {
+        Vec3::from(self.positions[i as usize])
+    }
+
+    /// Total surface area.
+    pub fn area(&self) -> f64 {
+        self.triangles
+            .iter()
+            .map(|t| self.triangle_normal(t).length() as f64 * 0.5)
+            .sum()
+    }
+
+    /// Signed enclosed volume (divergence theorem); positive for a closed surface wound
+    /// counter-clockwise from outside.
+    pub fn volume(&self) -> f64 {
+        self.triangles
+            .iter()
+            .map(|&[a, b, c]| {
+                let (a, b, c) = (self.position(a), self.position(b), self.position(c));
+                a.as_dvec3().dot(b.as_dvec3().cross(c.as_dvec3())) / 6.0
+            })
+            .sum()
+    }
+
+    /// Bounding box of the vertices.
+    pub fn bounds(&self) -> Aabb {
+        Aabb::from_points(self.positions.iter().map(|&p| Vec3::from(p)))
+    }
+
+    /// Twice-area normal `(b − a) × (c − a)` of a triangle.
+    #[inline]
+    pub fn triangle_normal(&self, &[a, b, c]: &[u32; 3]) -> Vec3 {
+        let (a, b, c) = (self.position(a), self.position(b), self.position(c));
+        (b - a).cross(c - a)
+    }
+
+    /// Replaces every normal that is not a finite unit vector by the area-weighted
+    /// average of its triangles' normals (or +Z if that is zero too).
+    pub fn repair_normals(&mut self) {
+        let bad: Vec<bool> = self
+            .normals
+            .iter()
+            .map(|n| {
+                let l = Vec3::from(*n).length();
+                !(l.is_finite() && (l - 1.0).abs() < 1e-3)
+            })
+            .collect();
+        if !bad.contains(&true) {
+            return;
+        }
+        let mut acc = vec![Vec3::ZERO; self.positions.len()];
+        for t in &self.triangles {
+            let n = self.triangle_normal(t);
+            for &v in t {
+                if bad[v as usize] {
+                    acc[v as usize] += n;
+                }
+            }
+        }
+        for (i, n) in self.normals.iter_mut().enumerate() {
+            if bad[i] {
+                *n = acc[i].try_normalize().unwrap_or(Vec3::Z).into();
+            }
+        }
+    }
+
+    /// Checks that the mesh is a consistently oriented 2-manifold: no degenerate triangle,
+    /// every edge shared by exactly two triangles in opposite directions, except edges
+    /// used once, which must lie on a face of `open_faces` (within `tol`) — pass `None`
+    /// to require a closed surface.
+    pub fn check_topology(
+        &self,
+        open_faces: Option<(&Aabb, f32)>,
+    ) -> Result<Topology, TopologyError> {
+        let nv = self.positions.len() as u32;
+        let mut edges: Vec<(u32, u32, bool)> = Vec::with_capacity(self.triangles.len() * 3);
+        for (i, t) in self.triangles.iter().enumerate() {
+            if t.iter().any(|&v| v >= nv) {
+                return Err(TopologyError::Index(i));
+            }
+            if t[0] == t[1]
+                || t[1] == t[2]
+                || t[0] == t[2]
+                || self.triangle_normal(t).length() == 0.0
+            {
+                return Err(TopologyError::Degenerate(i));
+            }
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                edges.push((a.min(b), a.max(b), a < b));
+            }
+        }
+        edges.sort_unstable();
+        let on_faces = |p: Vec3, b: &Aabb, tol: f32| {
+            (0..3).any(|k| (p[k] - b.min[k]).abs() <= tol || (p[k] - b.max[k]).abs() <= tol)
+        };
+        let mut unique = 0;
+        let mut boundary = 0;
+        let mut i = 0;
+        while i < edges.len() {
+            let (a, b, dir) = edges[i];
+            let mut j = i + 1;
+            while j < edges.len() && edges[j].0 == a && edges[j].1 == b {
+                j += 1;
+            }
+            match j - i {
+                1 => {
+                    let (pa, pb) = (self.position(a), self.position(b));
+                    match open_faces {
+                        Some((bx, tol)) if on_faces(pa, bx, tol) && on_faces(pb, bx, tol) => {
+                            boundary += 1
+                        }
+                        _ => return Err(TopologyError::Boundary(a, b)),
+                    }
+                }
+                2 if edges[i + 1].2 != dir => {}
+                _ => return Err(TopologyError::NonManifold(a, b)),
+            }
+            unique += 1;
+            i = j;
+        }
+        let mut used = vec![false; self.positions.len()];
+        for t in &self.triangles {
+            for &v in t {
+                used[v as usize] = true;
+            }
+        }
+        Ok(Topology {
+            vertices: used.iter().filter(|&&u| u).count(),
+            edges: unique,
+            faces: self.triangles.len(),
+            boundary_edges: boundary,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tetra() -> Mesh {
+        Mesh {
+            positions: vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+            normals: vec![[0.0, 0.0, 1.0]; 4],
+            triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+            attributes: vec![],
+        }
+    }
+
+    #[test]
+    fn tetrahedron_measures() {
+        let m = tetra();
+        assert!((m.volume() - 1.0 / 6.0).abs() < 1e-9);
+        let t = m.check_topology(None).unwrap();
+        assert_eq!(t.euler_characteristic(), 2);
+    }
+
+    #[test]
+    fn flipped_triangle_is_caught() {
+        let mut m = tetra();
+        m.triangles[3] = [1, 3, 2];
+        assert!(matches!(
+            m.check_topology(None),
+            Err(TopologyError::NonManifold(..))
+        ));
+        let mut m = tetra();
+        m.triangles.pop();
+        assert!(matches!(
+            m.check_topology(None),
+            Err(TopologyError::Boundary(..))
+        ));
+    }
+}

@@ -1,0 +1,132 @@
+//! Sampling a field on a dense grid (`karstic sample`) and the JSON sidecar that tells
+//! other tools where the samples are.
+
+use std::path::Path;
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use super::MeshError;
+use crate::field::{Aabb, Grid, T};
+
+/// `dims` samples spanning `b` corner to corner (each axis needs at least 2).
+pub fn grid_spanning(b: &Aabb, dims: [usize; 3]) -> Result<Grid, MeshError> {
+    if dims.iter().any(|&d| d < 2) {
+        return Err(MeshError::GridShape(format!(
+            "resolution {}×{}×{}: each axis needs at least 2 samples",
+            dims[0], dims[1], dims[2]
+        )));
+    }
+    let size = b.size();
+    if b.is_empty() || !size.is_finite() || size.min_element() <= 0.0 {
+        return Err(MeshError::GridShape(format!(
+            "box {} .. {}: expected a finite box with positive size on every axis",
+            b.min, b.max
+        )));
+    }
+    let steps = Vec3::new(
+        dims[0] as f32 - 1.0,
+        dims[1] as f32 - 1.0,
+        dims[2] as f32 - 1.0,
+    );
+    Ok(Grid {
+        origin: b.min,
+        step: size / steps,
+        dims,
+    })
+}
+
+/// The JSON sidecar of a sampled `.npy` grid.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Sidecar {
+    /// NumPy shape `[nz, ny, nx]`.
+    pub shape: [usize; 3],
+    /// Position of sample `[0, 0, 0]` (x, y, z; metres, Z up).
+    pub origin: [f32; 3],
+    /// Distance between samples along x, y, z.
+    pub spacing: [f32; 3],
+    /// The surface is `value = iso`, solid where `value > iso`.
+    pub iso: f32,
+    /// Human-readable index convention.
+    pub layout: String,
+}
+
+impl Sidecar {
+    /// The sidecar of `spec`.
+    pub fn new(spec: &Grid) -> Self {
+        let [nx, ny, nz] = spec.dims;
+        Sidecar {
+            shape: [nz, ny, nx],
+            origin: spec.origin.into(),
+            spacing: spec.step.into(),
+            iso: T,
+            layout: "float32 C order, value[z][y][x] at origin + (x, y, z) * spacing".into(),
+        }
+    }
+
+    /// The sidecar path of an `.npy` path: same stem, `.json`.
+    pub fn path_for(npy: &Path) -> std::path::PathBuf {
+        npy.with_extension("json")
+    }
+
+    /// The grid it describes.
+    pub fn spec(&self) -> Grid {
+        let [nz, ny, nx] = self.shape;
+        Grid {
+            origin: Vec3::from(self.origin),
+            step: Vec3::from(self.spacing),
+            dims: [nx, ny, nz],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::field::{Field, Interval, eval_grid, falloff::sigma};
+
+    /// `σ(z0 − z)`: solid below the plane `z = z0`.
+    struct Ground(f32);
+
+    impl Field for Ground {
+        fn value(&self, p: Vec3) -> f32 {
+            sigma(self.0 - p.z, 1.0)
+        }
+        fn value_grad(&self, p: Vec3) -> (f32, Vec3) {
+            (self.value(p), Vec3::ZERO)
+        }
+        fn support(&self) -> Aabb {
+            Aabb::around(Vec3::ZERO, 10.0)
+        }
+        fn interval(&self, _b: &Aabb) -> Interval {
+            Interval::new(0.0, 1.0)
+        }
+        fn lipschitz(&self) -> f32 {
+            1.0
+        }
+        fn lipschitz_box(&self, _b: &Aabb) -> f32 {
+            1.0
+        }
+    }
+
+    #[test]
+    fn samples_in_c_order_spanning_the_box() {
+        let spec =
+            grid_spanning(&Aabb::new(Vec3::ZERO, Vec3::new(2.0, 1.0, 4.0)), [3, 2, 5]).unwrap();
+        assert_eq!(spec.step, Vec3::ONE);
+        let v = eval_grid(&Ground(2.0), &spec, None);
+        assert_eq!(v.len(), 30);
+        // Layer z = 2 is on the surface, below solid, above empty.
+        assert!(v[..6].iter().all(|&x| x == 1.0));
+        assert!(v[12..18].iter().all(|&x| x == T));
+        assert!(v[24..].iter().all(|&x| x == 0.0));
+        let s = Sidecar::new(&spec);
+        assert_eq!(s.shape, [5, 2, 3]);
+        assert_eq!(s.spec(), spec);
+        assert!(grid_spanning(&spec_box(), [1, 2, 2]).is_err());
+    }
+
+    fn spec_box() -> Aabb {
+        Aabb::new(Vec3::ZERO, Vec3::ONE)
+    }
+}
