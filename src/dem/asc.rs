@@ -329,19 +329,11 @@ pub fn write(dem: &Dem, path: &Path) -> Result<(), DemError> {
     let mut s = String::with_capacity(nx * ny * 8 + 200);
     let corner = [g.origin[0] - 0.5 * g.step[0], g.origin[1] - 0.5 * g.step[1]];
     let _ = writeln!(s, "ncols        {nx}\nnrows        {ny}");
-    let _ = writeln!(
-        s,
-        "xllcorner    {:.12}\nyllcorner    {:.12}",
-        corner[0], corner[1]
-    );
+    let _ = writeln!(s, "xllcorner    {}\nyllcorner    {}", corner[0], corner[1]);
     if (g.step[0] - g.step[1]).abs() <= 1e-12 * g.step[0].abs() {
-        let _ = writeln!(s, "cellsize     {:.12}", g.step[0]);
+        let _ = writeln!(s, "cellsize     {}", g.step[0]);
     } else {
-        let _ = writeln!(
-            s,
-            "dx           {:.12}\ndy           {:.12}",
-            g.step[0], g.step[1]
-        );
+        let _ = writeln!(s, "dx           {}\ndy           {}", g.step[0], g.step[1]);
     }
     let _ = writeln!(s, "NODATA_value {nodata}");
     for j in (0..ny).rev() {
