@@ -13,8 +13,13 @@ fn every_corpus_file_gives_its_expected_error() {
     let expected = std::fs::read_to_string(dir.join("expected.txt")).unwrap();
     let mut listed = Vec::new();
     let mut failures = Vec::new();
-    for line in expected.lines().filter(|l| !l.trim().is_empty() && !l.starts_with('#')) {
-        let (file, want) = line.split_once('\t').unwrap_or_else(|| panic!("expected.txt: no tab in {line:?}"));
+    for line in expected
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !l.starts_with('#'))
+    {
+        let (file, want) = line
+            .split_once('\t')
+            .unwrap_or_else(|| panic!("expected.txt: no tab in {line:?}"));
         listed.push(file.to_string());
         match dem::read(&dir.join(file), &ReadOptions::default()) {
             Ok(_) => failures.push(format!("{file}: read without error")),
@@ -32,7 +37,9 @@ fn every_corpus_file_gives_its_expected_error() {
         let name = entry.unwrap().file_name().to_string_lossy().into_owned();
         let data = !(name.ends_with(".json") || name.ends_with(".py") || name == "expected.txt");
         if data && !listed.contains(&name) {
-            let e = dem::read(&dir.join(&name), &ReadOptions::default()).err().map(|e| e.to_string());
+            let e = dem::read(&dir.join(&name), &ReadOptions::default())
+                .err()
+                .map(|e| e.to_string());
             failures.push(format!("{name}: not in expected.txt (gives {e:?})"));
         }
     }

@@ -5,6 +5,7 @@
 
 use std::io::Cursor;
 use std::path::Path;
+use std::sync::OnceLock;
 
 use glam::Vec2;
 use karstic::dem::{self, Dem, Georef, Heightfield, ReadOptions, asc, geotiff, hgt, png16};
@@ -14,7 +15,15 @@ use tiff::tags::Tag;
 
 fn small_dem() -> Dem {
     let (nx, ny) = (9, 7);
-    let z = (0..nx * ny).map(|k| if k == 20 { f32::NAN } else { 100.0 + (k as f32 * 0.37).sin() * 30.0 }).collect();
+    let z = (0..nx * ny)
+        .map(|k| {
+            if k == 20 {
+                f32::NAN
+            } else {
+                100.0 + (k as f32 * 0.37).sin() * 30.0
+            }
+        })
+        .collect();
     Dem {
         heightfield: Heightfield::new(nx, ny, Vec2::ZERO, Vec2::splat(30.0), z).unwrap(),
         georef: Georef {
@@ -27,19 +36,35 @@ fn small_dem() -> Dem {
 
 /// A GeoTIFF with the given sample type, compression and predictor, written by the `tiff`
 /// crate (other writers than ours).
-fn tiff_with<C: colortype::ColorType>(data: &[C::Inner], comp: Compression, pred: Predictor) -> Vec<u8>
+fn tiff_with<C: colortype::ColorType>(
+    data: &[C::Inner],
+    comp: Compression,
+    pred: Predictor,
+) -> Vec<u8>
 where
     [C::Inner]: tiff::encoder::TiffValue,
 {
     let mut buf = Cursor::new(Vec::new());
     {
-        let mut enc = TiffEncoder::new(&mut buf).unwrap().with_compression(comp).with_predictor(pred);
+        let mut enc = TiffEncoder::new(&mut buf)
+            .unwrap()
+            .with_compression(comp)
+            .with_predictor(pred);
         let mut img = enc.new_image::<C>(8, 6).unwrap();
         img.rows_per_strip(2).unwrap();
         let e = img.encoder();
-        e.write_tag(Tag::ModelPixelScaleTag, &[0.001f64, 0.001, 0.0][..]).unwrap();
-        e.write_tag(Tag::ModelTiepointTag, &[0.0f64, 0.0, 0.0, 10.0, 45.0, 0.0][..]).unwrap();
-        e.write_tag(Tag::GeoKeyDirectoryTag, &[1u16, 1, 0, 2, 1024, 0, 1, 2, 2048, 0, 1, 4326][..]).unwrap();
+        e.write_tag(Tag::ModelPixelScaleTag, &[0.001f64, 0.001, 0.0][..])
+            .unwrap();
+        e.write_tag(
+            Tag::ModelTiepointTag,
+            &[0.0f64, 0.0, 0.0, 10.0, 45.0, 0.0][..],
+        )
+        .unwrap();
+        e.write_tag(
+            Tag::GeoKeyDirectoryTag,
+            &[1u16, 1, 0, 2, 1024, 0, 1, 2, 2048, 0, 1, 4326][..],
+        )
+        .unwrap();
         e.write_tag(Tag::GdalNodata, "7").unwrap();
         img.write_data(data).unwrap();
     }
@@ -56,7 +81,11 @@ fn tiff_seeds() -> Vec<Vec<u8>> {
         tiff_with::<colortype::GrayI16>(&i16s, Compression::Lzw, Predictor::Horizontal),
         tiff_with::<colortype::Gray8>(&u8s, Compression::Packbits, Predictor::None),
         tiff_with::<colortype::Gray64Float>(&f64s, Compression::Uncompressed, Predictor::None),
-        tiff_with::<colortype::Gray32>(&u32s, Compression::Deflate(DeflateLevel::Fast), Predictor::Horizontal),
+        tiff_with::<colortype::Gray32>(
+            &u32s,
+            Compression::Deflate(DeflateLevel::Fast),
+            Predictor::Horizontal,
+        ),
     ]
 }
 
@@ -65,14 +94,40 @@ fn geotiff_write_bytes(d: &Dem) -> Vec<u8> {
 }
 
 fn png_seed() -> (Vec<u8>, String) {
-    let dir = tempfile::tempdir().unwrap();
-    let p = dir.path().join("s.png");
-    dem::write(&small_dem(), &p).unwrap();
-    (std::fs::read(&p).unwrap(), std::fs::read_to_string(p.with_extension("json")).unwrap())
+    static SEED: OnceLock<(Vec<u8>, String)> = OnceLock::new();
+    SEED.get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("s.png");
+        dem::write(&small_dem(), &p).unwrap();
+        (
+            std::fs::read(&p).unwrap(),
+            std::fs::read_to_string(p.with_extension("json")).unwrap(),
+        )
+    })
+    .clone()
+}
+
+/// Every seed: the TIFFs, the PNG and the ASCII grid.
+fn all_seeds() -> &'static [Vec<u8>] {
+    static SEEDS: OnceLock<Vec<Vec<u8>>> = OnceLock::new();
+    SEEDS.get_or_init(|| {
+        let mut seeds = tiff_seeds();
+        seeds.push(png_seed().0);
+        seeds.push(asc_seed());
+        seeds
+    })
 }
 
 fn asc_seed() -> Vec<u8> {
     b"ncols 4\nnrows 3\nxllcorner 100\nyllcorner 200\ncellsize 5\nNODATA_value -9999\n1 2 3 4\n5 -9999 7 8\n9 10 11 12\n".to_vec()
+}
+
+/// Cases per proptest: 400, or `DEM_FUZZ_CASES` for a long session.
+fn fuzz_cases() -> u32 {
+    std::env::var("DEM_FUZZ_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(400)
 }
 
 const PNG_SIDE: &str = "s.json";
@@ -88,12 +143,23 @@ fn read_all(bytes: &[u8], side: &str) -> usize {
     ok += asc::read_bytes(Path::new("f.asc"), bytes, None, &opts).is_ok() as usize;
     let prj = std::str::from_utf8(bytes).ok();
     ok += asc::read_bytes(Path::new("f.asc"), &asc_seed(), prj, &opts).is_ok() as usize;
-    ok += png16::read_bytes(Path::new("f.png"), bytes, Some((Path::new(PNG_SIDE), side)), &opts).is_ok() as usize;
+    ok += png16::read_bytes(
+        Path::new("f.png"),
+        bytes,
+        Some((Path::new(PNG_SIDE), side)),
+        &opts,
+    )
+    .is_ok() as usize;
     ok += hgt::read_bytes(Path::new("N10E010.hgt"), bytes, &opts).is_ok() as usize;
     ok
 }
 
-fn mutate(seed: &[u8], edits: &[(usize, u8)], cut: Option<usize>, insert: Option<(usize, Vec<u8>)>) -> Vec<u8> {
+fn mutate(
+    seed: &[u8],
+    edits: &[(usize, u8)],
+    cut: Option<usize>,
+    insert: Option<(usize, Vec<u8>)>,
+) -> Vec<u8> {
     let mut b = seed.to_vec();
     for &(at, v) in edits {
         let n = b.len();
@@ -114,22 +180,32 @@ fn mutate(seed: &[u8], edits: &[(usize, u8)], cut: Option<usize>, insert: Option
 #[test]
 fn seeds_are_valid() {
     for (k, s) in tiff_seeds().iter().enumerate() {
-        let d = geotiff::read_bytes(Path::new("seed.tif"), s, &ReadOptions::default()).unwrap_or_else(|e| panic!("seed {k}: {e}"));
+        let d = geotiff::read_bytes(Path::new("seed.tif"), s, &ReadOptions::default())
+            .unwrap_or_else(|e| panic!("seed {k}: {e}"));
         assert!(d.heightfield.nodata_count() <= 1, "seed {k}");
     }
     let (png, side) = png_seed();
-    png16::read_bytes(Path::new("s.png"), &png, Some((Path::new(PNG_SIDE), &side)), &ReadOptions::default()).unwrap();
-    asc::read_bytes(Path::new("s.asc"), &asc_seed(), None, &ReadOptions::default()).unwrap();
+    png16::read_bytes(
+        Path::new("s.png"),
+        &png,
+        Some((Path::new(PNG_SIDE), &side)),
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    asc::read_bytes(
+        Path::new("s.asc"),
+        &asc_seed(),
+        None,
+        &ReadOptions::default(),
+    )
+    .unwrap();
 }
 
 /// Deterministic sweep: every header byte of every seed set to 0x00, 0xFF and +1.
 #[test]
 fn header_byte_sweep_never_panics() {
-    let (png, side) = png_seed();
-    let mut seeds = tiff_seeds();
-    seeds.push(png);
-    seeds.push(asc_seed());
-    for s in &seeds {
+    let side = png_seed().1;
+    for s in all_seeds() {
         for at in 0..s.len().min(400) {
             for v in [0x00, 0xFF, s[at].wrapping_add(1)] {
                 read_all(&mutate(s, &[(at, v)], None, None), &side);
@@ -139,7 +215,7 @@ fn header_byte_sweep_never_panics() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(400))]
+    #![proptest_config(ProptestConfig::with_cases(fuzz_cases()))]
 
     #[test]
     fn mutated_files_never_panic(
@@ -149,13 +225,11 @@ proptest! {
         insert in proptest::option::of((any::<usize>(), proptest::collection::vec(any::<u8>(), 1..16))),
         side_cut in any::<usize>(),
     ) {
-        let (png, side) = png_seed();
-        let mut seeds = tiff_seeds();
-        seeds.push(png);
-        seeds.push(asc_seed());
+        let side = png_seed().1;
+        let seeds = all_seeds();
         let s = &seeds[which % seeds.len()];
         let bytes = mutate(s, &edits, cut, insert);
-        let side = &side[..side.len() - side_cut % 3.min(side.len())];
+        let side = &side[..side.len() - side_cut % 3];
         read_all(&bytes, side);
     }
 

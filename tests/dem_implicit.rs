@@ -12,14 +12,21 @@ struct Rng(u64);
 
 impl Rng {
     fn f(&mut self) -> f32 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (self.0 >> 40) as f32 / (1u64 << 24) as f32
     }
     fn range(&mut self, lo: f32, hi: f32) -> f32 {
         lo + (hi - lo) * self.f()
     }
     fn point(&mut self, b: &Aabb) -> Vec3 {
-        Vec3::new(self.range(b.min.x, b.max.x), self.range(b.min.y, b.max.y), self.range(b.min.z, b.max.z))
+        Vec3::new(
+            self.range(b.min.x, b.max.x),
+            self.range(b.min.y, b.max.y),
+            self.range(b.min.z, b.max.z),
+        )
     }
 }
 
@@ -49,7 +56,12 @@ fn synthetic(interp: Interpolation) -> HeightfieldField {
         vertical_scale: 1.5,
         vertical_offset: -10.0,
         placement: Vec2::new(100.0, -50.0),
-        domain: Some(vec![Vec2::new(90.0, -60.0), Vec2::new(520.0, -40.0), Vec2::new(480.0, 320.0), Vec2::new(120.0, 280.0)]),
+        domain: Some(vec![
+            Vec2::new(90.0, -60.0),
+            Vec2::new(520.0, -40.0),
+            Vec2::new(480.0, 320.0),
+            Vec2::new(120.0, 280.0),
+        ]),
         interpolation: interp,
         ..ImplicitParams::with_falloff(25.0)
     };
@@ -85,10 +97,16 @@ fn intervals_contain_sampled_values() {
             for _ in 0..20 {
                 let p = rng.point(&b);
                 let v = f.value(p);
-                assert!(iv.lo - 1e-5 <= v && v <= iv.hi + 1e-5, "{name}: f({p}) = {v} not in {iv:?} for {b:?}");
+                assert!(
+                    iv.lo - 1e-5 <= v && v <= iv.hi + 1e-5,
+                    "{name}: f({p}) = {v} not in {iv:?} for {b:?}"
+                );
             }
         }
-        assert!(informative > 500, "{name}: intervals are too loose to prune ({informative})");
+        assert!(
+            informative > 500,
+            "{name}: intervals are too loose to prune ({informative})"
+        );
     }
 }
 
@@ -101,7 +119,10 @@ fn lipschitz_bounds_hold_on_random_pairs() {
         for _ in 0..20000 {
             let b = random_box(&f, &mut rng);
             let lb = f.lipschitz_box(&b);
-            assert!(lb <= l * 1.0001, "{name}: box bound {lb} above the global {l}");
+            assert!(
+                lb <= l * 1.0001,
+                "{name}: box bound {lb} above the global {l}"
+            );
             let (p, q) = (rng.point(&b), rng.point(&b));
             let d = p.distance(q);
             if d < 1e-2 {
@@ -109,9 +130,15 @@ fn lipschitz_bounds_hold_on_random_pairs() {
             }
             let slope = (f.value(p) - f.value(q)).abs() / d;
             worst = worst.max(slope / l);
-            assert!(slope <= lb * 1.001 + 1e-6, "{name}: slope {slope} > box bound {lb} in {b:?}");
+            assert!(
+                slope <= lb * 1.001 + 1e-6,
+                "{name}: slope {slope} > box bound {lb} in {b:?}"
+            );
         }
-        assert!(worst > 0.05, "{name}: global bound {l} never approached ({worst})");
+        assert!(
+            worst > 0.05,
+            "{name}: global bound {l} never approached ({worst})"
+        );
     }
 }
 
@@ -124,7 +151,9 @@ fn gradients_match_finite_differences() {
         while checked < 400 {
             // points near the surface, where the gradient matters
             let mut p = rng.point(&s);
-            let h = f.heightfield().sample(p.truncate(), f.params().interpolation);
+            let h = f
+                .heightfield()
+                .sample(p.truncate(), f.params().interpolation);
             if h.is_nan() {
                 continue;
             }
@@ -143,7 +172,10 @@ fn gradients_match_finite_differences() {
             if (a - b).length() > 1e-4 * (1.0 + a.length()) {
                 continue; // a kink (min, cell edge) under the stencil
             }
-            assert!((a - g).length() <= 2e-3 * (1.0 + g.length()), "{name}: at {p}: {g} vs {a}");
+            assert!(
+                (a - g).length() <= 2e-3 * (1.0 + g.length()),
+                "{name}: at {p}: {g} vs {a}"
+            );
             checked += 1;
         }
     }
@@ -185,8 +217,15 @@ fn z_bands_contain_every_sampled_crossing() {
                 }
             }
         }
-        assert!(crossings > 300, "{name}: too few crossings sampled ({crossings})");
-        assert!(pruned / 600.0 > 0.5, "{name}: bands prune only {:.0}% of z", 100.0 * pruned / 600.0);
+        assert!(
+            crossings > 300,
+            "{name}: too few crossings sampled ({crossings})"
+        );
+        assert!(
+            pruned / 600.0 > 0.5,
+            "{name}: bands prune only {:.0}% of z",
+            100.0 * pruned / 600.0
+        );
     }
 }
 
@@ -208,10 +247,17 @@ fn elevation_answers_only_where_the_field_is_the_heightfield() {
             for _ in 0..10 {
                 let xy = Vec2::new(rng.range(fp.min.x, fp.max.x), rng.range(fp.min.y, fp.max.y));
                 let h = e.source.height(xy);
-                assert!(h.is_finite(), "{name}: no elevation at {xy} inside an elevation footprint");
+                assert!(
+                    h.is_finite(),
+                    "{name}: no elevation at {xy} inside an elevation footprint"
+                );
                 let z = rng.range(e.z.lo, e.z.hi);
                 let v = f.value(xy.extend(z));
-                assert_eq!(v, sigma(h - z, f.params().falloff), "{name}: f is not σ(h − z) at {xy}, {z}");
+                assert_eq!(
+                    v,
+                    sigma(h - z, f.params().falloff),
+                    "{name}: f is not σ(h − z) at {xy}, {z}"
+                );
                 assert_eq!(v > T, z < h, "{name}");
             }
         }
@@ -233,7 +279,10 @@ fn field_vanishes_outside_the_support_and_the_domain() {
                 assert_eq!(v, 0.0, "{name}: f({p}) = {v} outside the support {s:?}");
             }
             let xy = p.truncate();
-            if f.heightfield().sample(xy, f.params().interpolation).is_nan() {
+            if f.heightfield()
+                .sample(xy, f.params().interpolation)
+                .is_nan()
+            {
                 assert_eq!(v, 0.0, "{name}: f({p}) = {v} where h is undefined");
             }
         }
@@ -275,19 +324,28 @@ fn eval_block_matches_value() {
 
 #[test]
 fn spec_errors_carry_positions_and_paths() {
-    let e = ron::from_str::<HeightfieldSpec>("(\n source: \"x.tif\",\n falloff: -3.0)").unwrap_err();
+    let e =
+        ron::from_str::<HeightfieldSpec>("(\n source: \"x.tif\",\n falloff: -3.0)").unwrap_err();
     assert_eq!(e.span.start.line, 3, "{e}");
     assert!(e.to_string().contains("> 0"), "{e}");
-    let e = ron::from_str::<HeightfieldSpec>("(source: \"x.tif\", falloff: 3.0, colour: 1)").unwrap_err();
+    let e = ron::from_str::<HeightfieldSpec>("(source: \"x.tif\", falloff: 3.0, colour: 1)")
+        .unwrap_err();
     assert!(e.to_string().contains("colour"), "{e}");
     let spec = HeightfieldSpec::new("missing.tif", 10.0);
     let e = spec.load(Path::new("/nonexistent-dir")).unwrap_err();
-    assert!(e.to_string().contains("/nonexistent-dir/missing.tif"), "{e}");
+    assert!(
+        e.to_string().contains("/nonexistent-dir/missing.tif"),
+        "{e}"
+    );
     // a round trip keeps the spec
     let mut spec = HeightfieldSpec::new("a.tif", 12.5);
     spec.interpolation = Interpolation::Bicubic;
     let text = ron::to_string(&spec).unwrap();
-    assert_eq!(ron::from_str::<HeightfieldSpec>(&text).unwrap(), spec, "{text}");
+    assert_eq!(
+        ron::from_str::<HeightfieldSpec>(&text).unwrap(),
+        spec,
+        "{text}"
+    );
 }
 
 #[test]
@@ -299,7 +357,12 @@ fn dem_cache_shares_decoded_files() {
     b.vertical_scale = karstic::scene::Finite(-1.0);
     let fa = a.load_with(base, &mut cache).unwrap();
     let fb = b.load_with(base, &mut cache).unwrap();
-    assert_eq!(cache.notices().len(), 1, "one decode, one notice: {:?}", cache.notices());
+    assert_eq!(
+        cache.notices().len(),
+        1,
+        "one decode, one notice: {:?}",
+        cache.notices()
+    );
     let xy = Vec2::new(5000.0, 5000.0);
     assert_eq!(fa.height(xy), -fb.height(xy));
 }
