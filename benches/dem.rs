@@ -32,17 +32,22 @@ fn points(f: &HeightfieldField, n: usize) -> Vec<Vec3> {
         .collect()
 }
 
-/// Column footprints of one 30 m MC cell at the sample points.
-fn columns(pts: &[Vec3]) -> Vec<Rect> {
-    pts.iter()
-        .map(|p| Rect::new(p.truncate(), p.truncate() + Vec2::splat(30.0)))
+/// Footprints of 100 × 100 MC columns of 30 m in raster order (as a mesher walks them),
+/// across the DEM's south-west corner so that walls, nodata and interior all occur.
+fn columns(f: &HeightfieldField) -> Vec<Rect> {
+    let o = f.heightfield().origin() + Vec2::new(-600.0, 2000.0);
+    (0..100 * 100)
+        .map(|k| {
+            let a = o + Vec2::new((k % 100) as f32, (k / 100) as f32) * 30.0;
+            Rect::new(a, a + Vec2::splat(30.0))
+        })
         .collect()
 }
 
 fn bench(c: &mut Criterion) {
     let f = leaf();
     let pts = points(&f, 10_000);
-    let fps = columns(&pts);
+    let fps = columns(&f);
     let z = f.support().z();
     let z = Interval::new(z.lo, z.hi);
 
