@@ -280,7 +280,7 @@ impl Polygon {
             .map(|(a, b)| a.perp_dot(*b))
             .sum::<f32>()
             * 0.5;
-        if !(area.abs() > 0.0) {
+        if area.is_nan() || area == 0.0 {
             return invalid("the domain polygon has no area".into());
         }
         let bbox = pts.iter().fold(Rect::new(pts[0], pts[0]), |r, p| Rect {

@@ -141,12 +141,16 @@ impl HeightfieldSpec {
     }
 }
 
+/// What makes two loads the same: canonical path, resampling (bits), PNG range (bits),
+/// interpolation used to resample.
+type CacheKey = (PathBuf, Option<u32>, Option<(u32, u32)>, Interpolation);
+
 /// Decoded DEMs by path (and resampling), shared by the heightfield nodes of one compile,
 /// plus the readers' notices for the caller to show.
 #[derive(Debug)]
 pub struct DemCache {
     budget: u64,
-    dems: HashMap<(PathBuf, Option<u32>, Option<(u32, u32)>, Interpolation), Arc<Dem>>,
+    dems: HashMap<CacheKey, Arc<Dem>>,
     notices: Vec<String>,
 }
 
