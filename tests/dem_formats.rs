@@ -31,7 +31,11 @@ fn every_encoding_decodes_to_the_same_grid() {
         }
         let g = &d.georef;
         assert_eq!(g.crs, Crs::Projected { epsg: Some(32616) }, "{name}");
-        assert_eq!(g.origin, [500_005.0, 3_999_715.0], "{name}: south-west sample centre");
+        assert_eq!(
+            g.origin,
+            [500_005.0, 3_999_715.0],
+            "{name}: south-west sample centre"
+        );
         assert_eq!(g.step, [10.0, 10.0], "{name}");
         seen += 1;
     }

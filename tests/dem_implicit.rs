@@ -349,6 +349,19 @@ fn spec_errors_carry_positions_and_paths() {
 }
 
 #[test]
+fn tree_frame_maps_back_to_utm() {
+    let f = utm_leaf(150.0, Interpolation::Bilinear);
+    // placement (-1000, 500): the south-west sample centre, GDAL's corner + 45 m
+    let sw = f.tree_to_crs(Vec2::new(-1000.0, 500.0)).unwrap();
+    assert!(
+        (sw[0] - 730_984.219_465_799).abs() < 1e-6 && (sw[1] - 4_036_601.162_225_269).abs() < 1e-6,
+        "{sw:?}"
+    );
+    let p = f.crs_to_tree([sw[0] + 900.0, sw[1] + 90.0]).unwrap();
+    assert!(p.distance(Vec2::new(-100.0, 590.0)) < 1e-3, "{p}");
+}
+
+#[test]
 fn dem_cache_shares_decoded_files() {
     let base = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut cache = karstic::dem::DemCache::new(1 << 30);

@@ -96,10 +96,7 @@ fn utm_geotransform_and_nodata_match_gdal() {
         assert_eq!(g.step, [90.0, 90.0]);
         assert_eq!(h.cell(), glam::Vec2::splat(90.0));
         // GDAL: xllcorner 730939.219465799048, yllcorner 4036556.162225268781
-        let sw = [
-            730_939.219_465_799 + 45.0,
-            4_036_556.162_225_269 + 45.0,
-        ];
+        let sw = [730_939.219_465_799 + 45.0, 4_036_556.162_225_269 + 45.0];
         assert!(
             (g.origin[0] - sw[0]).abs() < 1e-6 && (g.origin[1] - sw[1]).abs() < 1e-6,
             "{name}: {:?}",

@@ -23,10 +23,10 @@
 
 use glam::{Vec2, Vec3};
 
-use super::DemError;
 use super::domain::Domain;
 use super::grid::{Heightfield, Interpolation};
 use super::pyramid::MinMaxPyramid;
+use super::{DemError, Georef};
 use crate::field::contract::{Elevation, ElevationSource};
 use crate::field::falloff::{
     T, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope, wyvill,
@@ -86,6 +86,7 @@ pub struct HeightfieldField {
     lip_h: f32,
     support: Aabb,
     params: ImplicitParams,
+    georef: Option<Georef>,
 }
 
 impl HeightfieldField {
@@ -141,6 +142,35 @@ impl HeightfieldField {
             lip_h,
             support,
             params: p.clone(),
+            georef: None,
+        })
+    }
+
+    /// Attaches the georeference of the DEM this leaf was built from (its local frame is the
+    /// one the readers return: the south-west sample at `(0, 0)`).
+    pub fn with_georef(mut self, georef: Georef) -> HeightfieldField {
+        self.georef = Some(georef);
+        self
+    }
+
+    /// The DEM's georeference, when the leaf was loaded from a file.
+    pub fn georef(&self) -> Option<&Georef> {
+        self.georef.as_ref()
+    }
+
+    /// CRS coordinates (f64) of a tree-frame point, undoing the placement.
+    pub fn tree_to_crs(&self, xy: Vec2) -> Option<[f64; 2]> {
+        let local = xy - self.params.placement;
+        self.georef
+            .as_ref()
+            .map(|g| g.local_to_crs([f64::from(local.x), f64::from(local.y)]))
+    }
+
+    /// Tree-frame position of CRS coordinates (`None` without a georeference).
+    pub fn crs_to_tree(&self, crs: [f64; 2]) -> Option<Vec2> {
+        self.georef.as_ref().map(|g| {
+            let l = g.crs_to_local(crs);
+            Vec2::new(l[0] as f32, l[1] as f32) + self.params.placement
         })
     }
 

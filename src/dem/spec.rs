@@ -127,17 +127,19 @@ impl HeightfieldSpec {
         cache: &mut DemCache,
     ) -> Result<HeightfieldField, DemError> {
         let dem = cache.get(&base_dir.join(&self.source), self)?;
-        HeightfieldField::new(&dem.heightfield, &self.params()).map_err(|e| match e {
-            DemError::Invalid { what } => DemError::Invalid {
-                what: format!(
-                    "heightfield {}: {what}",
-                    self.name
-                        .as_deref()
-                        .unwrap_or(&self.source.to_string_lossy())
-                ),
-            },
-            e => e,
-        })
+        let field =
+            HeightfieldField::new(&dem.heightfield, &self.params()).map_err(|e| match e {
+                DemError::Invalid { what } => DemError::Invalid {
+                    what: format!(
+                        "heightfield {}: {what}",
+                        self.name
+                            .as_deref()
+                            .unwrap_or(&self.source.to_string_lossy())
+                    ),
+                },
+                e => e,
+            })?;
+        Ok(field.with_georef(dem.georef.clone()))
     }
 }
 
