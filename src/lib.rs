@@ -5,6 +5,7 @@
 //! [`field`] tree is the single thing the mesher and the tracers consume.
 
 pub mod cli;
+pub mod dem;
 pub mod field;
 pub mod io;
 pub mod mesh;

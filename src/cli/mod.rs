@@ -1,6 +1,7 @@
 //! The command line: a thin layer over the library. Each subcommand lives in its own file.
 
 pub mod build;
+pub mod dem;
 pub mod eval;
 pub mod sample;
 pub mod tree;
@@ -21,6 +22,8 @@ pub struct Cli {
 pub enum Command {
     /// Build a mesh (.glb, .gltf, .obj, .ply) from a tree with bound-pruned Marching Cubes.
     Build(build::BuildArgs),
+    /// Inspect and convert DEMs.
+    Dem(dem::DemArgs),
     /// Validate, inspect and edit tree files.
     Tree(tree::TreeArgs),
     /// Print field values and gradients at points (CSV `x,y,z` from a file or stdin).
@@ -31,13 +34,18 @@ pub enum Command {
 
 /// Loads and compiles a tree file.
 pub fn load_tree(path: &std::path::Path) -> anyhow::Result<crate::field::Tree> {
-    Ok(crate::scene::load(path)?.compile()?.tree)
+    let compiled = crate::scene::load(path)?.compile()?;
+    for n in &compiled.notices {
+        eprintln!("notice: {n}");
+    }
+    Ok(compiled.tree)
 }
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Build(a) => build::run(a),
+        Command::Dem(a) => dem::run(a),
         Command::Tree(a) => tree::run(a),
         Command::Eval(a) => eval::run(a),
         Command::Sample(a) => sample::run(a),

@@ -9,7 +9,9 @@ use super::load::{SceneError, SceneFile};
 use super::spec::{NodeSpec, Scene};
 use std::sync::Arc;
 
+use crate::dem::DemCache;
 use crate::field::{Aabb, Fbm, NodeId, Primitive, Tree, TreeBuilder, Warp};
+use crate::io::DEFAULT_MEMORY_BUDGET;
 
 /// A compiled scene: the tree, and for each node of the scene's root (pre-order, the order
 /// of [`NodeSpec::walk`]) the compiled node it became.
@@ -18,6 +20,8 @@ pub struct Compiled {
     pub tree: Tree,
     /// `(depth, node)` for each scene node of the root, in pre-order.
     pub outline: Vec<(usize, NodeId)>,
+    /// Things the user should know (e.g. a DEM in degrees given metric cells).
+    pub notices: Vec<String>,
 }
 
 struct Compiler<'s> {
@@ -28,6 +32,7 @@ struct Compiler<'s> {
     named: BTreeMap<String, NodeId>,
     outline: Vec<(usize, NodeId)>,
     record: bool,
+    dems: DemCache,
 }
 
 impl Compiler<'_> {
@@ -72,6 +77,12 @@ impl Compiler<'_> {
         Ok(match n {
             NodeSpec::Primitive(p) => {
                 let leaf = Primitive::from_spec(p, self.scene.seed);
+                self.builder.leaf(Arc::new(leaf), name)
+            }
+            NodeSpec::Heightfield(h) => {
+                let leaf = h
+                    .load_with(self.base_dir, &mut self.dems)
+                    .map_err(|e| self.error(n, e.to_string()))?;
                 self.builder.leaf(Arc::new(leaf), name)
             }
             NodeSpec::Blend(x) => {
@@ -149,12 +160,13 @@ pub fn compile_scene(scene: &Scene, path: &Path, base_dir: &Path) -> Result<Comp
         named: BTreeMap::new(),
         outline: Vec::new(),
         record: true,
+        dems: DemCache::new(DEFAULT_MEMORY_BUDGET),
     };
-    let _ = c.base_dir;
     let root = c.node(&scene.root, 0)?;
     let tree = c.builder.build(root);
     Ok(Compiled {
         tree,
         outline: c.outline,
+        notices: c.dems.notices().to_vec(),
     })
 }

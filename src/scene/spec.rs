@@ -3,6 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::value::{Dir3, Finite, P3, Positive, Scale3};
+use crate::dem::HeightfieldSpec;
 use crate::field::{NoiseSpec, PrimitiveSpec};
 
 /// The tree-file format version this build reads and writes.
@@ -32,6 +33,8 @@ pub struct Scene {
 pub enum NodeSpec {
     /// A skeletal primitive (seed 002 §5.2): `energy · g(d̃ / R)` around a skeleton.
     Primitive(PrimitiveSpec),
+    /// A DEM as an implicit terrain (seed 002 §5.1): solid below the elevation.
+    Heightfield(HeightfieldSpec),
     /// Sum of the children (Wyvill blend).
     Blend(Nary),
     /// Max of the children.
@@ -172,6 +175,7 @@ impl NodeSpec {
     pub fn kind(&self) -> &'static str {
         match self {
             NodeSpec::Primitive(_) => "Primitive",
+            NodeSpec::Heightfield(_) => "Heightfield",
             NodeSpec::Blend(_) => "Blend",
             NodeSpec::Union(_) => "Union",
             NodeSpec::Intersection(_) => "Intersection",
@@ -186,6 +190,7 @@ impl NodeSpec {
     pub fn name(&self) -> Option<&str> {
         match self {
             NodeSpec::Primitive(n) => n.name.as_deref(),
+            NodeSpec::Heightfield(n) => n.name.as_deref(),
             NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => {
                 n.name.as_deref()
             }
@@ -205,7 +210,7 @@ impl NodeSpec {
             NodeSpec::Difference(d) => std::iter::once(&*d.base).chain(&d.carves).collect(),
             NodeSpec::Transform(t) => vec![&*t.child],
             NodeSpec::Warp(w) => vec![&*w.child],
-            NodeSpec::Instance(_) | NodeSpec::Primitive(_) => Vec::new(),
+            NodeSpec::Instance(_) | NodeSpec::Primitive(_) | NodeSpec::Heightfield(_) => Vec::new(),
         }
     }
 
@@ -231,7 +236,7 @@ impl NodeSpec {
                 .collect(),
             NodeSpec::Transform(t) => vec![&mut *t.child],
             NodeSpec::Warp(w) => vec![&mut *w.child],
-            NodeSpec::Instance(_) | NodeSpec::Primitive(_) => Vec::new(),
+            NodeSpec::Instance(_) | NodeSpec::Primitive(_) | NodeSpec::Heightfield(_) => Vec::new(),
         }
     }
 

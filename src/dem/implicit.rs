@@ -1,0 +1,411 @@
+//! The implicit heightfield primitive of seed 002 §5.1.
+//!
+//! Given an elevation `h` over a horizontal domain Ω (see [`super::domain`]):
+//!
+//! * surface field `f_T(p) = σ_R(h(p.xy) − p.z)` — `σ` is [`falloff::sigma`], monotone with
+//!   `σ(0) = T`, so `f_T > T` exactly below the terrain (see `falloff.rs` for why our `σ`
+//!   differs from the paper's);
+//! * prism `P = (Ω ⊖ B(R)) × Δz` with `Δz = [z_min − base_depth, z_max + R]`, and prism
+//!   field `f_P(p) = 2T · g(d(p, P) / R)` (Wyvill `g`). The paper says "equal to T within the
+//!   prism", but `f = min(f_T, f_P)` must equal `f_T` inside the prism, where `f_T` reaches
+//!   `2T`, so we scale `g` by `2T`: `f_P = 2T` inside `P`, 0 beyond distance `R`;
+//! * `f = min(f_T, f_P)`.
+//!
+//! The distance to `P` is computed as `√(d_xy² + d_z²)` with `d_xy = max(0, R − e(xy))`,
+//! `e` the clearance of Ω. This equals the Euclidean distance to `P` wherever the nearest
+//! point of the eroded domain is reached straight across the boundary (all convex domains);
+//! in narrow necks it is a lower bound, so the prism is never thinner than the paper's. It
+//! vanishes exactly on `Ω ⊖ B(R) = {e ≥ R}` and reaches `R` on `∂Ω`, so `f = 0` outside Ω.
+//!
+//! The solid is the terrain inside `{e ≥ R}`, closed by side walls where `f_P = T`
+//! (`d = d* = R·√(1 − 2^(−1/3)) ≈ 0.454 R`, i.e. `e ≈ 0.546 R`) and a floor at
+//! `Δz.lo − d*`.
+
+use glam::{Vec2, Vec3};
+
+use super::domain::Domain;
+use super::grid::{Heightfield, Interpolation};
+use super::pyramid::MinMaxPyramid;
+use super::{DemError, Georef};
+use crate::field::contract::{Elevation, ElevationSource};
+use crate::field::falloff::{
+    T, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope, wyvill,
+    wyvill_d, wyvill_interval, wyvill_slope,
+};
+use crate::field::{Aabb, Field, Interval, Rect, ZBands};
+
+/// Parameters of the implicitization (validated by [`HeightfieldField::new`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImplicitParams {
+    /// Falloff distance `R` in metres (> 0): the width of the field's transition band
+    /// around the terrain, and the erosion of the domain.
+    pub falloff: f32,
+    /// How far below the lowest elevation the prism's floor lies (≥ 0).
+    pub base_depth: f32,
+    /// Elevations are multiplied by this...
+    pub vertical_scale: f32,
+    /// ...then this is added (metres).
+    pub vertical_offset: f32,
+    /// Where the heightfield's sample `(0, 0)` is placed in the tree frame (local `(0, 0)`
+    /// for a DEM as read, i.e. its south-west sample).
+    pub placement: Vec2,
+    /// An optional polygon (tree frame) cutting the domain.
+    pub domain: Option<Vec<Vec2>>,
+    /// Interpolation between samples.
+    pub interpolation: Interpolation,
+}
+
+impl ImplicitParams {
+    /// Defaults for falloff `r`: base depth `r`, no scaling, no move, whole grid, bilinear.
+    pub fn with_falloff(r: f32) -> ImplicitParams {
+        ImplicitParams {
+            falloff: r,
+            base_depth: r,
+            vertical_scale: 1.0,
+            vertical_offset: 0.0,
+            placement: Vec2::ZERO,
+            domain: None,
+            interpolation: Interpolation::Bilinear,
+        }
+    }
+}
+
+/// `√(1 − 2^(−1/3))`: `g(x) = ½` at this `x`, so `f_P = T` at distance `R·D_STAR` from `P`.
+const D_STAR: f32 = 0.454_202;
+
+/// The implicit heightfield leaf: `f = min(σ_R(h − z), 2T·g(d(p, P)/R))`.
+#[derive(Clone, Debug)]
+pub struct HeightfieldField {
+    hf: Heightfield,
+    interp: Interpolation,
+    r: f32,
+    dz: Interval,
+    domain: Domain,
+    heights: MinMaxPyramid,
+    slopes: MinMaxPyramid,
+    lip_h: f32,
+    support: Aabb,
+    params: ImplicitParams,
+    georef: Option<Georef>,
+}
+
+impl HeightfieldField {
+    /// Implicitizes `hf` (in its local frame) with `params`.
+    pub fn new(hf: &Heightfield, params: &ImplicitParams) -> Result<HeightfieldField, DemError> {
+        let p = params;
+        let bad = |what: String| Err(DemError::Invalid { what });
+        if !(p.falloff > 0.0 && p.falloff.is_finite()) {
+            return bad(format!(
+                "heightfield falloff must be > 0, got {}",
+                p.falloff
+            ));
+        }
+        if !(p.base_depth >= 0.0 && p.base_depth.is_finite()) {
+            return bad(format!(
+                "heightfield base_depth must be >= 0, got {}",
+                p.base_depth
+            ));
+        }
+        if !(p.vertical_scale.is_finite()
+            && p.vertical_offset.is_finite()
+            && p.placement.is_finite())
+        {
+            return bad("heightfield scale, offset and placement must be finite".into());
+        }
+        let z: Vec<f32> = hf
+            .samples()
+            .iter()
+            .map(|&v| v * p.vertical_scale + p.vertical_offset)
+            .collect();
+        let placed = Heightfield::new(hf.nx(), hf.ny(), hf.origin() + p.placement, hf.cell(), z)?;
+        let interp = p.interpolation;
+        let domain = Domain::new(&placed, interp, p.domain.as_deref())?;
+        let (cx, cy) = placed.cells();
+        let heights = MinMaxPyramid::new(cx, cy, placed.cell_ranges(interp));
+        let [zmin, zmax] = heights.total();
+        if zmin > zmax {
+            return bad("the heightfield has no cell with a surface (too much nodata)".into());
+        }
+        let slopes = MinMaxPyramid::new(cx, cy, placed.cell_slopes(interp));
+        let lip_h = slopes.total()[1].max(0.0);
+        let r = p.falloff;
+        let dz = Interval::new(zmin - p.base_depth, zmax + r);
+        let support = domain.bounds().extrude(Interval::new(dz.lo - r, dz.hi));
+        Ok(HeightfieldField {
+            hf: placed,
+            interp,
+            r,
+            dz,
+            domain,
+            heights,
+            slopes,
+            lip_h,
+            support,
+            params: p.clone(),
+            georef: None,
+        })
+    }
+
+    /// Attaches the georeference of the DEM this leaf was built from (its local frame is the
+    /// one the readers return: the south-west sample at `(0, 0)`).
+    pub fn with_georef(mut self, georef: Georef) -> HeightfieldField {
+        self.georef = Some(georef);
+        self
+    }
+
+    /// The DEM's georeference, when the leaf was loaded from a file.
+    pub fn georef(&self) -> Option<&Georef> {
+        self.georef.as_ref()
+    }
+
+    /// CRS coordinates (f64) of a tree-frame point, undoing the placement.
+    pub fn tree_to_crs(&self, xy: Vec2) -> Option<[f64; 2]> {
+        let local = xy - self.params.placement;
+        self.georef
+            .as_ref()
+            .map(|g| g.local_to_crs([f64::from(local.x), f64::from(local.y)]))
+    }
+
+    /// Tree-frame position of CRS coordinates (`None` without a georeference).
+    pub fn crs_to_tree(&self, crs: [f64; 2]) -> Option<Vec2> {
+        self.georef.as_ref().map(|g| {
+            let l = g.crs_to_local(crs);
+            Vec2::new(l[0] as f32, l[1] as f32) + self.params.placement
+        })
+    }
+
+    /// The placed, scaled heightfield this leaf evaluates.
+    pub fn heightfield(&self) -> &Heightfield {
+        &self.hf
+    }
+
+    /// The parameters it was built with.
+    pub fn params(&self) -> &ImplicitParams {
+        &self.params
+    }
+
+    /// The prism's vertical extent `Δz`.
+    pub fn prism_z(&self) -> Interval {
+        self.dz
+    }
+
+    /// Global Lipschitz bound of `h` (after vertical scaling).
+    pub fn lipschitz_h(&self) -> f32 {
+        self.lip_h
+    }
+
+    /// `h(xy)` in the tree frame (NaN outside the cells with a surface).
+    #[inline]
+    pub fn height(&self, xy: Vec2) -> f32 {
+        self.hf.sample(xy, self.interp)
+    }
+
+    /// Vertical distance from `z` to `Δz` (0 inside).
+    #[inline]
+    fn dist_z(&self, z: f32) -> f32 {
+        (self.dz.lo - z).max(z - self.dz.hi).max(0.0)
+    }
+
+    /// `f_P` from the horizontal distance to the eroded domain and the height.
+    #[inline]
+    fn prism(&self, dxy: f32, z: f32) -> f32 {
+        let dz = self.dist_z(z);
+        let d2 = dxy * dxy + dz * dz;
+        if d2 == 0.0 {
+            2.0 * T
+        } else {
+            2.0 * T * wyvill(d2.sqrt() / self.r)
+        }
+    }
+
+    /// Range of `h` over the cells under `fp` (empty when none has a surface).
+    #[inline]
+    fn h_range(&self, fp: &Rect) -> Interval {
+        match self.hf.cells_overlapping(fp) {
+            Some((i0, i1, j0, j1)) => self.heights.query_interval(i0, i1, j0, j1),
+            None => Interval::EMPTY,
+        }
+    }
+
+    /// Range of the distance to `P` over `b`, from the clearance range `e`.
+    fn dist_range(&self, e: Interval, z: Interval) -> Interval {
+        let dxy = Interval::new((self.r - e.hi).max(0.0), (self.r - e.lo).max(0.0));
+        let dz_lo = if z.overlaps(&self.dz) {
+            0.0
+        } else {
+            self.dist_z(z.lo).min(self.dist_z(z.hi))
+        };
+        let dz_hi = self.dist_z(z.lo).max(self.dist_z(z.hi));
+        Interval::new(dxy.lo.hypot(dz_lo), dxy.hi.hypot(dz_hi))
+    }
+
+    /// A float tolerance for bands around elevations of magnitude `m`.
+    #[inline]
+    fn eps(&self, m: f32) -> f32 {
+        1e-5 * (m + self.r)
+    }
+}
+
+impl Field for HeightfieldField {
+    #[inline]
+    fn value(&self, p: Vec3) -> f32 {
+        let xy = p.truncate();
+        let e = self.domain.clearance(xy);
+        if e <= 0.0 {
+            return 0.0;
+        }
+        let h = self.height(xy);
+        if h.is_nan() {
+            return 0.0;
+        }
+        sigma(h - p.z, self.r).min(self.prism((self.r - e).max(0.0), p.z))
+    }
+
+    fn value_grad(&self, p: Vec3) -> (f32, Vec3) {
+        let xy = p.truncate();
+        let (e, ge) = self.domain.clearance_grad(xy);
+        if e <= 0.0 {
+            return (0.0, Vec3::ZERO);
+        }
+        let (h, gh) = self.hf.sample_grad(xy, self.interp);
+        if h.is_nan() {
+            return (0.0, Vec3::ZERO);
+        }
+        let (ft, dft) = sigma_d(h - p.z, self.r);
+        let dxy = (self.r - e).max(0.0);
+        let (dz, gdz) = if p.z < self.dz.lo {
+            (self.dz.lo - p.z, -1.0)
+        } else if p.z > self.dz.hi {
+            (p.z - self.dz.hi, 1.0)
+        } else {
+            (0.0, 0.0)
+        };
+        let d = dxy.hypot(dz);
+        let (fp, gfp) = if d == 0.0 {
+            (2.0 * T, Vec3::ZERO)
+        } else {
+            let (g, dg) = wyvill_d(d / self.r);
+            let gd = (dxy * (-ge)).extend(dz * gdz) / d;
+            (2.0 * T * g, gd * (2.0 * T * dg / self.r))
+        };
+        if ft <= fp {
+            (ft, gh.extend(-1.0) * dft)
+        } else {
+            (fp, gfp)
+        }
+    }
+
+    fn support(&self) -> Aabb {
+        self.support
+    }
+
+    fn interval(&self, b: &Aabb) -> Interval {
+        let fp = b.footprint();
+        let e = self.domain.clearance_range(&fp);
+        let h = self.h_range(&fp);
+        if e.hi <= 0.0 || h.is_empty() {
+            return Interval::ZERO;
+        }
+        let z = b.z();
+        let ft = sigma_interval(Interval::new(h.lo - z.hi, h.hi - z.lo), self.r);
+        let d = self.dist_range(e, z);
+        let fp = wyvill_interval(d.scale(1.0 / self.r)).scale(2.0 * T);
+        let f = ft.min(fp);
+        if e.lo <= 0.0 {
+            f.hull(Interval::ZERO)
+        } else {
+            f
+        }
+    }
+
+    fn lipschitz(&self) -> f32 {
+        let lt = sigma_max_slope(self.r) * (1.0 + self.lip_h * self.lip_h).sqrt();
+        let lp = 2.0 * T * WYVILL_MAX_SLOPE / self.r * self.domain.lipschitz();
+        lt.max(lp)
+    }
+
+    fn lipschitz_box(&self, b: &Aabb) -> f32 {
+        let fp = b.footprint();
+        let e = self.domain.clearance_range(&fp);
+        let Some((i0, i1, j0, j1)) = self.hf.cells_overlapping(&fp) else {
+            return 0.0;
+        };
+        if e.hi <= 0.0 {
+            return 0.0;
+        }
+        let h = self.heights.query_interval(i0, i1, j0, j1);
+        let s = self.slopes.query(i0, i1, j0, j1)[1].max(0.0);
+        let z = b.z();
+        let lt = if h.is_empty() {
+            0.0
+        } else {
+            sigma_slope(Interval::new(h.lo - z.hi, h.hi - z.lo), self.r) * (1.0 + s * s).sqrt()
+        };
+        let d = self.dist_range(e, z);
+        let lp = 2.0 * T * wyvill_slope(d.scale(1.0 / self.r)) / self.r * self.domain.lipschitz();
+        lt.max(lp)
+    }
+
+    fn z_bands(&self, fp: &Rect, z: Interval, out: &mut ZBands) {
+        let e = self.domain.clearance_range(fp);
+        let d_star = D_STAR * self.r * (1.0 + 1e-5);
+        let dxy = Interval::new((self.r - e.hi).max(0.0), (self.r - e.lo).max(0.0));
+        if e.hi <= 0.0 || dxy.lo > d_star {
+            return; // f_P < T everywhere over fp: no surface
+        }
+        let h = self.h_range(fp);
+        if h.is_empty() {
+            return;
+        }
+        let eps = self.eps(h.lo.abs().max(h.hi.abs()));
+        // the terrain itself, z = h
+        out.push(Interval::new(h.lo - eps, h.hi + eps).intersect(z));
+        // the prism's walls and floor, f_P = T below the terrain
+        let lower = self.dz.lo - (d_star * d_star - dxy.lo * dxy.lo).max(0.0).sqrt();
+        let upper = if dxy.hi >= d_star {
+            h.hi.min(self.dz.hi)
+        } else {
+            self.dz.lo - (d_star * d_star - dxy.hi * dxy.hi).max(0.0).sqrt()
+        };
+        let eps = self.eps(lower.abs().max(upper.abs()));
+        out.push(Interval::new(lower - eps, upper + eps).intersect(z));
+    }
+
+    fn eval_block(&self, origin: Vec3, step: Vec3, dims: [usize; 3], out: &mut [f32]) {
+        let [nx, ny, nz] = dims;
+        let plane = nx * ny;
+        for j in 0..ny {
+            for i in 0..nx {
+                let p = origin + Vec3::new(i as f32, j as f32, 0.0) * step;
+                let xy = p.truncate();
+                let e = self.domain.clearance(xy);
+                let h = if e > 0.0 { self.height(xy) } else { f32::NAN };
+                let base = i + nx * j;
+                if h.is_nan() {
+                    for k in 0..nz {
+                        out[base + plane * k] = 0.0;
+                    }
+                    continue;
+                }
+                let dxy = (self.r - e).max(0.0);
+                for k in 0..nz {
+                    let z = (origin + Vec3::new(i as f32, j as f32, k as f32) * step).z;
+                    out[base + plane * k] = sigma(h - z, self.r).min(self.prism(dxy, z));
+                }
+            }
+        }
+    }
+
+    fn elevation(&self, fp: &Rect) -> Option<Elevation<'_>> {
+        (self.domain.clearance_range(fp).lo >= self.r).then_some(Elevation {
+            source: self,
+            z: self.dz,
+        })
+    }
+}
+
+impl ElevationSource for HeightfieldField {
+    fn height(&self, xy: Vec2) -> f32 {
+        HeightfieldField::height(self, xy)
+    }
+}

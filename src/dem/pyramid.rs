@@ -1,0 +1,162 @@
+//! A min/max pyramid over grid cells: conservative ranges over any cell rectangle in O(1).
+//!
+//! Level 0 holds one `[lo, hi]` per cell; level `k + 1` merges 2×2 blocks of level `k`. A
+//! query picks the finest level at which the rectangle spans at most 4 blocks per axis and
+//! merges those (≤ 16 lookups). The answer contains the exact range of the rectangle and is
+//! exact when the rectangle is block-aligned at that level (always for ≤ 4×4 cells).
+
+use crate::field::Interval;
+
+/// Pyramid of `[lo, hi]` ranges; `[+∞, −∞]` marks a cell with no value.
+#[derive(Clone, Debug)]
+pub struct MinMaxPyramid {
+    levels: Vec<Level>,
+}
+
+#[derive(Clone, Debug)]
+struct Level {
+    w: usize,
+    h: usize,
+    data: Vec<[f32; 2]>,
+}
+
+#[inline]
+fn merge(a: [f32; 2], b: [f32; 2]) -> [f32; 2] {
+    [a[0].min(b[0]), a[1].max(b[1])]
+}
+
+const EMPTY: [f32; 2] = [f32::INFINITY, f32::NEG_INFINITY];
+
+impl MinMaxPyramid {
+    /// Builds the pyramid over a `w × h` grid of cell ranges (row-major).
+    ///
+    /// # Panics
+    /// When `cells.len() != w · h` or the grid is empty (a programming error).
+    pub fn new(w: usize, h: usize, cells: Vec<[f32; 2]>) -> MinMaxPyramid {
+        assert!(
+            w > 0 && h > 0 && cells.len() == w * h,
+            "pyramid of {w}×{h} needs {} cells",
+            w * h
+        );
+        let mut levels = vec![Level { w, h, data: cells }];
+        while let Some(l) = levels.last().filter(|l| l.w > 1 || l.h > 1) {
+            let (w2, h2) = (l.w.div_ceil(2), l.h.div_ceil(2));
+            let mut data = vec![EMPTY; w2 * h2];
+            for j in 0..l.h {
+                for i in 0..l.w {
+                    let d = &mut data[i / 2 + w2 * (j / 2)];
+                    *d = merge(*d, l.data[i + l.w * j]);
+                }
+            }
+            levels.push(Level { w: w2, h: h2, data });
+        }
+        MinMaxPyramid { levels }
+    }
+
+    /// Cells along x and y at level 0.
+    pub fn dims(&self) -> (usize, usize) {
+        (self.levels[0].w, self.levels[0].h)
+    }
+
+    /// Range of one cell.
+    #[inline]
+    pub fn cell(&self, i: usize, j: usize) -> [f32; 2] {
+        let l = &self.levels[0];
+        l.data[i + l.w * j]
+    }
+
+    /// The range over the whole grid (`[+∞, −∞]` when no cell has a value).
+    pub fn total(&self) -> [f32; 2] {
+        self.levels.last().map_or(EMPTY, |l| l.data[0])
+    }
+
+    /// A range containing the ranges of cells `i0..=i1 × j0..=j1` (indices clamped).
+    #[inline]
+    pub fn query(&self, i0: usize, i1: usize, j0: usize, j1: usize) -> [f32; 2] {
+        let (w, h) = self.dims();
+        let (i1, j1) = (i1.min(w - 1), j1.min(h - 1));
+        if i0 > i1 || j0 > j1 {
+            return EMPTY;
+        }
+        let span = (i1 - i0).max(j1 - j0);
+        // smallest k with (i1 >> k) - (i0 >> k) ≤ 3: start from the span's magnitude
+        let mut k = (usize::BITS - (span / 4).leading_zeros()) as usize;
+        while k > 0
+            && (i1 >> (k - 1)) - (i0 >> (k - 1)) <= 3
+            && (j1 >> (k - 1)) - (j0 >> (k - 1)) <= 3
+        {
+            k -= 1;
+        }
+        while (i1 >> k) - (i0 >> k) > 3 || (j1 >> k) - (j0 >> k) > 3 {
+            k += 1;
+        }
+        let l = &self.levels[k.min(self.levels.len() - 1)];
+        let mut r = EMPTY;
+        for j in (j0 >> k)..=(j1 >> k).min(l.h - 1) {
+            for i in (i0 >> k)..=(i1 >> k).min(l.w - 1) {
+                r = merge(r, l.data[i + l.w * j]);
+            }
+        }
+        r
+    }
+
+    /// [`MinMaxPyramid::query`] as an [`Interval`] (empty when no cell has a value).
+    #[inline]
+    pub fn query_interval(&self, i0: usize, i1: usize, j0: usize, j1: usize) -> Interval {
+        let [lo, hi] = self.query(i0, i1, j0, j1);
+        Interval { lo, hi }
+    }
+
+    /// Bytes held.
+    pub fn memory(&self) -> usize {
+        self.levels.iter().map(|l| l.data.len() * 8).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn queries_contain_the_exact_range_and_are_exact_when_small() {
+        let (w, h) = (37, 23);
+        let mut seed = 11u64;
+        let cells: Vec<[f32; 2]> = (0..w * h)
+            .map(|k| {
+                seed = seed
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                if k % 17 == 5 {
+                    return EMPTY;
+                }
+                let v = (seed >> 40) as f32 / 1e5;
+                [v, v + (k % 3) as f32]
+            })
+            .collect();
+        let p = MinMaxPyramid::new(w, h, cells.clone());
+        let mut loose = 0;
+        for i0 in (0..w).step_by(3) {
+            for i1 in (i0..w).step_by(4) {
+                for j0 in (0..h).step_by(2) {
+                    for j1 in (j0..h).step_by(5) {
+                        let mut exact = EMPTY;
+                        for j in j0..=j1 {
+                            for i in i0..=i1 {
+                                exact = merge(exact, cells[i + w * j]);
+                            }
+                        }
+                        let q = p.query(i0, i1, j0, j1);
+                        assert!(q[0] <= exact[0] && q[1] >= exact[1]);
+                        if i1 - i0 < 4 && j1 - j0 < 4 {
+                            assert_eq!(q, exact);
+                        }
+                        loose += (q != exact) as usize;
+                    }
+                }
+            }
+        }
+        assert!(loose > 0, "big queries are allowed to be conservative");
+        assert_eq!(p.query(0, w - 1, 0, h - 1), p.total());
+        assert_eq!(p.query(5, 4, 0, 0), EMPTY);
+    }
+}

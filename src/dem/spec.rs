@@ -1,0 +1,205 @@
+//! The `Heightfield(...)` node of tree files: a DEM implicitized as in seed 002 §5.1.
+//!
+//! ```ron
+//! Heightfield((
+//!     name: Some("jacksboro"),
+//!     source: "../shared/data/dem/jacksboro_utm16n_90m.tif", // relative to the tree file
+//!     falloff: 60.0,            // R, metres
+//!     base_depth: Some(100.0),  // prism floor below the lowest point (default: falloff)
+//!     vertical_scale: 1.0,
+//!     vertical_offset: 0.0,
+//!     placement: Some((0.0, 0.0)), // where the south-west sample goes
+//!     domain: None,             // or Some([(x, y), ...]) polygon in the tree frame
+//!     interpolation: Bilinear,  // or Bicubic
+//!     cell_size: Some(30.0),    // resample to 30 m cells first
+//! ))
+//! ```
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use super::implicit::{HeightfieldField, ImplicitParams};
+use super::{Dem, DemError, Interpolation, ReadOptions};
+use crate::io::DEFAULT_MEMORY_BUDGET;
+use crate::scene::{Finite, NonNegative, P2, Positive};
+
+fn one() -> Finite {
+    Finite(1.0)
+}
+
+fn is_one(v: &Finite) -> bool {
+    v.0 == 1.0
+}
+
+fn is_zero(v: &Finite) -> bool {
+    v.0 == 0.0
+}
+
+fn is_default<T: Default + PartialEq>(v: &T) -> bool {
+    *v == T::default()
+}
+
+/// A heightfield leaf as written in a tree file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeightfieldSpec {
+    /// A name for editors and error messages.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The DEM file (GeoTIFF, PNG + sidecar, ESRI ASCII, SRTM .hgt), relative to the tree
+    /// file's folder.
+    pub source: PathBuf,
+    /// Falloff distance `R` in metres.
+    pub falloff: Positive,
+    /// Depth of the prism's floor below the lowest elevation (default: `falloff`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base_depth: Option<NonNegative>,
+    /// Multiplies elevations (default 1).
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub vertical_scale: Finite,
+    /// Added to elevations after scaling, metres (default 0).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub vertical_offset: Finite,
+    /// Tree-frame position of the DEM's south-west sample (default the origin).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub placement: Option<P2>,
+    /// A polygon (tree frame) restricting the domain.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub domain: Option<Vec<P2>>,
+    /// `Bilinear` (default) or `Bicubic`.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub interpolation: Interpolation,
+    /// Resample the DEM to cells of this size (metres) before use.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cell_size: Option<Positive>,
+    /// PNG sources without a sidecar: the elevations of raw 0 and of the largest raw value.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub z_range: Option<(Finite, Finite)>,
+}
+
+impl HeightfieldSpec {
+    /// A spec with defaults for everything but the source and falloff.
+    pub fn new(source: impl Into<PathBuf>, falloff: f32) -> HeightfieldSpec {
+        HeightfieldSpec {
+            name: None,
+            source: source.into(),
+            falloff: Positive::new(falloff),
+            base_depth: None,
+            vertical_scale: one(),
+            vertical_offset: Finite(0.0),
+            placement: None,
+            domain: None,
+            interpolation: Interpolation::Bilinear,
+            cell_size: None,
+            z_range: None,
+        }
+    }
+
+    /// The implicitization parameters this spec asks for.
+    pub fn params(&self) -> ImplicitParams {
+        let r = self.falloff.get();
+        ImplicitParams {
+            falloff: r,
+            base_depth: self.base_depth.map_or(r, |b| b.get()),
+            vertical_scale: self.vertical_scale.get(),
+            vertical_offset: self.vertical_offset.get(),
+            placement: self.placement.map_or(glam::Vec2::ZERO, |p| p.0),
+            domain: self
+                .domain
+                .as_ref()
+                .map(|d| d.iter().map(|p| p.0).collect()),
+            interpolation: self.interpolation,
+        }
+    }
+
+    /// Loads the DEM (`source` resolved against `base_dir`) and implicitizes it.
+    pub fn load(&self, base_dir: &Path) -> Result<HeightfieldField, DemError> {
+        self.load_with(base_dir, &mut DemCache::new(DEFAULT_MEMORY_BUDGET))
+    }
+
+    /// [`HeightfieldSpec::load`] sharing decoded DEMs through `cache` (one per compile).
+    pub fn load_with(
+        &self,
+        base_dir: &Path,
+        cache: &mut DemCache,
+    ) -> Result<HeightfieldField, DemError> {
+        let dem = cache.get(&base_dir.join(&self.source), self)?;
+        let field =
+            HeightfieldField::new(&dem.heightfield, &self.params()).map_err(|e| match e {
+                DemError::Invalid { what } => DemError::Invalid {
+                    what: format!(
+                        "heightfield {}: {what}",
+                        self.name
+                            .as_deref()
+                            .unwrap_or(&self.source.to_string_lossy())
+                    ),
+                },
+                e => e,
+            })?;
+        Ok(field.with_georef(dem.georef.clone()))
+    }
+}
+
+/// What makes two loads the same: canonical path, resampling (bits), PNG range (bits),
+/// interpolation used to resample.
+type CacheKey = (PathBuf, Option<u32>, Option<(u32, u32)>, Interpolation);
+
+/// Decoded DEMs by path (and resampling), shared by the heightfield nodes of one compile,
+/// plus the readers' notices for the caller to show.
+#[derive(Debug)]
+pub struct DemCache {
+    budget: u64,
+    dems: HashMap<CacheKey, Arc<Dem>>,
+    notices: Vec<String>,
+}
+
+impl DemCache {
+    /// An empty cache whose readers refuse grids over `budget` bytes.
+    pub fn new(budget: u64) -> DemCache {
+        DemCache {
+            budget,
+            dems: HashMap::new(),
+            notices: Vec::new(),
+        }
+    }
+
+    /// Notices of every DEM loaded so far, in load order.
+    pub fn notices(&self) -> &[String] {
+        &self.notices
+    }
+
+    fn get(&mut self, path: &Path, spec: &HeightfieldSpec) -> Result<Arc<Dem>, DemError> {
+        let canon = path.canonicalize().map_err(|source| DemError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let key = (
+            canon.clone(),
+            spec.cell_size.map(|c| c.get().to_bits()),
+            spec.z_range
+                .map(|(a, b)| (a.get().to_bits(), b.get().to_bits())),
+            spec.interpolation,
+        );
+        if let Some(d) = self.dems.get(&key) {
+            return Ok(d.clone());
+        }
+        let opts = ReadOptions {
+            memory_budget: self.budget,
+            z_range: spec
+                .z_range
+                .map(|(lo, hi)| [lo.get().into(), hi.get().into()]),
+            ..ReadOptions::default()
+        };
+        let mut dem = super::read(path, &opts)?;
+        if let Some(c) = spec.cell_size {
+            dem = dem.resample(c.get().into(), spec.interpolation, self.budget)?;
+        }
+        self.notices.append(&mut dem.notices.clone());
+        let dem = Arc::new(dem);
+        self.dems.insert(key, dem.clone());
+        Ok(dem)
+    }
+}

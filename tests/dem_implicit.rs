@@ -1,0 +1,381 @@
+//! The implicit heightfield leaf (seed 002 §5.1): every bound is checked by sampling, on the
+//! real UTM DEM (with its nodata edges) and on synthetic grids with polygons and bicubic.
+
+use std::path::Path;
+
+use glam::{Vec2, Vec3};
+use karstic::dem::{Heightfield, HeightfieldField, HeightfieldSpec, ImplicitParams, Interpolation};
+use karstic::field::falloff::sigma;
+use karstic::field::{Aabb, Field, Interval, Rect, T, ZBands};
+
+struct Rng(u64);
+
+impl Rng {
+    fn f(&mut self) -> f32 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.f()
+    }
+    fn point(&mut self, b: &Aabb) -> Vec3 {
+        Vec3::new(
+            self.range(b.min.x, b.max.x),
+            self.range(b.min.y, b.max.y),
+            self.range(b.min.z, b.max.z),
+        )
+    }
+}
+
+fn utm_leaf(r: f32, interp: Interpolation) -> HeightfieldField {
+    let ron = format!(
+        "(source: \"../shared/data/dem/jacksboro_utm16n_90m.tif\", falloff: {r}, interpolation: {interp:?}, placement: Some((-1000.0, 500.0)))"
+    );
+    let spec: HeightfieldSpec = ron::from_str(&ron).unwrap();
+    spec.load(Path::new(env!("CARGO_MANIFEST_DIR"))).unwrap()
+}
+
+/// A 40 × 30 grid of rolling hills with a nodata hole, cut by a triangle.
+fn synthetic(interp: Interpolation) -> HeightfieldField {
+    let (nx, ny) = (40, 30);
+    let z = (0..nx * ny)
+        .map(|k| {
+            let (i, j) = ((k % nx) as f32, (k / nx) as f32);
+            if (i - 25.0).abs() < 2.0 && (j - 12.0).abs() < 2.0 {
+                f32::NAN
+            } else {
+                50.0 + 20.0 * (0.3 * i).sin() * (0.25 * j).cos() + 0.5 * i
+            }
+        })
+        .collect();
+    let hf = Heightfield::new(nx, ny, Vec2::ZERO, Vec2::new(10.0, 12.0), z).unwrap();
+    let params = ImplicitParams {
+        vertical_scale: 1.5,
+        vertical_offset: -10.0,
+        placement: Vec2::new(100.0, -50.0),
+        domain: Some(vec![
+            Vec2::new(90.0, -60.0),
+            Vec2::new(520.0, -40.0),
+            Vec2::new(480.0, 320.0),
+            Vec2::new(120.0, 280.0),
+        ]),
+        interpolation: interp,
+        ..ImplicitParams::with_falloff(25.0)
+    };
+    HeightfieldField::new(&hf, &params).unwrap()
+}
+
+fn leaves() -> Vec<(&'static str, HeightfieldField)> {
+    vec![
+        ("utm bilinear", utm_leaf(150.0, Interpolation::Bilinear)),
+        ("utm bicubic", utm_leaf(60.0, Interpolation::Bicubic)),
+        ("synthetic bilinear", synthetic(Interpolation::Bilinear)),
+        ("synthetic bicubic", synthetic(Interpolation::Bicubic)),
+    ]
+}
+
+/// A random box around the support: sizes from a fraction of a cell to a large part.
+fn random_box(f: &HeightfieldField, rng: &mut Rng) -> Aabb {
+    let s = f.support().dilate(20.0);
+    let c = rng.point(&s);
+    let size = s.size() * rng.f().powi(3) * 0.3;
+    Aabb::new(c - size * 0.5, c + size * 0.5)
+}
+
+#[test]
+fn intervals_contain_sampled_values() {
+    for (name, f) in leaves() {
+        let mut rng = Rng(1);
+        let mut informative = 0;
+        for _ in 0..1500 {
+            let b = random_box(&f, &mut rng);
+            let iv = f.interval(&b);
+            informative += (iv.width() < 2.0 * T) as usize;
+            for _ in 0..20 {
+                let p = rng.point(&b);
+                let v = f.value(p);
+                assert!(
+                    iv.lo - 1e-5 <= v && v <= iv.hi + 1e-5,
+                    "{name}: f({p}) = {v} not in {iv:?} for {b:?}"
+                );
+            }
+        }
+        assert!(
+            informative > 500,
+            "{name}: intervals are too loose to prune ({informative})"
+        );
+    }
+}
+
+#[test]
+fn lipschitz_bounds_hold_on_random_pairs() {
+    for (name, f) in leaves() {
+        let l = f.lipschitz();
+        let mut rng = Rng(2);
+        let mut worst = 0.0f32;
+        for _ in 0..20000 {
+            let b = random_box(&f, &mut rng);
+            let lb = f.lipschitz_box(&b);
+            assert!(
+                lb <= l * 1.0001,
+                "{name}: box bound {lb} above the global {l}"
+            );
+            let (p, q) = (rng.point(&b), rng.point(&b));
+            let d = p.distance(q);
+            if d < 1e-2 {
+                continue;
+            }
+            let slope = (f.value(p) - f.value(q)).abs() / d;
+            worst = worst.max(slope / l);
+            assert!(
+                slope <= lb * 1.001 + 1e-6,
+                "{name}: slope {slope} > box bound {lb} in {b:?}"
+            );
+        }
+        assert!(
+            worst > 0.05,
+            "{name}: global bound {l} never approached ({worst})"
+        );
+    }
+}
+
+#[test]
+fn gradients_match_finite_differences() {
+    for (name, f) in leaves() {
+        let mut rng = Rng(3);
+        let s = f.support();
+        let mut checked = 0;
+        while checked < 400 {
+            // points near the surface, where the gradient matters
+            let mut p = rng.point(&s);
+            let h = f
+                .heightfield()
+                .sample(p.truncate(), f.params().interpolation);
+            if h.is_nan() {
+                continue;
+            }
+            p.z = h + rng.range(-40.0, 40.0);
+            let (v, g) = f.value_grad(p);
+            assert!((v - f.value(p)).abs() < 1e-6, "{name}");
+            let e = 1e-2;
+            let fd = |e: f32| {
+                Vec3::new(
+                    f.value(p + Vec3::X * e) - f.value(p - Vec3::X * e),
+                    f.value(p + Vec3::Y * e) - f.value(p - Vec3::Y * e),
+                    f.value(p + Vec3::Z * e) - f.value(p - Vec3::Z * e),
+                ) / (2.0 * e)
+            };
+            let (a, b) = (fd(e), fd(2.0 * e));
+            if (a - b).length() > 1e-4 * (1.0 + a.length()) {
+                continue; // a kink (min, cell edge) under the stencil
+            }
+            assert!(
+                (a - g).length() <= 2e-3 * (1.0 + g.length()),
+                "{name}: at {p}: {g} vs {a}"
+            );
+            checked += 1;
+        }
+    }
+}
+
+#[test]
+fn z_bands_contain_every_sampled_crossing() {
+    for (name, f) in leaves() {
+        let mut rng = Rng(4);
+        let s = f.support().dilate(10.0);
+        let zr = Interval::new(s.min.z, s.max.z);
+        let mut bands = ZBands::new();
+        let (mut crossings, mut pruned) = (0, 0.0);
+        for _ in 0..600 {
+            let c = rng.point(&s).truncate();
+            let half = Vec2::new(rng.range(1.0, 60.0), rng.range(1.0, 60.0));
+            let fp = Rect::new(c - half, c + half);
+            bands.clear();
+            f.z_bands(&fp, zr, &mut bands);
+            pruned += 1.0 - bands.as_slice().iter().map(|b| b.width()).sum::<f32>() / zr.width();
+            for _ in 0..6 {
+                let xy = Vec2::new(rng.range(fp.min.x, fp.max.x), rng.range(fp.min.y, fp.max.y));
+                let n = 2000;
+                let dz = zr.width() / n as f32;
+                let mut prev = f.value(xy.extend(zr.lo)) - T;
+                for k in 1..=n {
+                    let z = zr.lo + k as f32 * dz;
+                    let cur = f.value(xy.extend(z)) - T;
+                    if (prev > 0.0) != (cur > 0.0) {
+                        crossings += 1;
+                        let seg = Interval::new(z - dz, z);
+                        assert!(
+                            bands.as_slice().iter().any(|b| b.overlaps(&seg)),
+                            "{name}: crossing in {seg:?} at {xy} outside {:?}",
+                            bands.as_slice()
+                        );
+                    }
+                    prev = cur;
+                }
+            }
+        }
+        assert!(
+            crossings > 300,
+            "{name}: too few crossings sampled ({crossings})"
+        );
+        assert!(
+            pruned / 600.0 > 0.5,
+            "{name}: bands prune only {:.0}% of z",
+            100.0 * pruned / 600.0
+        );
+    }
+}
+
+#[test]
+fn elevation_answers_only_where_the_field_is_the_heightfield() {
+    for (name, f) in leaves() {
+        let mut rng = Rng(5);
+        let s = f.support();
+        let (mut some, mut none) = (0, 0);
+        for _ in 0..3000 {
+            let c = rng.point(&s).truncate();
+            let half = Vec2::splat(rng.range(1.0, 200.0));
+            let fp = Rect::new(c - half, c + half);
+            let Some(e) = f.elevation(&fp) else {
+                none += 1;
+                continue;
+            };
+            some += 1;
+            for _ in 0..10 {
+                let xy = Vec2::new(rng.range(fp.min.x, fp.max.x), rng.range(fp.min.y, fp.max.y));
+                let h = e.source.height(xy);
+                assert!(
+                    h.is_finite(),
+                    "{name}: no elevation at {xy} inside an elevation footprint"
+                );
+                let z = rng.range(e.z.lo, e.z.hi);
+                let v = f.value(xy.extend(z));
+                assert_eq!(
+                    v,
+                    sigma(h - z, f.params().falloff),
+                    "{name}: f is not σ(h − z) at {xy}, {z}"
+                );
+                assert_eq!(v > T, z < h, "{name}");
+            }
+        }
+        assert!(some > 100 && none > 100, "{name}: {some} Some, {none} None");
+    }
+}
+
+#[test]
+fn field_vanishes_outside_the_support_and_the_domain() {
+    for (name, f) in leaves() {
+        let mut rng = Rng(6);
+        let s = f.support();
+        let big = s.dilate(500.0);
+        for _ in 0..20000 {
+            let p = rng.point(&big);
+            let v = f.value(p);
+            assert!((0.0..=2.0 * T).contains(&v), "{name}: {v}");
+            if !s.contains(p) {
+                assert_eq!(v, 0.0, "{name}: f({p}) = {v} outside the support {s:?}");
+            }
+            let xy = p.truncate();
+            if f.heightfield()
+                .sample(xy, f.params().interpolation)
+                .is_nan()
+            {
+                assert_eq!(v, 0.0, "{name}: f({p}) = {v} where h is undefined");
+            }
+        }
+    }
+}
+
+#[test]
+fn solid_is_the_terrain_inside_and_closed_by_walls() {
+    let f = utm_leaf(150.0, Interpolation::Bilinear);
+    let hf = f.heightfield();
+    // centre of the DEM: solid below the terrain, empty above
+    let xy = hf.origin() + Vec2::new(170.0, 180.0) * hf.cell();
+    let h = f.height(xy);
+    assert!(f.value(xy.extend(h - 1.0)) > T && f.value(xy.extend(h + 1.0)) < T);
+    assert!((f.value(xy.extend(h)) - T).abs() < 1e-6);
+    // far below the prism floor: empty again (the block has a bottom)
+    let dz = f.prism_z();
+    assert!(f.value(xy.extend(dz.lo - 100.0)) < T && f.value(xy.extend(dz.lo - 10.0)) > T);
+}
+
+#[test]
+fn eval_block_matches_value() {
+    for (name, f) in leaves() {
+        let s = f.support();
+        let dims = [17, 13, 29];
+        let step = s.size() / Vec3::new(16.0, 12.0, 28.0);
+        let mut out = vec![0.0; 17 * 13 * 29];
+        f.eval_block(s.min, step, dims, &mut out);
+        for k in 0..29 {
+            for j in 0..13 {
+                for i in 0..17 {
+                    let p = s.min + Vec3::new(i as f32, j as f32, k as f32) * step;
+                    assert_eq!(out[i + 17 * (j + 13 * k)], f.value(p), "{name} at {p}");
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn spec_errors_carry_positions_and_paths() {
+    let e =
+        ron::from_str::<HeightfieldSpec>("(\n source: \"x.tif\",\n falloff: -3.0)").unwrap_err();
+    assert_eq!(e.span.start.line, 3, "{e}");
+    assert!(e.to_string().contains("> 0"), "{e}");
+    let e = ron::from_str::<HeightfieldSpec>("(source: \"x.tif\", falloff: 3.0, colour: 1)")
+        .unwrap_err();
+    assert!(e.to_string().contains("colour"), "{e}");
+    let spec = HeightfieldSpec::new("missing.tif", 10.0);
+    let e = spec.load(Path::new("/nonexistent-dir")).unwrap_err();
+    assert!(
+        e.to_string().contains("/nonexistent-dir/missing.tif"),
+        "{e}"
+    );
+    // a round trip keeps the spec
+    let mut spec = HeightfieldSpec::new("a.tif", 12.5);
+    spec.interpolation = Interpolation::Bicubic;
+    let text = ron::to_string(&spec).unwrap();
+    assert_eq!(
+        ron::from_str::<HeightfieldSpec>(&text).unwrap(),
+        spec,
+        "{text}"
+    );
+}
+
+#[test]
+fn tree_frame_maps_back_to_utm() {
+    let f = utm_leaf(150.0, Interpolation::Bilinear);
+    // placement (-1000, 500): the south-west sample centre, GDAL's corner + 45 m
+    let sw = f.tree_to_crs(Vec2::new(-1000.0, 500.0)).unwrap();
+    assert!(
+        (sw[0] - 730_984.219_465_799).abs() < 1e-6 && (sw[1] - 4_036_601.162_225_269).abs() < 1e-6,
+        "{sw:?}"
+    );
+    let p = f.crs_to_tree([sw[0] + 900.0, sw[1] + 90.0]).unwrap();
+    assert!(p.distance(Vec2::new(-100.0, 590.0)) < 1e-3, "{p}");
+}
+
+#[test]
+fn dem_cache_shares_decoded_files() {
+    let base = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut cache = karstic::dem::DemCache::new(1 << 30);
+    let a = HeightfieldSpec::new("../shared/data/dem/jacksboro_int16.tif", 100.0);
+    let mut b = a.clone();
+    b.vertical_scale = karstic::scene::Finite(-1.0);
+    let fa = a.load_with(base, &mut cache).unwrap();
+    let fb = b.load_with(base, &mut cache).unwrap();
+    assert_eq!(
+        cache.notices().len(),
+        1,
+        "one decode, one notice: {:?}",
+        cache.notices()
+    );
+    let xy = Vec2::new(5000.0, 5000.0);
+    assert_eq!(fa.height(xy), -fb.height(xy));
+}
