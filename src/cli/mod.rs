@@ -2,6 +2,8 @@
 
 use clap::{Parser, Subcommand};
 
+pub mod render;
+
 /// karstic: implicit terrain modelling — DEMs amplified with caves, arches and overhangs.
 #[derive(Parser, Debug)]
 #[command(name = "karstic", version, about)]
@@ -13,9 +15,14 @@ pub struct Cli {
 
 /// All subcommands.
 #[derive(Subcommand, Debug)]
-pub enum Command {}
+pub enum Command {
+    /// Render a PNG preview of a tree by tracing its implicit surface.
+    Render(render::RenderArgs),
+}
 
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
-    match cli.command {}
+    match cli.command {
+        Command::Render(args) => render::run(args),
+    }
 }

@@ -408,3 +408,74 @@ pub fn check_segment_lipschitz(f: &dyn Field, region: &Aabb, n: usize, seed: u64
     }
     n
 }
+
+pub mod tapes {
+    //! The same scenes encoded as GPU tapes.
+    use super::*;
+    use karstic::render::gpu::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder};
+
+    /// The blobs as a blend under a BVH of guards.
+    pub fn blobs(b: &Blobs) -> Tape {
+        let mut t = TapeBuilder::new();
+        let boxes: Vec<Aabb> = b
+            .centers
+            .iter()
+            .map(|c| Aabb::around(*c, b.radius))
+            .collect();
+        t.combine_bvh(Combine::Blend, &boxes, &mut |t, i| {
+            t.primitive(
+                Shape::Point(b.centers[i]),
+                Profile::Wyvill {
+                    radius: b.radius,
+                    energy: b.energy,
+                },
+            );
+            Ok(())
+        })
+        .unwrap();
+        t.finish().unwrap()
+    }
+
+    /// A σ-sphere.
+    pub fn sigma_sphere(s: &SigmaSphere) -> Tape {
+        let mut t = TapeBuilder::new();
+        t.primitive(
+            Shape::Sphere {
+                center: s.center,
+                radius: s.radius,
+            },
+            Profile::Sigma { radius: s.falloff },
+        );
+        t.finish().unwrap()
+    }
+
+    /// The terrain sampled on an `n × n` grid, intersected with a σ box prism.
+    pub fn terrain(tr: &Terrain, n: usize) -> Tape {
+        let lo = tr.bounds.min.truncate();
+        let cell = (tr.bounds.max.x - lo.x) / (n - 1) as f32;
+        let z: Vec<f32> = (0..n * n)
+            .map(|k| tr.height(lo + Vec2::new((k % n) as f32, (k / n) as f32) * cell))
+            .collect();
+        let mut t = TapeBuilder::new();
+        t.heightfield(
+            &HeightGrid {
+                origin: lo,
+                cell,
+                nx: n,
+                ny: n,
+                z: &z,
+            },
+            tr.falloff,
+        )
+        .unwrap();
+        t.primitive(
+            Shape::Box {
+                center: tr.bounds.center(),
+                half: tr.bounds.size() * 0.5,
+            },
+            Profile::Sigma { radius: tr.falloff },
+        );
+        t.combine(Combine::Intersection).unwrap();
+        t.finish().unwrap()
+    }
+}
