@@ -28,7 +28,9 @@ struct Uniforms {
 @group(0) @binding(7) var<storage, read> probe_in: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> probe_out: array<vec2<f32>>;
 
-const MAX_BISECTIONS: u32 = 12u;
+const MAX_REFINE: u32 = 12u;
+const FIRST_DELTA: f32 = 0.0625;
+const GAMMA_STEPS: f32 = 4095.0;
 const MISS: f32 = -1.0;
 
 // [t0, t1] of the ray inside the support box, t0 >= 0; t0 > t1 on a miss.
@@ -52,27 +54,52 @@ struct Hit {
     steps: u32,
 }
 
-fn bisect(o: vec3<f32>, d: vec3<f32>, a_in: f32, b_in: f32, side: f32, width: f32) -> Hit {
+// False position with the Illinois modification, as trace.rs::refine.
+fn refine(o: vec3<f32>, d: vec3<f32>, a_in: f32, ea_in: f32, b_in: f32, eb_in: f32, width: f32) -> Hit {
     var a = a_in;
+    var ea = ea_in;
     var b = b_in;
+    var eb = eb_in;
     var n = 0u;
+    var last = -3.4e38;
+    var m = 0.5 * (a + b);
+    var kept = 0;
     loop {
-        if n >= MAX_BISECTIONS || b - a <= width {
+        if n >= MAX_REFINE || b - a <= width {
             break;
         }
-        let m = 0.5 * (a + b);
+        if ea != eb {
+            m = a + (b - a) * ea / (ea - eb);
+        } else {
+            m = 0.5 * (a + b);
+        }
+        m = clamp(m, a, b);
         let e = value(o + d * m) - T;
-        if (e > 0.0) == (side > 0.0) {
+        n += 1u;
+        if abs(m - last) < width {
+            break;
+        }
+        last = m;
+        if (e > 0.0) == (ea > 0.0) {
             a = m;
+            ea = e;
+            if kept == 1 {
+                eb *= 0.5;
+            }
+            kept = 1;
         } else {
             b = m;
+            eb = e;
+            if kept == -1 {
+                ea *= 0.5;
+            }
+            kept = -1;
         }
-        n += 1u;
     }
-    return Hit(0.5 * (a + b), n);
+    return Hit(m, n);
 }
 
-// The march of trace.rs::trace: steps of at least the tolerance, bisection on a crossing.
+// The march of trace.rs::trace: steps of at least the tolerance, refinement on a crossing.
 fn trace_ray(o: vec3<f32>, d: vec3<f32>, t0: f32, t1: f32) -> Hit {
     if !(t0 <= t1) {
         return Hit(MISS, 0u);
@@ -81,10 +108,11 @@ fn trace_ray(o: vec3<f32>, d: vec3<f32>, t0: f32, t1: f32) -> Hit {
     let cone = u.box_max.w;
     let segment = u.trace.w == 0.0;
     var t = t0;
-    var delta = t1 - t0;
+    var delta = (t1 - t0) * FIRST_DELTA;
     var steps = 0u;
     var side = 0.0;
     var prev_t = t0;
+    var prev_e = 0.0;
     loop {
         if steps >= u.dims.z {
             break;
@@ -107,7 +135,7 @@ fn trace_ray(o: vec3<f32>, d: vec3<f32>, t0: f32, t1: f32) -> Hit {
         if side == 0.0 {
             side = s_now;
         } else if s_now != side {
-            let h = bisect(o, d, prev_t, t, side, 0.1 * (eps + cone * prev_t));
+            let h = refine(o, d, prev_t, prev_e, t, e, 0.1 * (eps + cone * prev_t));
             return Hit(h.t, steps + h.steps);
         }
         if t >= t1 {
@@ -128,6 +156,7 @@ fn trace_ray(o: vec3<f32>, d: vec3<f32>, t0: f32, t1: f32) -> Hit {
             }
         }
         prev_t = t;
+        prev_e = e;
         t = min(t + max(step, tol), t1);
     }
     return Hit(MISS, steps);
@@ -173,8 +202,10 @@ fn surface(p: vec3<f32>, n: vec3<f32>, t: f32, lit: f32) -> vec3<f32> {
     return mix(c, u.fog.xyz, k);
 }
 
+// Quantised to 1/4095 before encoding, like the CPU's gamma table (shade.rs::to_srgb8).
 fn srgb8(c: vec3<f32>) -> u32 {
-    let e = vec3<u32>(pow(clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)), vec3<f32>(1.0 / 2.2)) * 255.0 + 0.5);
+    let q = floor(clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)) * GAMMA_STEPS + 0.5) / GAMMA_STEPS;
+    let e = vec3<u32>(pow(q, vec3<f32>(1.0 / 2.2)) * 255.0 + 0.5);
     return e.x | (e.y << 8u) | (e.z << 16u) | (255u << 24u);
 }
 

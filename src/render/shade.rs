@@ -105,9 +105,17 @@ pub fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
     u * u * (3.0 - 2.0 * u)
 }
 
-/// Linear `[0, 1]` RGB to 8-bit sRGB (gamma 2.2), opaque.
+/// Entries of the gamma table: linear values are quantised to 1/4095 before encoding.
+const GAMMA_STEPS: usize = 4096;
+
+/// Linear `[0, 1]` RGB to 8-bit sRGB (gamma 2.2), opaque, through a table (a `powf` per
+/// channel was a visible share of a frame's time).
 pub fn to_srgb8(c: Vec3) -> [u8; 4] {
-    let e = |v: f32| (v.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0 + 0.5) as u8;
+    static TABLE: std::sync::OnceLock<[u8; GAMMA_STEPS]> = std::sync::OnceLock::new();
+    let table = TABLE.get_or_init(|| {
+        std::array::from_fn(|i| ((i as f32 / (GAMMA_STEPS - 1) as f32).powf(1.0 / 2.2) * 255.0 + 0.5) as u8)
+    });
+    let e = |v: f32| table[(v.clamp(0.0, 1.0) * (GAMMA_STEPS - 1) as f32 + 0.5) as usize];
     [e(c.x), e(c.y), e(c.z), 255]
 }
 

@@ -15,7 +15,7 @@
 //!
 //! Steps are never shorter than the tolerance `ε + cone·t` (metres; the cone term is the
 //! pixel footprint): near the surface the march steps across it, and the crossing is
-//! located by bisection to a tenth of the tolerance. Rays that start inside the solid
+//! located by false position (Illinois) to a tenth of the tolerance. Rays that start inside the solid
 //! find where they leave it.
 
 use glam::Vec3;
@@ -79,7 +79,7 @@ impl TraceParams {
 pub struct Trace {
     /// Ray parameter of the hit (metres from the origin); `f32::INFINITY` on a miss.
     pub t: f32,
-    /// Field evaluations spent (marching plus bisection).
+    /// Field evaluations spent (marching plus refinement).
     pub steps: u32,
 }
 
@@ -90,15 +90,18 @@ impl Trace {
     }
 }
 
-/// Most bisection iterations used to locate a bracketed crossing.
-const MAX_BISECTIONS: u32 = 12;
+/// Most evaluations used to locate a bracketed crossing.
+const MAX_REFINE: u32 = 12;
+
+/// First candidate segment, as a fraction of the clipped span.
+const FIRST_DELTA: f32 = 1.0 / 16.0;
 
 /// Traces `ray` over `t ∈ [t0, t1]` (normally the ray clipped to the support box) and
 /// returns the first crossing of the surface.
 ///
 /// Steps never fall below the tolerance `ε + cone·t`, so once the safe distance gets that
-/// small the march steps over the surface and the crossing is bracketed; bisection then
-/// narrows the bracket to a tenth of the tolerance. Stopping on a small safe step alone
+/// small the march steps over the surface and the crossing is bracketed; false position then
+/// locates it to a tenth of the tolerance. Stopping on a small safe step alone
 /// (classic sphere tracing) would stop short wherever the Lipschitz bound is loose —
 /// with a blend's global bound, everywhere.
 pub fn trace(field: &dyn Field, ray: &Ray, (t0, t1): (f32, f32), params: &TraceParams) -> Trace {
@@ -114,10 +117,12 @@ pub fn trace(field: &dyn Field, ray: &Ray, (t0, t1): (f32, f32), params: &TraceP
         Method::Segment => 0.0,
     };
     let mut t = t0;
-    let mut delta = t1 - t0;
+    // A first candidate of a sixteenth of the span: long enough to cross empty space in a
+    // few doublings, short enough that its bound is local.
+    let mut delta = (t1 - t0) * FIRST_DELTA;
     let mut steps = 0;
     let mut side = 0.0f32;
-    let mut prev_t = t0;
+    let (mut prev_t, mut prev_e) = (t0, 0.0);
     while steps < params.max_steps {
         let p = ray.at(t);
         let e = field.value(p) - T;
@@ -127,7 +132,7 @@ pub fn trace(field: &dyn Field, ray: &Ray, (t0, t1): (f32, f32), params: &TraceP
             side = s_now;
         } else if s_now != side {
             let tol = params.epsilon + params.cone * prev_t;
-            let (t_hit, n) = bisect(field, ray, prev_t, t, side, 0.1 * tol);
+            let (t_hit, n) = refine(field, ray, (prev_t, prev_e), (t, e), 0.1 * tol);
             return Trace {
                 t: t_hit,
                 steps: steps + n,
@@ -149,7 +154,7 @@ pub fn trace(field: &dyn Field, ray: &Ray, (t0, t1): (f32, f32), params: &TraceP
                 }
             }
         };
-        prev_t = t;
+        (prev_t, prev_e) = (t, e);
         t = (t + step.max(tol)).min(t1);
         delta = next_delta;
     }
@@ -172,28 +177,40 @@ fn safe_step(e: f32, lambda: f32) -> f32 {
     }
 }
 
-/// Locates the crossing between `a` (on `side`) and `b` (across) to within `precision`;
-/// returns `t` and the evaluations spent.
-fn bisect(
-    field: &dyn Field,
-    ray: &Ray,
-    mut a: f32,
-    mut b: f32,
-    side: f32,
-    precision: f32,
-) -> (f32, u32) {
+/// Locates the crossing of `T` between `a` and `b` (field offsets `e = f − T` of opposite
+/// signs) by false position with the Illinois modification, until the bracket or the
+/// last move is below `width`; returns `t` and the evaluations spent.
+fn refine(field: &dyn Field, ray: &Ray, (mut a, mut ea): (f32, f32), (mut b, mut eb): (f32, f32), width: f32) -> (f32, u32) {
     let mut n = 0;
-    while n < MAX_BISECTIONS && b - a > precision {
-        let m = 0.5 * (a + b);
+    let mut last = f32::NAN;
+    let mut m = 0.5 * (a + b);
+    let mut kept = 0i8; // which end was kept last: -1 a, 1 b
+
+    while n < MAX_REFINE && b - a > width {
+        m = if ea != eb { a + (b - a) * ea / (ea - eb) } else { 0.5 * (a + b) };
+        m = m.clamp(a, b);
         let e = field.value(ray.at(m)) - T;
-        if (e > 0.0) == (side > 0.0) {
-            a = m;
-        } else {
-            b = m;
-        }
         n += 1;
+        if (m - last).abs() < width {
+            break;
+        }
+        last = m;
+        // Illinois: when the same end is kept twice in a row, halve its weight.
+        if (e > 0.0) == (ea > 0.0) {
+            (a, ea) = (m, e);
+            if kept == 1 {
+                eb *= 0.5;
+            }
+            kept = 1;
+        } else {
+            (b, eb) = (m, e);
+            if kept == -1 {
+                ea *= 0.5;
+            }
+            kept = -1;
+        }
     }
-    (0.5 * (a + b), n)
+    (m, n)
 }
 
 /// The outward unit normal at `p`: `−∇f / |∇f|` (solid where `f > T`); `+Z` where the

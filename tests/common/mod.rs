@@ -76,7 +76,8 @@ impl Field for SigmaSphere {
 }
 
 /// `Σ e · g(|p − c_i| / R)` with a uniform grid of cell size `R`: each cell lists the
-/// blobs whose support overlaps it and a bound of `|∇f|` inside it.
+/// blobs whose support overlaps it (for values) and the blobs centred in it (for segment
+/// bounds), and holds a bound of `|∇f|` inside it (for long segments and boxes).
 pub struct Blobs {
     pub centers: Vec<Vec3>,
     pub energy: f32,
@@ -84,7 +85,9 @@ pub struct Blobs {
     origin: Vec3,
     dims: [i32; 3],
     starts: Vec<u32>,
-    items: Vec<u32>,
+    items: Vec<Vec3>,
+    centered_starts: Vec<u32>,
+    centered: Vec<Vec3>,
     slope: Vec<f32>,
 }
 
@@ -168,13 +171,23 @@ impl Blobs {
                 }
             }
         }
-        let mut starts = Vec::with_capacity(ncell + 1);
-        let mut items = Vec::new();
-        for l in &lists {
+        let csr = |lists: &[Vec<u32>]| {
+            let mut starts = Vec::with_capacity(lists.len() + 1);
+            let mut items = Vec::new();
+            for l in lists {
+                starts.push(items.len() as u32);
+                items.extend(l.iter().map(|&i| centers[i as usize]));
+            }
             starts.push(items.len() as u32);
-            items.extend_from_slice(l);
+            (starts, items)
+        };
+        let mut by_center: Vec<Vec<u32>> = vec![Vec::new(); ncell];
+        for (i, c) in centers.iter().enumerate() {
+            let q = ((*c - b.min) / radius).floor().as_ivec3().clamp(glam::IVec3::ZERO, glam::IVec3::from(dims) - 1);
+            by_center[(q.x + dims[0] * (q.y + dims[1] * q.z)) as usize].push(i as u32);
         }
-        starts.push(items.len() as u32);
+        let (starts, items) = csr(&lists);
+        let (centered_starts, centered) = csr(&by_center);
         Blobs {
             centers,
             energy,
@@ -183,20 +196,27 @@ impl Blobs {
             dims,
             starts,
             items,
+            centered_starts,
+            centered,
             slope,
         }
     }
 
     fn cell_of(&self, p: Vec3) -> Option<usize> {
-        let c = ((p - self.origin) / self.radius).floor().as_ivec3();
+        let q = (p - self.origin) / self.radius;
+        if q.min_element() < 0.0 {
+            return None;
+        }
+        // Non-negative: truncation is the floor (and avoids a libm call).
+        let c = q.as_ivec3();
         let d = self.dims;
-        if c.x < 0 || c.y < 0 || c.z < 0 || c.x >= d[0] || c.y >= d[1] || c.z >= d[2] {
+        if c.x >= d[0] || c.y >= d[1] || c.z >= d[2] {
             return None;
         }
         Some((c.x + d[0] * (c.y + d[1] * c.z)) as usize)
     }
 
-    fn blobs_at(&self, p: Vec3) -> &[u32] {
+    fn blobs_at(&self, p: Vec3) -> &[Vec3] {
         match self.cell_of(p) {
             Some(c) => &self.items[self.starts[c] as usize..self.starts[c + 1] as usize],
             None => &[],
@@ -226,8 +246,8 @@ impl Field for Blobs {
     fn value(&self, p: Vec3) -> f32 {
         let r2 = self.radius * self.radius;
         let mut v = 0.0;
-        for &i in self.blobs_at(p) {
-            let d2 = p.distance_squared(self.centers[i as usize]);
+        for c in self.blobs_at(p) {
+            let d2 = p.distance_squared(*c);
             if d2 < r2 {
                 let s = 1.0 - d2 / r2;
                 v += s * s * s;
@@ -237,8 +257,8 @@ impl Field for Blobs {
     }
     fn value_grad(&self, p: Vec3) -> (f32, Vec3) {
         let (mut v, mut g) = (0.0, Vec3::ZERO);
-        for &i in self.blobs_at(p) {
-            let d = p - self.centers[i as usize];
+        for c in self.blobs_at(p) {
+            let d = p - *c;
             let l = d.length();
             let (w, dw) = wyvill_d(l / self.radius);
             v += w;
@@ -277,10 +297,50 @@ impl Field for Blobs {
         }
         m
     }
-    /// The largest cell bound along the segment: pieces no longer than a cell, each
-    /// covered by the cells its box overlaps.
+    /// Short segments (up to `2R`): the sum over the blobs within reach of each blob's
+    /// slope bound on the segment's distance range. Longer ones: the largest cell bound
+    /// along the segment (pieces no longer than a cell, each covered by the cells its box
+    /// overlaps).
     fn lipschitz_segment(&self, a: Vec3, b: Vec3) -> f32 {
-        let n = ((b - a).abs().max_element() / self.radius).ceil().max(1.0) as usize;
+        let r = self.radius;
+        let ab = b - a;
+        let len2 = ab.length_squared();
+        let (r2, inv_r) = (r * r, 1.0 / r);
+        let slope_on_segment = |c: Vec3| {
+            let ac = c - a;
+            let h = if len2 > 0.0 { (ac.dot(ab) / len2).clamp(0.0, 1.0) } else { 0.0 };
+            let near2 = (ac - ab * h).length_squared();
+            if near2 >= r2 {
+                return 0.0;
+            }
+            let far = ac.length_squared().max((c - b).length_squared()).sqrt();
+            wyvill_slope(Interval::new(near2.sqrt() * inv_r, far * inv_r))
+        };
+        let (ca, cb) = (self.cell_of(a), self.cell_of(b));
+        if ca.is_some() && ca == cb {
+            // Both ends in one (convex) cell: the blobs overlapping it are all that reach.
+            let c = ca.unwrap_or_default();
+            let list = &self.items[self.starts[c] as usize..self.starts[c + 1] as usize];
+            return self.energy * inv_r * list.iter().map(|&c| slope_on_segment(c)).sum::<f32>();
+        }
+        if len2 <= 4.0 * r * r {
+            let Some((lo, hi)) = self.cell_range(&Aabb::new(a, b).dilate(r)) else { return 0.0 };
+            let mut sum = 0.0;
+            for z in lo.z..=hi.z {
+                for y in lo.y..=hi.y {
+                    let row = self.dims[0] * (y + self.dims[1] * z);
+                    let (s, e) = (
+                        self.centered_starts[(row + lo.x) as usize] as usize,
+                        self.centered_starts[(row + hi.x + 1) as usize] as usize,
+                    );
+                    for &c in &self.centered[s..e] {
+                        sum += slope_on_segment(c);
+                    }
+                }
+            }
+            return self.energy * inv_r * sum;
+        }
+        let n = (ab.abs().max_element() / r).ceil().max(1.0) as usize;
         let mut m = 0.0f32;
         let mut p = a;
         for i in 1..=n {
