@@ -9,4 +9,5 @@ pub mod dem;
 pub mod field;
 pub mod io;
 pub mod mesh;
+pub mod render;
 pub mod scene;

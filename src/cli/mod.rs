@@ -8,6 +8,8 @@ pub mod tree;
 
 use clap::{Parser, Subcommand};
 
+pub mod render;
+
 /// karstic: implicit terrain modelling — DEMs amplified with caves, arches and overhangs.
 #[derive(Parser, Debug)]
 #[command(name = "karstic", version, about)]
@@ -30,6 +32,8 @@ pub enum Command {
     Eval(eval::EvalArgs),
     /// Sample a tree's field on a grid as a float32 .npy with a JSON sidecar.
     Sample(sample::SampleArgs),
+    /// Render a PNG preview of a tree by tracing its implicit surface.
+    Render(render::RenderArgs),
 }
 
 /// Loads and compiles a tree file.
@@ -49,5 +53,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Tree(a) => tree::run(a),
         Command::Eval(a) => eval::run(a),
         Command::Sample(a) => sample::run(a),
+        Command::Render(args) => render::run(args),
     }
 }

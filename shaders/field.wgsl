@@ -1,0 +1,235 @@
+// The field tape evaluator: the GPU twin of `Tape::eval` in src/render/gpu/tape.rs.
+// One pass at (p, c, r) returns vec2(f(p), Lipschitz bound of f over the ball B(c, r)).
+// Keep the op codes and parameter layouts in step with tape.rs.
+
+const T: f32 = 0.5;
+const MAX_STACK: u32 = 32u;
+const MAX_WARPS: u32 = 8u;
+
+const OP_CONST: u32 = 0u;
+const OP_PRIM: u32 = 1u;
+const OP_HEIGHT: u32 = 2u;
+const OP_BLEND: u32 = 16u;
+const OP_UNION: u32 = 17u;
+const OP_INTER: u32 = 18u;
+const OP_DIFF: u32 = 19u;
+const OP_GUARD: u32 = 32u;
+const OP_WARP: u32 = 33u;
+const OP_UNWARP: u32 = 34u;
+
+const SHAPE_SPHERE: u32 = 0u;
+const SHAPE_CAPSULE: u32 = 1u;
+const SIGMA_FLAG: u32 = 256u;
+
+const WYVILL_MAX_SLOPE: f32 = 1.7173008;
+const WYVILL_PEAK_X: f32 = 0.4472136;
+
+// x = op, y = flags, z = jump, w = param offset.
+@group(0) @binding(1) var<storage, read> instrs: array<vec4<u32>>;
+@group(0) @binding(2) var<storage, read> params: array<f32>;
+@group(0) @binding(3) var<storage, read> heights: array<f32>;
+
+fn wyvill(x: f32) -> f32 {
+    if x >= 1.0 {
+        return 0.0;
+    }
+    let s = 1.0 - x * x;
+    return s * s * s;
+}
+
+fn wyvill_d(x: f32) -> f32 {
+    if x >= 1.0 {
+        return 0.0;
+    }
+    let s = 1.0 - x * x;
+    return -6.0 * x * s * s;
+}
+
+// max |g'| over [lo, hi] (both clamped at 0).
+fn wyvill_slope(lo_in: f32, hi_in: f32) -> f32 {
+    let a = max(lo_in, 0.0);
+    let b = max(hi_in, 0.0);
+    if a >= 1.0 {
+        return 0.0;
+    }
+    if a <= WYVILL_PEAK_X && WYVILL_PEAK_X <= b {
+        return WYVILL_MAX_SLOPE;
+    }
+    return max(abs(wyvill_d(a)), abs(wyvill_d(min(b, 1.0))));
+}
+
+fn sigma(x: f32, r: f32) -> f32 {
+    let u = clamp(x / r, -1.0, 1.0);
+    return T * (1.0 + 1.5 * u - 0.5 * u * u * u);
+}
+
+// max σ' over [lo, hi]: the slope is largest where |x| is smallest.
+fn sigma_slope(lo: f32, hi: f32, r: f32) -> f32 {
+    var nearest = 0.0;
+    if !(lo <= 0.0 && 0.0 <= hi) {
+        nearest = min(abs(lo), abs(hi));
+    }
+    let u = clamp(nearest / r, -1.0, 1.0);
+    return 1.5 * T / r * (1.0 - u * u);
+}
+
+fn param3(o: u32) -> vec3<f32> {
+    return vec3<f32>(params[o], params[o + 1u], params[o + 2u]);
+}
+
+fn signed_distance(kind: u32, o: u32, p: vec3<f32>) -> f32 {
+    if kind == SHAPE_SPHERE {
+        return distance(p, param3(o)) - params[o + 3u];
+    }
+    if kind == SHAPE_CAPSULE {
+        let a = param3(o);
+        let ab = param3(o + 3u) - a;
+        let ap = p - a;
+        let l2 = dot(ab, ab);
+        var h = 0.0;
+        if l2 > 0.0 {
+            h = clamp(dot(ap, ab) / l2, 0.0, 1.0);
+        }
+        return length(ap - ab * h) - params[o + 6u];
+    }
+    let d = abs(p - param3(o)) - param3(o + 3u);
+    return length(max(d, vec3<f32>(0.0))) + min(max(d.x, max(d.y, d.z)), 0.0);
+}
+
+fn primitive(flags: u32, o: u32, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
+    let rad = params[o];
+    let energy = params[o + 1u];
+    let kind = flags & 255u;
+    let sd_p = signed_distance(kind, o + 2u, p);
+    let sd_c = signed_distance(kind, o + 2u, c);
+    if (flags & SIGMA_FLAG) != 0u {
+        return vec2<f32>(sigma(-sd_p, rad), sigma_slope(-sd_c - r, -sd_c + r, rad));
+    }
+    let v = energy * wyvill(max(sd_p, 0.0) / rad);
+    let l = abs(energy) / rad * wyvill_slope(max(sd_c - r, 0.0) / rad, max(sd_c + r, 0.0) / rad);
+    return vec2<f32>(v, l);
+}
+
+fn bilinear(o: u32, x: f32, y: f32) -> f32 {
+    let ox = params[o + 2u];
+    let oy = params[o + 3u];
+    let cell = params[o + 4u];
+    let nx = params[o + 5u];
+    let ny = params[o + 6u];
+    let off = u32(params[o + 7u]);
+    let gx = clamp((x - ox) / cell, 0.0, nx - 1.0);
+    let gy = clamp((y - oy) / cell, 0.0, ny - 1.0);
+    let fi = min(floor(gx), nx - 2.0);
+    let fj = min(floor(gy), ny - 2.0);
+    let fx = gx - fi;
+    let fy = gy - fj;
+    let w = u32(nx);
+    let k = off + u32(fi) + w * u32(fj);
+    let z00 = heights[k];
+    let z10 = heights[k + 1u];
+    let z01 = heights[k + w];
+    let z11 = heights[k + w + 1u];
+    let bottom = z00 + (z10 - z00) * fx;
+    let top = z01 + (z11 - z01) * fx;
+    return bottom + (top - bottom) * fy;
+}
+
+fn heightfield(o: u32, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
+    let fall = params[o];
+    let slope = params[o + 1u];
+    let value = sigma(bilinear(o, p.x, p.y) - p.z, fall);
+    let hc = bilinear(o, c.x, c.y);
+    let l = sigma_slope(hc - slope * r - c.z - r, hc + slope * r - c.z + r, fall) * sqrt(1.0 + slope * slope);
+    return vec2<f32>(value, l);
+}
+
+fn affine(o: u32, p: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(
+        params[o] * p.x + params[o + 1u] * p.y + params[o + 2u] * p.z + params[o + 3u],
+        params[o + 4u] * p.x + params[o + 5u] * p.y + params[o + 6u] * p.z + params[o + 7u],
+        params[o + 8u] * p.x + params[o + 9u] * p.y + params[o + 10u] * p.z + params[o + 11u],
+    );
+}
+
+fn box_distance(lo: vec3<f32>, hi: vec3<f32>, q: vec3<f32>) -> f32 {
+    return length(q - clamp(q, lo, hi));
+}
+
+// (f(p), Lipschitz bound of f over the ball B(c, r)).
+fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
+    var stack: array<vec2<f32>, MAX_STACK>;
+    var sp = 0u;
+    var frames: array<vec4<f32>, 16>; // two per warp: (p, r) and (c, 0)
+    var fp = 0u;
+    var p = p_in;
+    var c = c_in;
+    var r = r_in;
+    var pc = 0u;
+    let n = arrayLength(&instrs);
+    loop {
+        if pc >= n {
+            break;
+        }
+        let ins = instrs[pc];
+        let o = ins.w;
+        switch ins.x {
+            case OP_CONST: {
+                stack[sp] = vec2<f32>(params[o], 0.0);
+                sp += 1u;
+            }
+            case OP_PRIM: {
+                stack[sp] = primitive(ins.y, o, p, c, r);
+                sp += 1u;
+            }
+            case OP_HEIGHT: {
+                stack[sp] = heightfield(o, p, c, r);
+                sp += 1u;
+            }
+            case OP_BLEND, OP_UNION, OP_INTER, OP_DIFF: {
+                let b = stack[sp - 1u];
+                let a = stack[sp - 2u];
+                sp -= 1u;
+                var v: vec2<f32>;
+                if ins.x == OP_BLEND {
+                    v = a + b;
+                } else if ins.x == OP_UNION {
+                    v = vec2<f32>(max(a.x, b.x), max(a.y, b.y));
+                } else if ins.x == OP_INTER {
+                    v = vec2<f32>(min(a.x, b.x), max(a.y, b.y));
+                } else {
+                    v = vec2<f32>(min(a.x, 2.0 * T - b.x), max(a.y, b.y));
+                }
+                stack[sp - 1u] = v;
+            }
+            case OP_GUARD: {
+                let lo = param3(o);
+                let hi = param3(o + 3u);
+                let inside = all(lo <= p) && all(p <= hi);
+                if !inside && box_distance(lo, hi, c) > r {
+                    stack[sp] = vec2<f32>(0.0, 0.0);
+                    sp += 1u;
+                    pc = ins.z - 1u; // the jump target, after the `pc += 1u` below
+
+                }
+            }
+            case OP_WARP: {
+                frames[2u * fp] = vec4<f32>(p, r);
+                frames[2u * fp + 1u] = vec4<f32>(c, 0.0);
+                fp += 1u;
+                p = affine(o, p);
+                c = affine(o, c);
+                r *= params[o + 12u];
+            }
+            case OP_UNWARP: {
+                fp -= 1u;
+                p = frames[2u * fp].xyz;
+                r = frames[2u * fp].w;
+                c = frames[2u * fp + 1u].xyz;
+                stack[sp - 1u].y *= params[o + 12u];
+            }
+            default: {}
+        }
+        pc += 1u;
+    }
+    return stack[0];
+}

@@ -1,0 +1,324 @@
+//! wgpu plumbing: adapter and device, the compute pipelines of `shaders/trace.wgsl`,
+//! buffer upload, dispatch and read-back.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Vec3, Vec4};
+use wgpu::util::DeviceExt;
+
+use super::tape::Tape;
+use super::{GpuError, shader_source};
+use crate::field::Field;
+use crate::render::camera::Camera;
+use crate::render::cpu::RenderSettings;
+use crate::render::image::Frame;
+use crate::render::trace::Method;
+
+/// Uniform block of `trace.wgsl` (`struct Uniforms`); see the comments there.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct Uniforms {
+    v: [[f32; 4]; 15],
+    dims: [u32; 4],
+}
+
+fn v4(v: Vec3, w: f32) -> [f32; 4] {
+    Vec4::new(v.x, v.y, v.z, w).to_array()
+}
+
+impl Uniforms {
+    fn new(tape: &Tape, cam: &Camera, s: &RenderSettings) -> Self {
+        let (right, up, forward, tan_half) = cam.basis();
+        let sh = &s.shading;
+        let b = tape.support();
+        let method = match s.trace.method {
+            Method::Segment => 0.0,
+            Method::Sphere => 1.0,
+        };
+        Uniforms {
+            v: [
+                v4(cam.eye, tan_half),
+                v4(right, cam.width as f32 / cam.height as f32),
+                v4(up, cam.width as f32),
+                v4(forward, cam.height as f32),
+                v4(b.min, s.trace.epsilon),
+                v4(b.max, s.trace.cone),
+                [tape.lipschitz(), s.trace.grow, tape.grad_step(), method],
+                v4(sh.sun, if sh.shadows { 1.0 } else { 0.0 }),
+                v4(sh.sun_color, sh.fog_distance),
+                v4(sh.sky_color, sh.snow_line),
+                v4(sh.ground_color, sh.snow_blend),
+                v4(sh.fog_color, sh.rock_slope.0),
+                v4(sh.rock, sh.rock_slope.1),
+                v4(sh.grass, 0.0),
+                v4(sh.snow, 0.0),
+            ],
+            dims: [cam.width, cam.height, s.trace.max_steps, 0],
+        }
+    }
+}
+
+/// An open GPU device with the tracing pipelines, reusable across frames.
+pub struct GpuContext {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    render: wgpu::ComputePipeline,
+    probe: wgpu::ComputePipeline,
+    /// Name and backend of the adapter, for messages.
+    pub adapter: String,
+}
+
+impl GpuContext {
+    /// Opens the default adapter (any backend; lavapipe counts) and builds the pipelines.
+    pub fn new() -> Result<Self, GpuError> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
+        let adapter =
+            pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
+                .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let info = adapter.get_info();
+        let limits = adapter.limits();
+        if limits.max_storage_buffers_per_shader_stage < 6 {
+            return Err(GpuError::Device(format!(
+                "{} binds {} storage buffers per stage; the tracer needs 6",
+                info.name, limits.max_storage_buffers_per_shader_stage
+            )));
+        }
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("karstic render"),
+            required_limits: limits,
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device(e.to_string()))?;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("trace.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(shader_source().into()),
+        });
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: None,
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let (render, probe) = (pipeline("render"), pipeline("probe"));
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Device(format!(
+                "the tracing shader does not compile: {e}"
+            )));
+        }
+        Ok(GpuContext {
+            device,
+            queue,
+            render,
+            probe,
+            adapter: format!("{} ({:?})", info.name, info.backend),
+        })
+    }
+
+    fn storage(&self, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+        // Empty bindings are invalid: pad to one word.
+        let pad = [0u8; 4];
+        let contents = if bytes.is_empty() { &pad[..] } else { bytes };
+        self.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+    }
+
+    fn output(&self, label: &str, size: u64) -> wgpu::Buffer {
+        self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        })
+    }
+
+    fn check_size(&self, what: &str, bytes: u64) -> Result<(), GpuError> {
+        let max = self.device.limits().max_storage_buffer_binding_size as u64;
+        if bytes > max {
+            return Err(GpuError::Limits(format!(
+                "{what} needs a {bytes}-byte buffer; this GPU binds at most {max} bytes"
+            )));
+        }
+        Ok(())
+    }
+
+    fn tape_buffers(&self, tape: &Tape) -> Result<[wgpu::Buffer; 3], GpuError> {
+        self.check_size("the tape's heightfields", 4 * tape.heights.len() as u64)?;
+        Ok([
+            self.storage("instrs", bytemuck::cast_slice(&tape.instrs)),
+            self.storage("params", bytemuck::cast_slice(&tape.params)),
+            self.storage("heights", bytemuck::cast_slice(&tape.heights)),
+        ])
+    }
+
+    /// Runs one dispatch of `pipeline` and reads `outputs` back (in order).
+    fn run(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        bindings: &[(u32, &wgpu::Buffer)],
+        outputs: &[&wgpu::Buffer],
+        groups: (u32, u32),
+    ) -> Result<Vec<Vec<u8>>, GpuError> {
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let layout = pipeline.get_bind_group_layout(0);
+        let entries: Vec<_> = bindings
+            .iter()
+            .map(|&(binding, b)| wgpu::BindGroupEntry {
+                binding,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        let group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: None,
+            layout: &layout,
+            entries: &entries,
+        });
+        let reads: Vec<_> = outputs
+            .iter()
+            .map(|b| {
+                self.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("read-back"),
+                    size: b.size(),
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                })
+            })
+            .collect();
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(groups.0, groups.1, 1);
+        }
+        for (src, dst) in outputs.iter().zip(&reads) {
+            enc.copy_buffer_to_buffer(src, 0, dst, 0, src.size());
+        }
+        self.queue.submit([enc.finish()]);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Run(e.to_string()));
+        }
+        let (tx, rx) = std::sync::mpsc::channel();
+        for r in &reads {
+            let tx = tx.clone();
+            r.map_async(wgpu::MapMode::Read, .., move |res| {
+                let _ = tx.send(res);
+            });
+        }
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GpuError::Run(e.to_string()))?;
+        for _ in &reads {
+            rx.recv()
+                .map_err(|e| GpuError::Run(e.to_string()))?
+                .map_err(|e| GpuError::Run(e.to_string()))?;
+        }
+        reads
+            .iter()
+            .map(|r| {
+                let bytes = r
+                    .get_mapped_range(..)
+                    .map_err(|e| GpuError::Run(e.to_string()))?
+                    .to_vec();
+                r.unmap();
+                Ok(bytes)
+            })
+            .collect()
+    }
+
+    /// Renders `tape` through `camera` as [`crate::render::cpu::render`] does on the CPU.
+    pub fn render(
+        &self,
+        tape: &Tape,
+        camera: &Camera,
+        settings: &RenderSettings,
+    ) -> Result<Frame, GpuError> {
+        let (w, h) = (camera.width, camera.height);
+        let n = w as u64 * h as u64;
+        self.check_size("the image", 4 * n)?;
+        let [instrs, params, heights] = self.tape_buffers(tape)?;
+        let uniforms = self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("uniforms"),
+                contents: bytemuck::bytes_of(&Uniforms::new(tape, camera, settings)),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        let rgba = self.output("rgba", 4 * n);
+        let depth = self.output("depth", 4 * n);
+        let steps = self.output("steps", 4 * n);
+        let out = self.run(
+            &self.render,
+            &[
+                (0, &uniforms),
+                (1, &instrs),
+                (2, &params),
+                (3, &heights),
+                (4, &rgba),
+                (5, &depth),
+                (6, &steps),
+            ],
+            &[&rgba, &depth, &steps],
+            (w.div_ceil(8), h.div_ceil(8)),
+        )?;
+        let depth = bytemuck::cast_slice::<u8, f32>(&out[1])
+            .iter()
+            .map(|&t| if t < 0.0 { f32::INFINITY } else { t })
+            .collect();
+        Ok(Frame::new(
+            w,
+            h,
+            out[0].clone(),
+            depth,
+            bytemuck::cast_slice::<u8, u32>(&out[2]).to_vec(),
+        ))
+    }
+
+    /// Evaluates `tape` at each `(p, r)` on the GPU: `(f(p), Lipschitz bound over B(p, r))`.
+    pub fn probe(&self, tape: &Tape, points: &[(Vec3, f32)]) -> Result<Vec<(f32, f32)>, GpuError> {
+        if points.is_empty() {
+            return Ok(Vec::new());
+        }
+        let [instrs, params, heights] = self.tape_buffers(tape)?;
+        let input: Vec<[f32; 4]> = points.iter().map(|&(p, r)| v4(p, r)).collect();
+        self.check_size("the probes", 16 * input.len() as u64)?;
+        let input = self.storage("probe_in", bytemuck::cast_slice(&input));
+        let output = self.output("probe_out", 8 * points.len() as u64);
+        let groups = (points.len() as u32).div_ceil(64);
+        let max = self.device.limits().max_compute_workgroups_per_dimension;
+        if groups > max {
+            return Err(GpuError::Limits(format!(
+                "{} probes exceed one dispatch",
+                points.len()
+            )));
+        }
+        let out = self.run(
+            &self.probe,
+            &[
+                (1, &instrs),
+                (2, &params),
+                (3, &heights),
+                (7, &input),
+                (8, &output),
+            ],
+            &[&output],
+            (groups, 1),
+        )?;
+        Ok(bytemuck::cast_slice::<u8, [f32; 2]>(&out[0])
+            .iter()
+            .map(|v| (v[0], v[1]))
+            .collect())
+    }
+}
+
+/// Opens a device and renders one frame (see [`GpuContext::render`]).
+pub fn render(tape: &Tape, camera: &Camera, settings: &RenderSettings) -> Result<Frame, GpuError> {
+    GpuContext::new()?.render(tape, camera, settings)
+}

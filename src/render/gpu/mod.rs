@@ -1,0 +1,47 @@
+//! The tracer on the GPU: a wgpu compute shader, headless (no window), one primary ray per
+//! invocation, running the same march and shading as the CPU path over a [`Tape`].
+//!
+//! * [`tape`]: the GPU encoding of a field and its CPU reference evaluator.
+//! * [`context`]: adapter, device, pipelines, buffers and read-back.
+//!
+//! The WGSL lives in `shaders/` and is assembled by [`shader_source`]; the tests validate
+//! every module with naga so shader errors fail without a GPU.
+
+pub mod context;
+pub mod tape;
+
+pub use context::{GpuContext, render};
+pub use tape::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder};
+
+/// Errors of the GPU path.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No usable adapter (no GPU and no software Vulkan such as lavapipe).
+    #[error("no GPU adapter available ({0})")]
+    NoAdapter(String),
+    /// The device could not be created.
+    #[error("cannot open the GPU device: {0}")]
+    Device(String),
+    /// The tree cannot be encoded for the GPU.
+    #[error("cannot encode the tree for the GPU: {0}")]
+    Tape(String),
+    /// The work exceeds what the device allows.
+    #[error("{0}")]
+    Limits(String),
+    /// Running or reading back failed.
+    #[error("GPU execution failed: {0}")]
+    Run(String),
+}
+
+/// The WGSL modules, each the concatenation of these files of `shaders/` (WGSL has no
+/// includes). The tests check that every file there belongs to some module.
+pub const SHADER_MODULES: &[(&str, &[&str])] = &[("trace", &["field.wgsl", "trace.wgsl"])];
+
+/// The source of the tracing module.
+pub fn shader_source() -> String {
+    [
+        include_str!("../../../shaders/field.wgsl"),
+        include_str!("../../../shaders/trace.wgsl"),
+    ]
+    .concat()
+}

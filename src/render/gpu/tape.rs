@@ -1,0 +1,768 @@
+//! The GPU encoding of a field: a flat **tape** of instructions evaluated with a small
+//! value stack, plus a parameter array and a buffer of heightfield samples.
+//!
+//! One pass over the tape at `(p, c, r)` returns both `f(p)` and a Lipschitz bound of `f`
+//! over the ball `B(c, r)` — exactly what one step of segment tracing needs (the ball
+//! around a candidate segment). `r = 0` gives the value alone.
+//!
+//! | op | params at `param` | stack | meaning |
+//! | --- | --- | --- | --- |
+//! | `CONST` | `v` | push | constant `v` (Lipschitz 0) |
+//! | `PRIM` | `R, e, shape…` | push | `e·g(max(sd, 0)/R)` (Wyvill) or `σ(−sd, R)` (σ, `flags` bit 8); `sd` = signed distance to the shape (`flags & 0xff`: sphere `c, ρ`; capsule `a, b, ρ`; box `c, half`) |
+//! | `HEIGHT` | `R, L, ox, oy, cell, nx, ny, offset` | push | `σ(h(x, y) − z, R)`, `h` bilinear in `heights[offset..]`, `L ≥ |∇h|` |
+//! | `BLEND` / `UNION` / `INTER` / `DIFF` | – | pop 2, push 1 | `a + b`, `max`, `min`, `min(a, 2T − b)` |
+//! | `GUARD` | `min.xyz, max.xyz` | – | when neither `p` nor the ball touches the box, push `(0, 0)` and jump to `jump` (the instruction after the guarded subtree) |
+//! | `WARP` / `UNWARP` | `M⁻¹` (3 rows of 4), `k = ‖M⁻¹‖` | – | `p, c ← M⁻¹p, M⁻¹c`, `r ← k·r`; on `UNWARP` restore them and scale the top bound by `k` |
+//!
+//! Every subtree pushes exactly one `(value, bound)` pair and every node is 0 outside its
+//! support box, so a guard may stand in for any subtree: a blend's BVH becomes nested
+//! guards ([`TapeBuilder::combine_bvh`]) — a stackless BVH with escape indices. n-ary
+//! nodes are emitted as chains of binary ops, which keeps the stack shallow.
+//!
+//! [`Tape`] implements [`Field`] with the same arithmetic as `shaders/field.wgsl`, so the
+//! CPU tracer renders exactly what the GPU renders; the tests compare the two.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Affine3A, Vec2, Vec3, Vec3A};
+
+use super::GpuError;
+use crate::field::falloff::{sigma, sigma_slope, wyvill, wyvill_slope};
+use crate::field::{Aabb, Field, Interval, T};
+
+/// One tape instruction: 16 bytes, `vec4<u32>` in WGSL.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct Instr {
+    /// Operation code ([`op`]).
+    pub op: u32,
+    /// Operation-specific flags (shape and profile of a primitive).
+    pub flags: u32,
+    /// Jump target of a guard: the index just past its subtree.
+    pub jump: u32,
+    /// Offset of the instruction's parameters in [`Tape::params`].
+    pub param: u32,
+}
+
+/// Operation codes, shared with `shaders/field.wgsl`.
+pub mod op {
+    /// Push a constant.
+    pub const CONST: u32 = 0;
+    /// Push a skeletal primitive.
+    pub const PRIM: u32 = 1;
+    /// Push a heightfield's `σ(h − z)`.
+    pub const HEIGHT: u32 = 2;
+    /// Sum of the two top entries.
+    pub const BLEND: u32 = 16;
+    /// Maximum.
+    pub const UNION: u32 = 17;
+    /// Minimum.
+    pub const INTER: u32 = 18;
+    /// `min(a, 2T − b)`.
+    pub const DIFF: u32 = 19;
+    /// Skip a subtree whose support box is out of reach.
+    pub const GUARD: u32 = 32;
+    /// Enter an affine warp.
+    pub const WARP: u32 = 33;
+    /// Leave an affine warp.
+    pub const UNWARP: u32 = 34;
+}
+
+/// Primitive shapes (`flags & 0xff`).
+pub mod shape {
+    /// Ball `c, ρ` (a point when `ρ = 0`).
+    pub const SPHERE: u32 = 0;
+    /// Capsule `a, b, ρ` (a segment when `ρ = 0`).
+    pub const CAPSULE: u32 = 1;
+    /// Box `centre, half-size`.
+    pub const BOX: u32 = 2;
+    /// Flag: σ profile instead of Wyvill.
+    pub const SIGMA: u32 = 1 << 8;
+}
+
+/// Value-stack depth of the WGSL evaluator.
+pub const MAX_STACK: usize = 32;
+/// Nesting depth of warps in the WGSL evaluator.
+pub const MAX_WARPS: usize = 8;
+/// Ball radius standing for "everywhere" when computing the global bound.
+const EVERYWHERE: f32 = 1e30;
+
+/// The skeleton of a primitive.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape {
+    /// A point.
+    Point(Vec3),
+    /// A ball of radius `radius` (its surface is the skeleton's zero distance).
+    Sphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius, metres.
+        radius: f32,
+    },
+    /// A segment `[a, b]`.
+    Segment(Vec3, Vec3),
+    /// A capsule around `[a, b]`.
+    Capsule {
+        /// First end.
+        a: Vec3,
+        /// Second end.
+        b: Vec3,
+        /// Radius, metres.
+        radius: f32,
+    },
+    /// An axis-aligned box.
+    Box {
+        /// Centre.
+        center: Vec3,
+        /// Half the edge lengths.
+        half: Vec3,
+    },
+}
+
+impl Shape {
+    fn encode(&self, out: &mut Vec<f32>) -> u32 {
+        match *self {
+            Shape::Point(c) => Shape::Sphere {
+                center: c,
+                radius: 0.0,
+            }
+            .encode(out),
+            Shape::Segment(a, b) => Shape::Capsule { a, b, radius: 0.0 }.encode(out),
+            Shape::Sphere { center, radius } => {
+                out.extend([center.x, center.y, center.z, radius]);
+                shape::SPHERE
+            }
+            Shape::Capsule { a, b, radius } => {
+                out.extend([a.x, a.y, a.z, b.x, b.y, b.z, radius]);
+                shape::CAPSULE
+            }
+            Shape::Box { center, half } => {
+                out.extend([center.x, center.y, center.z, half.x, half.y, half.z]);
+                shape::BOX
+            }
+        }
+    }
+
+    /// The box where the signed distance is `≤ reach`.
+    fn bounds(&self, reach: f32) -> Aabb {
+        match *self {
+            Shape::Point(c) => Aabb::around(c, reach),
+            Shape::Sphere { center, radius } => Aabb::around(center, radius + reach),
+            Shape::Segment(a, b) => Aabb::new(a, b).dilate(reach),
+            Shape::Capsule { a, b, radius } => Aabb::new(a, b).dilate(radius + reach),
+            Shape::Box { center, half } => Aabb::new(center - half, center + half).dilate(reach),
+        }
+    }
+}
+
+/// How a primitive turns its signed distance `sd` into a field.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Profile {
+    /// `energy · g(max(sd, 0) / radius)`, Wyvill's `g(x) = (1 − x²)³`.
+    Wyvill {
+        /// Radius of influence, metres.
+        radius: f32,
+        /// Energy (negative carves).
+        energy: f32,
+    },
+    /// `σ(−sd, radius)`: `T` on the shape's surface, `2T` deep inside, 0 beyond `radius`.
+    Sigma {
+        /// Falloff distance, metres.
+        radius: f32,
+    },
+}
+
+/// Binary combination of the two top stack entries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Combine {
+    /// `a + b`.
+    Blend,
+    /// `max(a, b)`.
+    Union,
+    /// `min(a, b)`.
+    Intersection,
+    /// `min(a, 2T − b)`: `b` carved out of `a`.
+    Difference,
+}
+
+/// A regular grid of elevations for [`TapeBuilder::heightfield`].
+#[derive(Clone, Copy, Debug)]
+pub struct HeightGrid<'a> {
+    /// Position of sample `(0, 0)`, metres.
+    pub origin: Vec2,
+    /// Sample spacing, metres.
+    pub cell: f32,
+    /// Samples along x.
+    pub nx: usize,
+    /// Samples along y.
+    pub ny: usize,
+    /// Elevations, x fastest: `z[i + nx·j]` at `origin + cell·(i, j)`.
+    pub z: &'a [f32],
+}
+
+/// A compiled tape: what the GPU uploads, and a [`Field`] on the CPU.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tape {
+    /// Instructions in evaluation order.
+    pub instrs: Vec<Instr>,
+    /// Parameters of all instructions.
+    pub params: Vec<f32>,
+    /// Heightfield samples of all `HEIGHT` leaves.
+    pub heights: Vec<f32>,
+    support: Aabb,
+    lipschitz: f32,
+    grad_step: f32,
+}
+
+/// Where a guard opened by [`TapeBuilder::guard_begin`] sits, to close it.
+#[must_use]
+#[derive(Debug)]
+pub struct Guard {
+    at: usize,
+    depth: usize,
+}
+
+/// What the builder knows of each stack entry.
+#[derive(Clone, Copy, Debug)]
+struct Entry {
+    support: Aabb,
+    range: Interval,
+}
+
+const EVERYWHERE_BOX: Aabb = Aabb {
+    min: Vec3::splat(f32::NEG_INFINITY),
+    max: Vec3::splat(f32::INFINITY),
+};
+
+/// Builds a [`Tape`] in evaluation order (post-order: children, then the combining op).
+#[derive(Debug, Default)]
+pub struct TapeBuilder {
+    instrs: Vec<Instr>,
+    params: Vec<f32>,
+    heights: Vec<f32>,
+    stack: Vec<Entry>,
+    max_stack: usize,
+    warps: Vec<(usize, Affine3A)>,
+    max_warps: usize,
+    guards: usize,
+}
+
+impl TapeBuilder {
+    /// An empty tape.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    fn emit(&mut self, op: u32, flags: u32, params: &[f32]) {
+        let param = self.params.len() as u32;
+        self.params.extend_from_slice(params);
+        self.instrs.push(Instr {
+            op,
+            flags,
+            jump: 0,
+            param,
+        });
+    }
+
+    fn push(&mut self, e: Entry) {
+        self.stack.push(e);
+        self.max_stack = self.max_stack.max(self.stack.len());
+    }
+
+    fn pop(&mut self, what: &str) -> Result<Entry, GpuError> {
+        self.stack.pop().ok_or_else(|| {
+            GpuError::Tape(format!("{what} needs an operand but the stack is empty"))
+        })
+    }
+
+    /// Pushes a constant.
+    pub fn constant(&mut self, v: f32) {
+        self.emit(op::CONST, 0, &[v]);
+        let support = if v == 0.0 {
+            Aabb::EMPTY
+        } else {
+            EVERYWHERE_BOX
+        };
+        self.push(Entry {
+            support,
+            range: Interval::point(v),
+        });
+    }
+
+    /// Pushes a skeletal primitive.
+    pub fn primitive(&mut self, shape: Shape, profile: Profile) {
+        let (r, e, flag, range) = match profile {
+            Profile::Wyvill { radius, energy } => (radius, energy, 0, Interval::new(0.0, energy)),
+            Profile::Sigma { radius } => (radius, 1.0, shape::SIGMA, Interval::new(0.0, 2.0 * T)),
+        };
+        let mut p = vec![r, e];
+        let kind = shape.encode(&mut p);
+        self.emit(op::PRIM, kind | flag, &p);
+        self.push(Entry {
+            support: shape.bounds(r),
+            range,
+        });
+    }
+
+    /// Pushes `σ(h(x, y) − z, falloff)` for a bilinear heightfield (clamped at its edges).
+    /// Solid below the surface and unbounded: intersect it with a prism (seed 002 §5.1).
+    pub fn heightfield(&mut self, grid: &HeightGrid<'_>, falloff: f32) -> Result<(), GpuError> {
+        let HeightGrid {
+            origin,
+            cell,
+            nx,
+            ny,
+            z,
+        } = *grid;
+        if nx < 2
+            || ny < 2
+            || z.len() != nx * ny
+            || !(cell > 0.0)
+            || z.iter().any(|v| !v.is_finite())
+        {
+            return Err(GpuError::Tape(format!(
+                "heightfield: need at least 2 × 2 finite samples ({nx} × {ny} given, {} values) and a positive cell",
+                z.len()
+            )));
+        }
+        // The bilinear interpolant's slope is at most the largest edge differences.
+        let mut slope = 0.0f32;
+        for j in 0..ny - 1 {
+            for i in 0..nx - 1 {
+                let at = |a: usize, b: usize| z[a + nx * b];
+                let dx = (at(i + 1, j) - at(i, j))
+                    .abs()
+                    .max((at(i + 1, j + 1) - at(i, j + 1)).abs());
+                let dy = (at(i, j + 1) - at(i, j))
+                    .abs()
+                    .max((at(i + 1, j + 1) - at(i + 1, j)).abs());
+                slope = slope.max((dx * dx + dy * dy).sqrt() / cell);
+            }
+        }
+        let offset = self.heights.len();
+        self.heights.extend_from_slice(z);
+        let p = [
+            falloff,
+            slope,
+            origin.x,
+            origin.y,
+            cell,
+            nx as f32,
+            ny as f32,
+            offset as f32,
+        ];
+        self.emit(op::HEIGHT, 0, &p);
+        self.push(Entry {
+            support: EVERYWHERE_BOX,
+            range: Interval::new(0.0, 2.0 * T),
+        });
+        Ok(())
+    }
+
+    /// Combines the two top entries.
+    pub fn combine(&mut self, how: Combine) -> Result<(), GpuError> {
+        let b = self.pop("a combination")?;
+        let a = self.pop("a combination")?;
+        let (code, e) = match how {
+            Combine::Blend => (
+                op::BLEND,
+                Entry {
+                    support: a.support.union(b.support),
+                    range: a.range.add(b.range),
+                },
+            ),
+            Combine::Union => (
+                op::UNION,
+                Entry {
+                    support: a.support.union(b.support),
+                    range: a.range.max(b.range),
+                },
+            ),
+            Combine::Intersection => (
+                op::INTER,
+                Entry {
+                    support: a.support.intersection(b.support),
+                    range: a.range.min(b.range),
+                },
+            ),
+            Combine::Difference => {
+                let carved = Interval::new(2.0 * T - b.range.hi, 2.0 * T - b.range.lo);
+                // Outside a's support the result is min(0, 2T − b): zero unless b > 2T.
+                let support = if b.range.hi <= 2.0 * T {
+                    a.support
+                } else {
+                    a.support.union(b.support)
+                };
+                (
+                    op::DIFF,
+                    Entry {
+                        support,
+                        range: a.range.min(carved),
+                    },
+                )
+            }
+        };
+        self.emit(code, 0, &[]);
+        self.push(e);
+        Ok(())
+    }
+
+    /// Opens a guard: the subtree emitted until [`TapeBuilder::guard_end`] is skipped where
+    /// it cannot matter. `b` must contain the subtree's support (checked at the end).
+    pub fn guard_begin(&mut self, b: Aabb) -> Guard {
+        let at = self.instrs.len();
+        self.emit(
+            op::GUARD,
+            0,
+            &[b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z],
+        );
+        self.guards += 1;
+        Guard {
+            at,
+            depth: self.stack.len(),
+        }
+    }
+
+    /// Closes a guard around exactly one pushed subtree.
+    pub fn guard_end(&mut self, g: Guard) -> Result<(), GpuError> {
+        if self.stack.len() != g.depth + 1 {
+            return Err(GpuError::Tape(format!(
+                "a guard must enclose exactly one subtree, it encloses {}",
+                self.stack.len() as isize - g.depth as isize
+            )));
+        }
+        let p = self.instrs[g.at].param as usize;
+        let b = Aabb {
+            min: Vec3::new(self.params[p], self.params[p + 1], self.params[p + 2]),
+            max: Vec3::new(self.params[p + 3], self.params[p + 4], self.params[p + 5]),
+        };
+        let top = self.stack.last_mut().expect("checked above");
+        if !top.support.is_empty() && !b.contains_box(&top.support) {
+            return Err(GpuError::Tape(format!(
+                "guard box {b:?} does not contain its subtree's support {:?}",
+                top.support
+            )));
+        }
+        self.instrs[g.at].jump = self.instrs.len() as u32;
+        self.guards -= 1;
+        Ok(())
+    }
+
+    /// Enters an affine warp `x ↦ M x` of the subtree emitted until
+    /// [`TapeBuilder::warp_end`]: the subtree is evaluated at `M⁻¹p`.
+    pub fn warp_begin(&mut self, m: Affine3A) -> Result<(), GpuError> {
+        let inv = m.inverse();
+        if !(m.matrix3.determinant().abs() > 1e-12 && inv.is_finite()) {
+            return Err(GpuError::Tape(format!(
+                "affine warp {m:?} is not invertible"
+            )));
+        }
+        self.emit(op::WARP, 0, &warp_params(&inv));
+        self.warps.push((self.stack.len(), m));
+        self.max_warps = self.max_warps.max(self.warps.len());
+        Ok(())
+    }
+
+    /// Leaves the innermost warp; it must enclose exactly one subtree.
+    pub fn warp_end(&mut self) -> Result<(), GpuError> {
+        let (depth, m) = self
+            .warps
+            .pop()
+            .ok_or_else(|| GpuError::Tape("warp_end without warp_begin".into()))?;
+        if self.stack.len() != depth + 1 {
+            return Err(GpuError::Tape(
+                "a warp must enclose exactly one subtree".into(),
+            ));
+        }
+        self.emit(op::UNWARP, 0, &warp_params(&m.inverse()));
+        let top = self.stack.last_mut().expect("checked above");
+        if !top.support.is_empty() && top.support.min.is_finite() && top.support.max.is_finite() {
+            top.support = Aabb::from_points(top.support.corners().map(|c| m.transform_point3(c)));
+        }
+        Ok(())
+    }
+
+    /// Emits `children` (each pushes one subtree, its support inside `boxes[i]`) combined
+    /// with `how`, under a BVH of guards: a median split on the longest axis of the box
+    /// centres, groups of at most 4 children at the leaves.
+    pub fn combine_bvh(
+        &mut self,
+        how: Combine,
+        boxes: &[Aabb],
+        emit: &mut dyn FnMut(&mut TapeBuilder, usize) -> Result<(), GpuError>,
+    ) -> Result<(), GpuError> {
+        if boxes.is_empty() {
+            return Err(GpuError::Tape(
+                "combine_bvh needs at least one child".into(),
+            ));
+        }
+        let mut order: Vec<usize> = (0..boxes.len()).collect();
+        self.bvh_node(how, boxes, &mut order, emit)
+    }
+
+    fn bvh_node(
+        &mut self,
+        how: Combine,
+        boxes: &[Aabb],
+        order: &mut [usize],
+        emit: &mut dyn FnMut(&mut TapeBuilder, usize) -> Result<(), GpuError>,
+    ) -> Result<(), GpuError> {
+        let bounds = order.iter().fold(Aabb::EMPTY, |b, &i| b.union(boxes[i]));
+        let g = self.guard_begin(bounds);
+        if order.len() <= 4 {
+            for (k, &i) in order.iter().enumerate() {
+                emit(self, i)?;
+                if k > 0 {
+                    self.combine(how)?;
+                }
+            }
+        } else {
+            let cb = Aabb::from_points(order.iter().map(|&i| boxes[i].center()));
+            let axis = cb.size().max_position();
+            order.sort_by(|&a, &b| boxes[a].center()[axis].total_cmp(&boxes[b].center()[axis]));
+            let mid = order.len() / 2;
+            let (left, right) = order.split_at_mut(mid);
+            self.bvh_node(how, boxes, left, emit)?;
+            self.bvh_node(how, boxes, right, emit)?;
+            self.combine(how)?;
+        }
+        self.guard_end(g)
+    }
+
+    /// Finishes the tape: exactly one value must be on the stack, every guard and warp
+    /// closed, and the depths within the WGSL evaluator's limits.
+    pub fn finish(self) -> Result<Tape, GpuError> {
+        if self.stack.len() != 1 || self.guards != 0 || !self.warps.is_empty() {
+            return Err(GpuError::Tape(format!(
+                "unbalanced tape: {} values on the stack, {} open guards, {} open warps",
+                self.stack.len(),
+                self.guards,
+                self.warps.len()
+            )));
+        }
+        if self.max_stack > MAX_STACK || self.max_warps > MAX_WARPS {
+            return Err(GpuError::Tape(format!(
+                "tree too deep for the GPU evaluator: stack {} (max {MAX_STACK}), warps {} (max {MAX_WARPS})",
+                self.max_stack, self.max_warps
+            )));
+        }
+        let support = self.stack[0].support;
+        let mut tape = Tape {
+            instrs: self.instrs,
+            params: self.params,
+            heights: self.heights,
+            support,
+            lipschitz: 0.0,
+            grad_step: 0.0,
+        };
+        tape.lipschitz = tape.eval(Vec3::ZERO, Vec3::ZERO, EVERYWHERE).1;
+        let size = if support.min.is_finite() && support.max.is_finite() {
+            support.radius()
+        } else {
+            1.0
+        };
+        tape.grad_step = 1e-4 * size.max(1e-3);
+        Ok(tape)
+    }
+}
+
+fn warp_params(inv: &Affine3A) -> [f32; 13] {
+    let m = inv.matrix3;
+    let t = inv.translation;
+    // ‖M⁻¹‖₂ ≤ Frobenius norm.
+    let k =
+        (m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()).sqrt();
+    [
+        m.x_axis.x, m.y_axis.x, m.z_axis.x, t.x, //
+        m.x_axis.y, m.y_axis.y, m.z_axis.y, t.y, //
+        m.x_axis.z, m.y_axis.z, m.z_axis.z, t.z, //
+        k,
+    ]
+}
+
+impl Tape {
+    /// The step of the tetrahedral finite differences used for gradients (shared with
+    /// the GPU so both shade with the same normals).
+    pub fn grad_step(&self) -> f32 {
+        self.grad_step
+    }
+
+    /// `(f(p), λ)` with `λ` a Lipschitz bound of `f` over the ball `B(c, r)`: the CPU twin
+    /// of `eval_tape` in `shaders/field.wgsl`.
+    pub fn eval(&self, p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
+        let mut stack = [(0.0f32, 0.0f32); MAX_STACK];
+        let mut sp = 0usize;
+        let mut frames = [(Vec3::ZERO, Vec3::ZERO, 0.0f32); MAX_WARPS];
+        let mut fp = 0usize;
+        let (mut p, mut c, mut r) = (p, c, r);
+        let mut pc = 0usize;
+        let prm = &self.params;
+        while pc < self.instrs.len() {
+            let ins = self.instrs[pc];
+            let o = ins.param as usize;
+            match ins.op {
+                op::CONST => {
+                    stack[sp] = (prm[o], 0.0);
+                    sp += 1;
+                }
+                op::PRIM => {
+                    stack[sp] = primitive(ins.flags, &prm[o..], p, c, r);
+                    sp += 1;
+                }
+                op::HEIGHT => {
+                    stack[sp] = self.height(&prm[o..], p, c, r);
+                    sp += 1;
+                }
+                op::BLEND | op::UNION | op::INTER | op::DIFF => {
+                    let (b, a) = (stack[sp - 1], stack[sp - 2]);
+                    sp -= 1;
+                    stack[sp - 1] = match ins.op {
+                        op::BLEND => (a.0 + b.0, a.1 + b.1),
+                        op::UNION => (a.0.max(b.0), a.1.max(b.1)),
+                        op::INTER => (a.0.min(b.0), a.1.max(b.1)),
+                        _ => (a.0.min(2.0 * T - b.0), a.1.max(b.1)),
+                    };
+                }
+                op::GUARD => {
+                    let lo = Vec3::new(prm[o], prm[o + 1], prm[o + 2]);
+                    let hi = Vec3::new(prm[o + 3], prm[o + 4], prm[o + 5]);
+                    let bx = Aabb { min: lo, max: hi };
+                    if !bx.contains(p) && bx.distance(c) > r {
+                        stack[sp] = (0.0, 0.0);
+                        sp += 1;
+                        pc = ins.jump as usize;
+                        continue;
+                    }
+                }
+                op::WARP => {
+                    frames[fp] = (p, c, r);
+                    fp += 1;
+                    p = affine(&prm[o..], p);
+                    c = affine(&prm[o..], c);
+                    r *= prm[o + 12];
+                }
+                op::UNWARP => {
+                    fp -= 1;
+                    (p, c, r) = frames[fp];
+                    stack[sp - 1].1 *= prm[o + 12];
+                }
+                _ => unreachable!("the builder emits only known ops"),
+            }
+            pc += 1;
+        }
+        stack[0]
+    }
+
+    fn height(&self, q: &[f32], p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
+        let (fall, slope) = (q[0], q[1]);
+        let h = |x: f32, y: f32| bilinear(&self.heights, q, x, y);
+        let value = sigma(h(p.x, p.y) - p.z, fall);
+        let hc = h(c.x, c.y);
+        let v = Interval::new(hc - slope * r - c.z - r, hc + slope * r - c.z + r);
+        (value, sigma_slope(v, fall) * (1.0 + slope * slope).sqrt())
+    }
+}
+
+/// Bilinear elevation at `(x, y)` clamped to the grid `q = [.., .., ox, oy, cell, nx, ny, offset]`.
+fn bilinear(heights: &[f32], q: &[f32], x: f32, y: f32) -> f32 {
+    let (ox, oy, cell, nx, ny, off) = (q[2], q[3], q[4], q[5], q[6], q[7] as usize);
+    let gx = ((x - ox) / cell).clamp(0.0, nx - 1.0);
+    let gy = ((y - oy) / cell).clamp(0.0, ny - 1.0);
+    let (i, j) = ((gx.floor()).min(nx - 2.0), (gy.floor()).min(ny - 2.0));
+    let (fx, fy) = (gx - i, gy - j);
+    let (i, j, w) = (i as usize, j as usize, nx as usize);
+    let z = |a: usize, b: usize| heights[off + a + w * b];
+    let bottom = z(i, j) + (z(i + 1, j) - z(i, j)) * fx;
+    let top = z(i, j + 1) + (z(i + 1, j + 1) - z(i, j + 1)) * fx;
+    bottom + (top - bottom) * fy
+}
+
+fn affine(m: &[f32], p: Vec3) -> Vec3 {
+    let p4 = |k: usize| m[k] * p.x + m[k + 1] * p.y + m[k + 2] * p.z + m[k + 3];
+    Vec3::new(p4(0), p4(4), p4(8))
+}
+
+/// Signed distance to the shape in `q` (after `R, e`).
+fn signed_distance(kind: u32, q: &[f32], p: Vec3) -> f32 {
+    match kind {
+        shape::SPHERE => p.distance(Vec3::new(q[0], q[1], q[2])) - q[3],
+        shape::CAPSULE => {
+            let a = Vec3::new(q[0], q[1], q[2]);
+            let ab = Vec3::new(q[3], q[4], q[5]) - a;
+            let ap = p - a;
+            let l2 = ab.length_squared();
+            let h = if l2 > 0.0 {
+                (ap.dot(ab) / l2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            (ap - ab * h).length() - q[6]
+        }
+        _ => {
+            let d = (p - Vec3::new(q[0], q[1], q[2])).abs() - Vec3::new(q[3], q[4], q[5]);
+            Vec3A::from(d).max(Vec3A::ZERO).length() + d.max_element().min(0.0)
+        }
+    }
+}
+
+/// `(value at p, Lipschitz bound over B(c, r))` of a primitive with params `q`.
+fn primitive(flags: u32, q: &[f32], p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
+    let (rad, energy) = (q[0], q[1]);
+    let kind = flags & 0xff;
+    let sd_p = signed_distance(kind, &q[2..], p);
+    let sd_c = signed_distance(kind, &q[2..], c);
+    if flags & shape::SIGMA != 0 {
+        let v = sigma(-sd_p, rad);
+        (v, sigma_slope(Interval::new(-sd_c - r, -sd_c + r), rad))
+    } else {
+        let v = energy * wyvill(sd_p.max(0.0) / rad);
+        let xs = Interval::new((sd_c - r).max(0.0) / rad, (sd_c + r).max(0.0) / rad);
+        (v, energy.abs() / rad * wyvill_slope(xs))
+    }
+}
+
+impl Field for Tape {
+    fn value(&self, p: Vec3) -> f32 {
+        self.eval(p, p, 0.0).0
+    }
+
+    /// Tetrahedral finite differences with step [`Tape::grad_step`], as on the GPU.
+    fn value_grad(&self, p: Vec3) -> (f32, Vec3) {
+        let h = self.grad_step;
+        let k = [
+            Vec3::new(1.0, -1.0, -1.0),
+            Vec3::new(-1.0, -1.0, 1.0),
+            Vec3::new(-1.0, 1.0, -1.0),
+            Vec3::new(1.0, 1.0, 1.0),
+        ];
+        let g = k
+            .iter()
+            .fold(Vec3::ZERO, |g, &d| g + d * self.value(p + d * h))
+            / (4.0 * h);
+        (self.value(p), g)
+    }
+
+    fn support(&self) -> Aabb {
+        self.support
+    }
+
+    fn interval(&self, b: &Aabb) -> Interval {
+        let c = b.center();
+        let r = b.radius();
+        let (v, l) = self.eval(c, c, r);
+        Interval::new(v - l * r, v + l * r)
+    }
+
+    fn lipschitz(&self) -> f32 {
+        self.lipschitz
+    }
+
+    fn lipschitz_box(&self, b: &Aabb) -> f32 {
+        let c = b.center();
+        self.eval(c, c, b.radius()).1
+    }
+
+    fn lipschitz_segment(&self, a: Vec3, b: Vec3) -> f32 {
+        let c = 0.5 * (a + b);
+        self.eval(c, c, 0.5 * a.distance(b)).1
+    }
+}

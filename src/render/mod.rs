@@ -1,0 +1,57 @@
+//! Direct preview of the implicit surface `f = T` by ray tracing (seed 001 §7).
+//!
+//! * [`camera`]: look-at pinhole camera, framed automatically from a support box.
+//! * [`trace`]: segment tracing with local Lipschitz bounds (seed 001 §7.2, Galin et al.
+//!   2020) and plain sphere tracing with the global bound, with per-ray step counts.
+//! * [`shade`]: terrain shading — sun, sky ambient, shadow rays, fog, slope/altitude tint.
+//! * [`cpu`]: the image renderer, tiles over rayon.
+//! * [`image`]: the rendered [`Frame`] and its PNG outputs (colour and step cost).
+//! * [`gpu`]: the same tracer as a wgpu compute shader over a flattened node tape.
+
+pub mod camera;
+pub mod cpu;
+pub mod gpu;
+pub mod image;
+pub mod shade;
+pub mod trace;
+
+pub use camera::{Camera, Ray};
+pub use cpu::{RenderSettings, render};
+pub use image::Frame;
+pub use shade::Shading;
+pub use trace::{Method, Trace, TraceParams};
+
+/// Errors of the renderer.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// The image size is zero or too large.
+    #[error(
+        "image size {width} × {height} is invalid: both sides must be between 1 and 32768 pixels"
+    )]
+    BadSize {
+        /// Requested width.
+        width: u32,
+        /// Requested height.
+        height: u32,
+    },
+    /// The camera cannot be built from these parameters.
+    #[error("bad camera: {0}")]
+    BadCamera(String),
+    /// The field has an empty or non-finite support box: nothing to frame or trace.
+    #[error("the field's support box is empty or not finite ({0}); nothing to render")]
+    EmptySupport(String),
+    /// Encoding or writing an image failed.
+    #[error(transparent)]
+    Io(#[from] crate::io::IoError),
+    /// PNG encoding failed.
+    #[error("cannot encode PNG {path}: {message}")]
+    Encode {
+        /// The destination.
+        path: std::path::PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// The GPU path failed.
+    #[error(transparent)]
+    Gpu(#[from] gpu::GpuError),
+}

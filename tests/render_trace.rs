@@ -1,0 +1,276 @@
+//! The CPU tracer against independent ground truths, and segment vs sphere tracing.
+
+mod common;
+
+use common::{Blobs, Rng, SigmaSphere, Terrain, check_segment_lipschitz};
+use glam::{Vec2, Vec3};
+use indicatif::ProgressBar;
+use karstic::field::Field;
+use karstic::render::camera::Ray;
+use karstic::render::cpu::{self, RenderSettings};
+use karstic::render::trace::{Method, TraceParams, occluded, trace};
+use karstic::render::{Camera, render};
+
+/// Fraction of pixels where both images agree on hit/miss and, on hits, on depth within
+/// `tol`. `None` in the first image counts as a miss.
+fn depth_agreement(a: &[f32], b: &[f32], tol: f32) -> (f64, usize) {
+    let mut ok = 0;
+    let mut hits = 0;
+    for (x, y) in a.iter().zip(b) {
+        hits += usize::from(x.is_finite() || y.is_finite());
+        let same = match (x.is_finite(), y.is_finite()) {
+            (true, true) => (x - y).abs() <= tol,
+            (false, false) => true,
+            _ => false,
+        };
+        ok += usize::from(same && (x.is_finite() || y.is_finite()));
+    }
+    (ok as f64 / hits.max(1) as f64, hits)
+}
+
+#[test]
+fn sigma_sphere_depth_matches_the_analytic_intersection() {
+    let s = SigmaSphere {
+        center: Vec3::new(3.0, -2.0, 5.0),
+        radius: 4.0,
+        falloff: 1.5,
+    };
+    let cam = Camera::look_at(Vec3::new(20.0, -25.0, 15.0), s.center, 30.0, 96, 80).unwrap();
+    let truth: Vec<f32> = (0..96 * 80)
+        .map(|k| {
+            let r = cam.pixel_ray(k % 96, k / 96);
+            s.intersect(r.origin, r.dir).unwrap_or(f32::INFINITY)
+        })
+        .collect();
+    let cell = 0.01 * s.radius;
+    for method in [Method::Segment, Method::Sphere] {
+        let params = TraceParams::for_scene(method, 2.0 * s.support().radius());
+        let (depth, _) = cpu::depth(&s, &cam, &params);
+        let (frac, hits) = depth_agreement(&truth, &depth, cell);
+        assert!(hits > 1000, "the sphere fills part of the image");
+        assert!(
+            frac >= 0.99,
+            "{method:?}: only {:.2}% of hit pixels agree",
+            frac * 100.0
+        );
+    }
+}
+
+/// First crossing of `z = h(x, y)` by dense marching on the elevation itself (not on the
+/// field), refined by bisection: independent of every Lipschitz bound.
+fn terrain_truth(t: &Terrain, ray: &Ray) -> f32 {
+    let Some((t0, t1)) = ray.clip(&t.bounds) else {
+        return f32::INFINITY;
+    };
+    let below = |s: f32| {
+        let p = ray.at(s);
+        p.z < t.height(Vec2::new(p.x, p.y))
+    };
+    let h = 0.002 * t.wavelength;
+    let mut a = t0;
+    if below(a) {
+        return a;
+    }
+    while a < t1 {
+        let b = (a + h).min(t1);
+        if below(b) {
+            let (mut lo, mut hi) = (a, b);
+            for _ in 0..30 {
+                let m = 0.5 * (lo + hi);
+                if below(m) { hi = m } else { lo = m }
+            }
+            return 0.5 * (lo + hi);
+        }
+        a = b;
+    }
+    f32::INFINITY
+}
+
+#[test]
+fn terrain_depth_matches_marching_the_elevation() {
+    let terrain = Terrain::new(100.0, 12.0, 4.0);
+    let cam = Camera::frame(&terrain.support(), 40.0, 160, 120).unwrap();
+    let truth: Vec<f32> = (0..160 * 120)
+        .map(|k| terrain_truth(&terrain, &cam.pixel_ray(k % 160, k / 160)))
+        .collect();
+    let params = TraceParams::for_scene(Method::Segment, 2.0 * terrain.support().radius());
+    let (depth, _) = cpu::depth(&terrain, &cam, &params);
+    // The prism's σ-rounded edges make the chunk's sides differ from the bare elevation:
+    // compare where the truth hits the top surface away from the sides.
+    let inner = terrain.bounds.dilate(-2.0 * terrain.falloff);
+    let (mut ok, mut n) = (0, 0);
+    for k in 0..truth.len() {
+        let r = cam.pixel_ray(k as u32 % 160, k as u32 / 160);
+        let p = r.at(truth[k]);
+        if truth[k].is_finite() && inner.contains(Vec3::new(p.x, p.y, inner.center().z)) {
+            n += 1;
+            ok += usize::from((depth[k] - truth[k]).abs() <= 0.01 * terrain.wavelength);
+        }
+    }
+    assert!(n > 2000, "enough terrain pixels: {n}");
+    assert!(
+        ok as f64 >= 0.99 * n as f64,
+        "{ok} of {n} terrain pixels agree"
+    );
+}
+
+fn small_blobs() -> Blobs {
+    Blobs::in_ball(60, 6.0, 2.0, 1.0, 7)
+}
+
+#[test]
+fn blob_field_bounds_are_sound() {
+    let b = small_blobs();
+    let region = b.support().dilate(1.0);
+    check_segment_lipschitz(&b, &region, 20_000, 1);
+    let mut rng = Rng(3);
+    for _ in 0..2000 {
+        let p = region.min + Vec3::new(rng.f32(), rng.f32(), rng.f32()) * region.size();
+        assert!((b.value(p) - b.value_brute(p)).abs() < 1e-5);
+    }
+    let s = SigmaSphere {
+        center: Vec3::ZERO,
+        radius: 3.0,
+        falloff: 1.0,
+    };
+    check_segment_lipschitz(&s, &s.support().dilate(1.0), 20_000, 2);
+    let t = Terrain::new(50.0, 6.0, 2.0);
+    check_segment_lipschitz(&t, &t.support().dilate(1.0), 20_000, 4);
+}
+
+#[test]
+fn blob_depth_matches_a_dense_march_and_both_methods_agree() {
+    let b = small_blobs();
+    let cam = Camera::frame(&b.support(), 35.0, 120, 90).unwrap();
+    // Dense fixed-step march on the brute-force value, refined by bisection.
+    let truth: Vec<f32> = (0..120 * 90)
+        .map(|k| {
+            let r = cam.pixel_ray(k % 120, k / 120);
+            let Some((t0, t1)) = r.clip(&b.support()) else {
+                return f32::INFINITY;
+            };
+            let inside = |t: f32| b.value_brute(r.at(t)) > 0.5;
+            let mut a = t0;
+            while a < t1 {
+                let c = a + 0.01;
+                if inside(c) {
+                    let (mut lo, mut hi) = (a, c);
+                    for _ in 0..20 {
+                        let m = 0.5 * (lo + hi);
+                        if inside(m) { hi = m } else { lo = m }
+                    }
+                    return lo;
+                }
+                a = c;
+            }
+            f32::INFINITY
+        })
+        .collect();
+    let mut depths = Vec::new();
+    let mut mean_steps = Vec::new();
+    for method in [Method::Segment, Method::Sphere] {
+        let params = TraceParams::for_scene(method, 2.0 * b.support().radius());
+        let (depth, steps) = cpu::depth(&b, &cam, &params);
+        let (frac, hits) = depth_agreement(&truth, &depth, 0.02);
+        assert!(hits > 500);
+        assert!(
+            frac >= 0.99,
+            "{method:?} vs dense march: {:.2}%",
+            frac * 100.0
+        );
+        mean_steps.push(steps.iter().map(|&s| s as f64).sum::<f64>() / steps.len() as f64);
+        depths.push(depth);
+    }
+    let (frac, _) = depth_agreement(&depths[0], &depths[1], 0.02);
+    assert!(frac >= 0.99, "segment vs sphere: {:.2}%", frac * 100.0);
+    assert!(
+        mean_steps[0] * 5.0 < mean_steps[1],
+        "segment tracing should take far fewer steps: {mean_steps:?}"
+    );
+}
+
+#[test]
+fn segment_and_sphere_images_match() {
+    let b = small_blobs();
+    let cam = Camera::frame(&b.support(), 35.0, 64, 48).unwrap();
+    let frames: Vec<_> = [Method::Segment, Method::Sphere]
+        .iter()
+        .map(|&m| {
+            render(
+                &b,
+                &cam,
+                &RenderSettings::for_scene(&b.support(), &cam, m),
+                &ProgressBar::hidden(),
+            )
+        })
+        .collect();
+    let close = frames[0]
+        .rgba
+        .chunks(4)
+        .zip(frames[1].rgba.chunks(4))
+        .filter(|(a, c)| a.iter().zip(c.iter()).all(|(x, y)| x.abs_diff(*y) <= 6))
+        .count();
+    assert!(
+        close as f64 >= 0.99 * (64.0 * 48.0),
+        "{close} of {} pixels match",
+        64 * 48
+    );
+}
+
+#[test]
+fn shadows_fall_where_the_sun_is_blocked() {
+    // A ball floating above a slab of terrain: the point under the ball (towards the sun's
+    // opposite) is in shadow, a point far away is lit.
+    let ball = SigmaSphere {
+        center: Vec3::new(0.0, 0.0, 10.0),
+        radius: 3.0,
+        falloff: 1.0,
+    };
+    let params = TraceParams::for_scene(Method::Segment, 40.0);
+    let sun = Vec3::new(0.3, 0.2, 1.0).normalize();
+    let support = ball.support();
+    let shadowed = |origin: Vec3| {
+        let ray = Ray { origin, dir: sun };
+        ray.clip(&support)
+            .is_some_and(|span| occluded(&ball, &ray, span, &params))
+    };
+    assert!(
+        shadowed(ball.center - sun * 10.0),
+        "straight under the ball along the sun"
+    );
+    assert!(!shadowed(Vec3::new(8.0, 0.0, 0.0)));
+    // A ray leaving the surface outwards is not shadowed by the surface itself.
+    let on = ball.center + sun * ball.radius;
+    assert!(!shadowed(on + sun * 1e-3));
+}
+
+#[test]
+fn rays_starting_inside_find_the_way_out() {
+    let s = SigmaSphere {
+        center: Vec3::ZERO,
+        radius: 4.0,
+        falloff: 1.0,
+    };
+    let ray = Ray {
+        origin: Vec3::ZERO,
+        dir: Vec3::new(1.0, 2.0, 0.5).normalize(),
+    };
+    let params = TraceParams::for_scene(Method::Segment, 10.0);
+    let tr = trace(&s, &ray, ray.clip(&s.support()).unwrap(), &params);
+    assert!((tr.t - 4.0).abs() < 0.01, "{tr:?}");
+}
+
+#[test]
+fn rendering_is_deterministic_across_thread_counts() {
+    let t = Terrain::new(60.0, 8.0, 3.0);
+    let cam = Camera::frame(&t.support(), 40.0, 50, 40).unwrap();
+    let s = RenderSettings::for_scene(&t.support(), &cam, Method::Segment);
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let a = one.install(|| render(&t, &cam, &s, &ProgressBar::hidden()));
+    let b = render(&t, &cam, &s, &ProgressBar::hidden());
+    assert_eq!(a, b.clone());
+    assert!(b.hits() > 400, "{}", b.hits());
+}
