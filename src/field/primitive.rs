@@ -193,6 +193,7 @@ impl Primitive {
     }
 
     /// `(d̃(p), ∇d̃(p))`, `d̃` capped at 1 (gradient 0 there).
+    #[inline]
     pub fn normalized_distance_grad(&self, p: Vec3) -> (f32, Vec3) {
         match self.noise {
             None => {
@@ -325,6 +326,7 @@ impl Field for Primitive {
         self.energy * wyvill(self.normalized_distance(p))
     }
 
+    #[inline]
     fn value_grad(&self, p: Vec3) -> (f32, Vec3) {
         let (x, g) = self.normalized_distance_grad(p);
         let (v, dv) = wyvill_d(x);
