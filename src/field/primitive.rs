@@ -76,6 +76,8 @@ pub struct Primitive {
     energy: f32,
     noise: Option<Noise>,
     support: Aabb,
+    /// `skeleton.bounds()`.
+    skeleton_bounds: Aabb,
     /// Global bound of `|∇d̃|` where `d̃ < 1`.
     slope: f32,
 }
@@ -106,7 +108,8 @@ impl Primitive {
         }
         let a = noise.map_or(0.0, |n| n.amplitude);
         // Grown by one part in 10⁵ so rounding never puts a non-zero value outside.
-        let support = skeleton.bounds().dilate((radius + a) * 1.000_01);
+        let skeleton_bounds = skeleton.bounds();
+        let support = skeleton_bounds.dilate((radius + a) * 1.000_01);
         let mut p = Primitive {
             skeleton,
             radius,
@@ -114,6 +117,7 @@ impl Primitive {
             energy,
             noise,
             support,
+            skeleton_bounds,
             slope: 0.0,
         };
         p.slope = p.dt_slope(1.0, radius - a);
@@ -193,6 +197,7 @@ impl Primitive {
     }
 
     /// `(d̃(p), ∇d̃(p))`, `d̃` capped at 1 (gradient 0 there).
+    #[inline]
     pub fn normalized_distance_grad(&self, p: Vec3) -> (f32, Vec3) {
         match self.noise {
             None => {
@@ -211,8 +216,22 @@ impl Primitive {
     fn noisy<const GRAD: bool>(&self, n: &Noise, p: Vec3) -> (f32, Vec3) {
         let r = self.radius;
         let outer = r + n.amplitude;
+        let mut reach = outer;
+        if self.skeleton.convex().is_none() {
+            // Many pieces: the nearest one gives d̃ ≤ ρ_min/(R − A), so pieces farther than
+            // ρ_min·(R + A)/(R − A) cannot win (ρᵢ/(R + A) ≤ d̃ᵢ). A cheap distance pass
+            // first spares their turbulence.
+            let rho_min = self.skeleton.distance_capped(p, outer);
+            if rho_min >= outer {
+                return (1.0, Vec3::ZERO);
+            }
+            if rho_min <= 0.0 {
+                return (0.0, Vec3::ZERO);
+            }
+            reach = outer.min(rho_min * outer / (r - n.amplitude) * 1.000_1);
+        }
         let mut best = (1.0f32, Vec3::ZERO);
-        self.skeleton.visit_pieces(p, outer, &mut |piece, rho| {
+        self.skeleton.visit_pieces(p, reach, &mut |piece, rho| {
             let cand = if rho <= 0.0 {
                 (0.0, Vec3::ZERO)
             } else {
@@ -241,7 +260,7 @@ impl Primitive {
         let half = b.radius();
         let reach = r + a;
         let dc = self.skeleton.distance_capped(c, reach + half);
-        let skel = self.skeleton.bounds();
+        let skel = self.skeleton_bounds;
         let gap = (skel.min - b.max)
             .max(b.min - skel.max)
             .max(Vec3::ZERO)
@@ -325,6 +344,7 @@ impl Field for Primitive {
         self.energy * wyvill(self.normalized_distance(p))
     }
 
+    #[inline]
     fn value_grad(&self, p: Vec3) -> (f32, Vec3) {
         let (x, g) = self.normalized_distance_grad(p);
         let (v, dv) = wyvill_d(x);
@@ -360,7 +380,7 @@ impl Field for Primitive {
         let Some(reach) = self.surface_reach() else {
             return;
         };
-        let around = self.skeleton.bounds().dilate(reach);
+        let around = self.skeleton_bounds.dilate(reach);
         if !fp.overlaps(&around.footprint()) {
             return;
         }
@@ -598,6 +618,39 @@ mod tests {
             // Zero beyond R + A of the sphere's surface, full inside it.
             assert_eq!(p.value(c + dir * (2.0 + 3.0 + 1.5 + 1e-3)), 0.0);
             assert_eq!(p.value(c + dir * 1.9), 1.0);
+        }
+    }
+
+    /// The pruned search over pieces finds the same minimum as trying every piece.
+    #[test]
+    fn noisy_pieces_pruning_is_exact() {
+        for shape in [
+            "Curve(points: [(0, 0, 0), (5, 0, 1), (6, 5, 0), (1, 6, 2), (0, 2, 0)])",
+            "Prism(polygon: [(0, 0), (6, 0), (6, 2), (2, 2), (2, 6), (0, 6)], z: (0, 3))",
+        ] {
+            let s = format!(
+                "(shape: {shape}, falloff: 2, noise: Some((amplitude: 1.2, wavelength: 1.5)))"
+            );
+            let prim = Primitive::from_spec(&ron::from_str(&s).unwrap(), 3);
+            let n = *prim.noise().unwrap();
+            let b = prim.support();
+            for i in 0..3000 {
+                let f = |k: u32| (crate::field::noise::mix32(i * 3 + k) >> 8) as f32 / 16_777_216.0;
+                let p = b.min + Vec3::new(f(0), f(1), f(2)) * b.size();
+                let mut brute = 1.0f32;
+                prim.skeleton()
+                    .visit_pieces(p, f32::INFINITY, &mut |piece, rho| {
+                        let x = if rho <= 0.0 {
+                            0.0
+                        } else {
+                            piece_distance::<false>(piece, &n, 2.0, p, rho).0
+                        };
+                        brute = brute.min(x);
+                        f32::INFINITY
+                    });
+                assert_eq!(prim.normalized_distance(p), brute, "{shape} at {p}");
+                assert_eq!(prim.normalized_distance_grad(p).0, brute, "{shape} at {p}");
+            }
         }
     }
 }

@@ -58,7 +58,6 @@ impl Chain {
 
     /// `(index of the nearest segment, squared distance)` among segments closer than
     /// `cap`, or `None`.
-    #[inline]
     fn nearest(&self, p: Vec3, cap: f32) -> Option<(usize, f32)> {
         let mut best = cap * cap;
         let mut at = None;
@@ -82,8 +81,10 @@ impl Chain {
         at.map(|i| (i, best))
     }
 
-    /// `min(distance(p), cap)`.
-    #[inline]
+    /// `min(distance(p), cap)`. Never inlined: it keeps [`super::Skeleton`]'s dispatch
+    /// small enough to inline into the single-piece kinds' hot paths (a sphere's value
+    /// runs twice as fast).
+    #[inline(never)]
     pub fn distance_capped(&self, p: Vec3, cap: f32) -> f32 {
         self.nearest(p, cap).map_or(cap, |(_, d2)| d2.sqrt())
     }

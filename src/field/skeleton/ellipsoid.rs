@@ -3,9 +3,10 @@
 //! For `y = p − c` outside the ellipsoid `Σ (xᵢ/eᵢ)² ≤ 1`, the closest point is
 //! `xᵢ = eᵢ² yᵢ / (t + eᵢ²)` where `t > 0` is the root of
 //! `F(t) = Σ (eᵢ yᵢ / (t + eᵢ²))² − 1` (Eberly, "Distance from a point to an ellipse, an
-//! ellipsoid, or a hyperellipsoid"). `F` is decreasing and convex on `t ≥ 0`, and
-//! `t* ≥ e_min‖y‖ − e_max²`, so Newton's method started at that bound climbs to the root
-//! monotonically, without overshoot. Solved in f64.
+//! ellipsoid, or a hyperellipsoid"). `F` is decreasing and convex on `t ≥ 0`, and since
+//! `t + eᵢ² ≤ t + e_max²`, `F(t) ≥ ‖e∘y‖²/(t + e_max²)² − 1`, so `t* ≥ ‖e∘y‖ − e_max²`:
+//! Newton's method started at that bound climbs to the root monotonically, without
+//! overshoot. Solved in f64.
 
 use glam::{DVec3, Mat3, Vec3};
 
@@ -37,17 +38,18 @@ impl Ellipsoid {
         }
         let e2 = e * e;
         let ey = e * y;
-        let mut t = (e.min_element() * y.length() - e2.max_element()).max(0.0);
+        let mut t = (ey.length() - e2.max_element()).max(0.0);
         for _ in 0..MAX_NEWTON {
-            let q = ey / (DVec3::splat(t) + e2);
+            let inv = (DVec3::splat(t) + e2).recip();
+            let q = ey * inv;
             let f = q.length_squared() - 1.0;
-            if f <= 0.0 {
+            if f <= 1e-12 {
                 break;
             }
-            let df = -2.0 * (q * q / (DVec3::splat(t) + e2)).element_sum();
+            let df = -2.0 * (q * q * inv).element_sum();
             let step = -f / df;
             t += step;
-            if step <= 1e-13 * (t + e2.max_element()) {
+            if step <= 1e-10 * (t + e2.max_element()) {
                 break;
             }
         }

@@ -61,6 +61,14 @@ pub trait Project {
         (p - self.closest(p)).length()
     }
 
+    /// `(distance, unit gradient)`; the gradient is `+z` where the distance is 0.
+    #[inline]
+    fn distance_grad(&self, p: Vec3) -> (f32, Vec3) {
+        let w = p - self.closest(p);
+        let d = w.length();
+        if d > 0.0 { (d, w / d) } else { (0.0, Vec3::Z) }
+    }
+
     /// A box holding the set.
     fn bounds(&self) -> Aabb;
 }
@@ -224,9 +232,11 @@ impl Skeleton {
     /// (or inside a solid), where `d` is not differentiable, it is `+z`.
     #[inline]
     pub fn distance_grad(&self, p: Vec3) -> (f32, Vec3) {
-        let w = p - self.closest(p);
-        let d = w.length();
-        if d > 0.0 { (d, w / d) } else { (0.0, Vec3::Z) }
+        let far = |w: Vec3| {
+            let d = w.length();
+            if d > 0.0 { (d, w / d) } else { (0.0, Vec3::Z) }
+        };
+        dispatch!(self, s => s.distance_grad(p), c => far(p - c.closest(p)), pr => far(p - pr.closest(p)))
     }
 
     /// A box holding the skeleton.

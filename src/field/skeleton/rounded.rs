@@ -67,6 +67,16 @@ impl<C: Project> Project for Rounded<C> {
         (self.inner.distance(p) - self.radius).max(0.0)
     }
 
+    #[inline]
+    fn distance_grad(&self, p: Vec3) -> (f32, Vec3) {
+        let (d, g) = self.inner.distance_grad(p);
+        if d > self.radius {
+            (d - self.radius, g)
+        } else {
+            (0.0, Vec3::Z)
+        }
+    }
+
     fn bounds(&self) -> Aabb {
         self.inner.bounds().dilate(self.radius)
     }
