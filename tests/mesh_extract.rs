@@ -257,3 +257,28 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(16))]
+
+    /// Elevation columns meet field columns (mixed edges) without cracks, for random
+    /// caves, cell sizes and boxes that cut tiles at odd places.
+    #[test]
+    fn caved_terrains_stay_manifold(
+        caves in prop::collection::vec((20f32..380.0, 20f32..380.0, -12f32..6.0, 6f32..30.0), 0..6),
+        cell in 5.0f32..13.0,
+        x0 in 0f32..120.0,
+    ) {
+        let mut t = caved_terrain(0);
+        t.caves = caves
+            .into_iter()
+            .map(|(x, y, dz, r)| (Vec3::new(x, y, t.ground.h.height(Vec2::new(x, y)) + dz), r))
+            .collect();
+        let b = Aabb::new(Vec3::new(x0, 0.0, -30.0), Vec3::new(400.0, 400.0, 70.0));
+        let grid = GridSpec::with_cell(&b, cell).unwrap();
+        let (m, stats) = extract(&t, &grid, true, true);
+        let topo = m.check_topology(Some((&grid.bounds(), 1e-3)));
+        prop_assert!(topo.is_ok(), "{:?}", topo);
+        prop_assert!(stats.elevation_columns > 0);
+    }
+}

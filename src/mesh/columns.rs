@@ -182,7 +182,7 @@ pub fn cells_of_band(band: Interval, z0: f32, dz: f32, n: usize) -> Option<[u32;
     }
     let a = (lo - 1.0 - BAND_SLACK).ceil().max(0.0);
     let b = ((hi + BAND_SLACK).floor() + 1.0).min(n as f32);
-    (a < b).then(|| [a as u32, b as u32])
+    (a < b).then_some([a as u32, b as u32])
 }
 
 /// Adds `[a, b)` to a sorted list of disjoint ranges, merging overlapping or touching ones.

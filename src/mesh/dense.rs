@@ -1,15 +1,14 @@
 //! Marching Cubes over a dense precomputed grid of samples (an `.npy` volume, a sampled
 //! field): the fast path benchmarked against scikit-image.
 //!
-//! The grid is cut into slabs of [`SLAB_LAYERS`] cell layers, processed in parallel. In a
-//! slab, each plane of samples becomes one bit per sample (`v > iso`) packed in `u64`
-//! words, so empty space costs a few word operations per 64 cells and crossed edges are
-//! found by XOR-ing rows. Vertices are created once per crossed edge into per-plane index
-//! arrays, in the order: plane `k0`, z-edges of layer `k0`, plane `k0 + 1`, …, plane `k1`.
-//! The last plane of a slab is the first plane of the next one, created in the same order
-//! from the same samples, so at the merge the slab's copy is dropped and its indices are
-//! redirected to the next slab's: the mesh is welded, and its bytes depend only on the
-//! grid, not on the thread count.
+//! Every sample becomes one bit (`v > iso`) packed in `u64` words, so empty space costs a
+//! few word operations per 64 cells and crossed edges are found by XOR-ing rows. The grid
+//! is cut into slabs of [`SLAB_LAYERS`] cell layers. A first parallel pass counts each
+//! slab's vertices (one per crossed edge: the x- and y-edges of its planes `k0..k1`, the
+//! z-edges of its layers) and triangles; the prefix sums give every slab its range of the
+//! final arrays, and a second parallel pass writes them in place, numbering the vertices
+//! of the slab's top plane as the next slab does. No merge copy; the mesh is welded and
+//! its bytes depend only on the grid, not on the thread count.
 
 use std::time::Instant;
 
@@ -17,7 +16,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::cell::{ambiguity_mask, edge_t};
-use super::mesh::Mesh;
+use super::indexed::Mesh;
 use super::stats::MeshStats;
 use super::tables::{EDGE_AXIS, EDGE_CORNERS, TABLES};
 use super::{MeshError, split_parts};
@@ -103,62 +102,80 @@ impl<'a> DenseGrid<'a> {
 /// crack-free, consistently oriented mesh with normals from the grid's central-difference
 /// gradient. Parallel over slabs (rayon); deterministic.
 pub fn mc_dense(grid: &DenseGrid<'_>, iso: f32) -> (Mesh, MeshStats) {
-    let start = Instant::now();
     let [nx, ny, nz] = grid.dims;
     let layers = nz - 1;
+    let x = Extractor {
+        g: grid,
+        iso,
+        words: nx.div_ceil(64) + 1,
+        bits: Vec::new(),
+    };
+
+    // 1. Signs of every sample, one plane per task.
+    let start = Instant::now();
+    let mut bits = vec![0u64; nz * ny * x.words];
+    bits.par_chunks_mut(ny * x.words)
+        .enumerate()
+        .for_each(|(k, plane)| x.plane_bits(k, plane));
+    let x = Extractor { bits, ..x };
+    let signs = start.elapsed();
+
+    // 2. Exact vertex and triangle counts per slab, so slabs write straight into the mesh.
+    let start = Instant::now();
     let slabs: Vec<(usize, usize)> = (0..layers)
         .step_by(SLAB_LAYERS)
         .map(|k0| (k0, (k0 + SLAB_LAYERS).min(layers)))
         .collect();
-    let outs: Vec<Slab> = slabs
+    let counts: Vec<(usize, usize)> = slabs
         .par_iter()
-        .map(|&(k0, k1)| slab(grid, iso, k0, k1))
+        .map(|&(k0, k1)| x.count(k0, k1, k1 == layers))
         .collect();
-    let extract = start.elapsed();
-
-    let merge_start = Instant::now();
-    let keep: Vec<usize> = outs
-        .iter()
-        .enumerate()
-        .map(|(c, s)| {
-            if c + 1 < outs.len() {
-                s.positions.len() - s.top
-            } else {
-                s.positions.len()
-            }
-        })
-        .collect();
-    let mut offsets = vec![0usize; outs.len() + 1];
-    for c in 0..outs.len() {
-        offsets[c + 1] = offsets[c] + keep[c];
+    let mut vbase = vec![0usize; slabs.len() + 1];
+    let mut tbase = vec![0usize; slabs.len() + 1];
+    for (c, &(v, t)) in counts.iter().enumerate() {
+        vbase[c + 1] = vbase[c] + v;
+        tbase[c + 1] = tbase[c] + t;
     }
+    let count = start.elapsed();
+
+    // 3. Vertices and triangles.
+    let start = Instant::now();
     let mut mesh = Mesh {
-        positions: vec![[0.0; 3]; offsets[outs.len()]],
-        normals: vec![[0.0; 3]; offsets[outs.len()]],
-        triangles: vec![[0; 3]; outs.iter().map(|s| s.triangles.len()).sum()],
+        positions: vec![[0.0; 3]; vbase[slabs.len()]],
+        normals: vec![[0.0; 3]; vbase[slabs.len()]],
+        triangles: vec![[0; 3]; tbase[slabs.len()]],
         attributes: Vec::new(),
     };
-    let mut pos_parts = split_parts(&mut mesh.positions, &keep);
-    let mut nrm_parts = split_parts(&mut mesh.normals, &keep);
-    let tri_counts: Vec<usize> = outs.iter().map(|s| s.triangles.len()).collect();
-    let mut tri_parts = split_parts(&mut mesh.triangles, &tri_counts);
-    pos_parts
-        .par_iter_mut()
-        .zip(nrm_parts.par_iter_mut())
-        .zip(tri_parts.par_iter_mut())
+    let vlens: Vec<usize> = counts.iter().map(|c| c.0).collect();
+    let tlens: Vec<usize> = counts.iter().map(|c| c.1).collect();
+    let positions = split_parts(&mut mesh.positions, &vlens);
+    let normals = split_parts(&mut mesh.normals, &vlens);
+    let triangles = split_parts(&mut mesh.triangles, &tlens);
+    positions
+        .into_par_iter()
+        .zip(normals)
+        .zip(triangles)
         .enumerate()
-        .for_each(|(c, ((pos, nrm), tri))| {
-            let s = &outs[c];
-            pos.copy_from_slice(&s.positions[..keep[c]]);
-            nrm.copy_from_slice(&s.normals[..keep[c]]);
-            let (own, base, next) = (keep[c] as u32, offsets[c] as u32, offsets[c + 1] as u32);
-            let remap = |l: u32| if l < own { base + l } else { next + (l - own) };
-            for (d, t) in tri.iter_mut().zip(&s.triangles) {
-                *d = t.map(remap);
-            }
+        .for_each(|(c, ((positions, normals), triangles))| {
+            let (k0, k1) = slabs[c];
+            let mut out = SlabOut {
+                positions,
+                normals,
+                triangles,
+                base: vbase[c] as u32,
+                next: vbase[c + 1] as u32,
+                nv: 0,
+                nt: 0,
+            };
+            x.fill(k0, k1, k1 == layers, &mut out);
+            debug_assert_eq!(
+                (out.nv, out.nt),
+                counts[c],
+                "slab {c}: counts and output disagree"
+            );
         });
     mesh.repair_normals();
-    let merge = merge_start.elapsed();
+    let fill = start.elapsed();
 
     let cells = ((nx - 1) * (ny - 1) * layers) as u64;
     let stats = MeshStats {
@@ -168,24 +185,26 @@ pub fn mc_dense(grid: &DenseGrid<'_>, iso: f32) -> (Mesh, MeshStats) {
         field_evaluations: grid.values.len() as u64,
         vertices: mesh.positions.len() as u64,
         triangles: mesh.triangles.len() as u64,
-        stages: vec![("extract", extract), ("merge", merge)],
+        stages: vec![("signs", signs), ("count", count), ("extract", fill)],
         ..MeshStats::default()
     };
     (mesh, stats)
 }
 
-/// What one slab produces, with slab-local vertex indices.
-struct Slab {
-    positions: Vec<[f32; 3]>,
-    normals: Vec<[f32; 3]>,
-    triangles: Vec<[u32; 3]>,
-    /// Vertices created on the slab's last plane (shared with the next slab).
-    top: usize,
+/// A slab's part of the mesh. Vertices it owns get indices `base + n`; the vertices of its
+/// last plane belong to the next slab, which numbers them first, from `next`.
+struct SlabOut<'m> {
+    positions: &'m mut [[f32; 3]],
+    normals: &'m mut [[f32; 3]],
+    triangles: &'m mut [[u32; 3]],
+    base: u32,
+    next: u32,
+    nv: usize,
+    nt: usize,
 }
 
-/// Per-plane state: sign bits and the vertex index of each crossed x- and y-edge.
-struct Plane {
-    bits: Vec<u64>,
+/// Vertex indices of the crossed x- and y-edges of one plane, by sample.
+struct PlaneIndex {
     x: Vec<u32>,
     y: Vec<u32>,
 }
@@ -203,14 +222,17 @@ fn shifted(row: &[u64], w: usize) -> u64 {
     (row[w] >> 1) | (row[w + 1] << 63)
 }
 
-struct SlabBuilder<'g, 'a> {
+/// The grid, its iso-value and the sign bits of all its samples.
+struct Extractor<'g, 'a> {
     g: &'g DenseGrid<'a>,
     iso: f32,
+    /// `u64` words per row, including one zero padding word.
     words: usize,
-    out: Slab,
+    /// `bits[(k·ny + j)·words + w]`: bit `b` set when sample `(64w + b, j, k)` is solid.
+    bits: Vec<u64>,
 }
 
-impl SlabBuilder<'_, '_> {
+impl Extractor<'_, '_> {
     /// Mask of the valid cells (or x-edges) in word `w`: `i < nx − 1`.
     #[inline]
     fn cell_mask(&self, w: usize) -> u64 {
@@ -241,90 +263,63 @@ impl SlabBuilder<'_, '_> {
         }
     }
 
-    /// Creates the vertex on the edge from sample `(i, j, k)` along `axis`.
+    /// Row `j` of plane `k`.
     #[inline]
-    fn vertex(&mut self, i: usize, j: usize, k: usize, axis: usize) -> u32 {
-        let g = self.g;
-        let mut q = [i, j, k];
-        q[axis] += 1;
-        let (v0, v1) = (g.at(i, j, k) - self.iso, g.at(q[0], q[1], q[2]) - self.iso);
-        let t = edge_t(v0, v1);
-        let mut p = Vec3::new(i as f32, j as f32, k as f32);
-        p[axis] += t;
-        let grad = g.grad(i, j, k).lerp(g.grad(q[0], q[1], q[2]), t) / g.spacing;
-        let n = -grad.normalize_or_zero();
-        let id = self.out.positions.len() as u32;
-        self.out.positions.push((g.origin + p * g.spacing).into());
-        self.out.normals.push(n.into());
-        id
+    fn row(&self, k: usize, j: usize) -> &[u64] {
+        let at = (k * self.g.dims[1] + j) * self.words;
+        &self.bits[at..at + self.words]
     }
 
-    /// Creates the vertices of the crossed x- and y-edges of plane `k`.
-    fn plane_vertices(&mut self, k: usize, plane: &mut Plane) {
-        let [nx, ny, _] = self.g.dims;
-        let wn = self.words;
+    /// Calls `f(i, j, axis)` for each crossed x- and y-edge of plane `k`, in the order
+    /// vertices are numbered: row by row, x-edges then y-edges.
+    #[inline]
+    fn plane_edges(&self, k: usize, mut f: impl FnMut(usize, usize, usize)) {
+        let ny = self.g.dims[1];
         for j in 0..ny {
-            let row = j * wn;
-            for w in 0..wn - 1 {
-                let r = &plane.bits[row..row + wn];
+            let r = self.row(k, j);
+            for w in 0..self.words - 1 {
                 let mut c = (r[w] ^ shifted(r, w)) & self.cell_mask(w);
                 while c != 0 {
-                    let i = w * 64 + c.trailing_zeros() as usize;
+                    f(w * 64 + c.trailing_zeros() as usize, j, 0);
                     c &= c - 1;
-                    plane.x[j * nx + i] = self.vertex(i, j, k, 0);
                 }
             }
             if j + 1 < ny {
-                for w in 0..wn - 1 {
-                    let mut c = plane.bits[row + w] ^ plane.bits[row + wn + w];
+                let up = self.row(k, j + 1);
+                for w in 0..self.words - 1 {
+                    let mut c = r[w] ^ up[w];
                     while c != 0 {
-                        let i = w * 64 + c.trailing_zeros() as usize;
+                        f(w * 64 + c.trailing_zeros() as usize, j, 1);
                         c &= c - 1;
-                        plane.y[j * nx + i] = self.vertex(i, j, k, 1);
                     }
                 }
             }
         }
     }
 
-    /// Creates the vertices of the crossed z-edges between planes `k` and `k + 1`.
-    fn layer_vertices(&mut self, k: usize, lo: &Plane, hi: &Plane, z: &mut [u32]) {
-        let [nx, ny, _] = self.g.dims;
-        let wn = self.words;
-        for j in 0..ny {
-            for w in 0..wn - 1 {
-                let mut c = lo.bits[j * wn + w] ^ hi.bits[j * wn + w];
+    /// Calls `f(i, j)` for each crossed z-edge between planes `k` and `k + 1`.
+    #[inline]
+    fn layer_edges(&self, k: usize, mut f: impl FnMut(usize, usize)) {
+        for j in 0..self.g.dims[1] {
+            let (lo, hi) = (self.row(k, j), self.row(k + 1, j));
+            for w in 0..self.words - 1 {
+                let mut c = lo[w] ^ hi[w];
                 while c != 0 {
-                    let i = w * 64 + c.trailing_zeros() as usize;
+                    f(w * 64 + c.trailing_zeros() as usize, j);
                     c &= c - 1;
-                    z[j * nx + i] = self.vertex(i, j, k, 2);
                 }
             }
         }
     }
 
-    /// Emits the triangles of the cells of layer `k`.
-    fn layer_cells(&mut self, k: usize, lo: &Plane, hi: &Plane, z: &[u32]) {
-        let [nx, ny, _] = self.g.dims;
-        let wn = self.words;
-        // Where edge e's vertex index lives, relative to the cell's (i, j): array, offset.
-        let slot: [(usize, usize); 12] = std::array::from_fn(|e| {
-            let c = EDGE_CORNERS[e][0] as usize;
-            let (dx, dy, dz) = (c & 1, (c >> 1) & 1, (c >> 2) & 1);
-            let array = match EDGE_AXIS[e] {
-                0 => dz,
-                1 => 2 + dz,
-                _ => 4,
-            };
-            (array, dx + dy * nx)
-        });
+    /// Calls `f(i, j, case, triangles)` for each cell of layer `k` the surface crosses.
+    #[inline]
+    fn layer_cells(&self, k: usize, mut f: impl FnMut(usize, usize, &[[u8; 3]])) {
         let tables = &*TABLES;
-        for j in 0..ny - 1 {
-            let r00 = &lo.bits[j * wn..(j + 1) * wn];
-            let r10 = &lo.bits[(j + 1) * wn..(j + 2) * wn];
-            let r01 = &hi.bits[j * wn..(j + 1) * wn];
-            let r11 = &hi.bits[(j + 1) * wn..(j + 2) * wn];
-            for w in 0..wn - 1 {
+        for j in 0..self.g.dims[1] - 1 {
+            let (r00, r10) = (self.row(k, j), self.row(k, j + 1));
+            let (r01, r11) = (self.row(k + 1, j), self.row(k + 1, j + 1));
+            for w in 0..self.words - 1 {
                 let any = r00[w]
                     | shifted(r00, w)
                     | r10[w]
@@ -357,65 +352,104 @@ impl SlabBuilder<'_, '_> {
                         });
                         ambiguity_mask(entry, &v)
                     };
-                    let base = j * nx + i;
-                    let mut ev = [0u32; 12];
-                    let mut edges = entry.edges;
-                    while edges != 0 {
-                        let e = edges.trailing_zeros() as usize;
-                        edges &= edges - 1;
-                        let (array, off) = slot[e];
-                        let at = base + off;
-                        ev[e] = match array {
-                            0 => lo.x[at],
-                            1 => hi.x[at],
-                            2 => lo.y[at],
-                            3 => hi.y[at],
-                            _ => z[at],
-                        };
-                    }
-                    for t in tables.triangles(case, mask) {
-                        self.out.triangles.push(t.map(|e| ev[e as usize]));
-                    }
+                    f(i, j, tables.triangles(case, mask));
                 }
             }
         }
     }
-}
 
-/// Extracts cell layers `k0..k1`.
-fn slab(g: &DenseGrid<'_>, iso: f32, k0: usize, k1: usize) -> Slab {
-    let [nx, ny, _] = g.dims;
-    let words = nx.div_ceil(64) + 1;
-    let new_plane = || Plane {
-        bits: vec![0; ny * words],
-        x: vec![0; nx * ny],
-        y: vec![0; nx * ny],
-    };
-    let mut b = SlabBuilder {
-        g,
-        iso,
-        words,
-        out: Slab {
-            positions: Vec::new(),
-            normals: Vec::new(),
-            triangles: Vec::new(),
-            top: 0,
-        },
-    };
-    let (mut lo, mut hi) = (new_plane(), new_plane());
-    let mut z = vec![0u32; nx * ny];
-    b.plane_bits(k0, &mut lo.bits);
-    b.plane_vertices(k0, &mut lo);
-    for k in k0..k1 {
-        b.plane_bits(k + 1, &mut hi.bits);
-        b.layer_vertices(k, &lo, &hi, &mut z);
-        let before = b.out.positions.len();
-        b.plane_vertices(k + 1, &mut hi);
-        b.out.top = b.out.positions.len() - before;
-        b.layer_cells(k, &lo, &hi, &z);
-        std::mem::swap(&mut lo, &mut hi);
+    /// Vertices and triangles slab `k0..k1` produces (it owns planes `k0..k1`, and the
+    /// last plane too when `last`).
+    fn count(&self, k0: usize, k1: usize, last: bool) -> (usize, usize) {
+        let (mut v, mut t) = (0, 0);
+        for k in k0..k1 {
+            self.plane_edges(k, |_, _, _| v += 1);
+            self.layer_edges(k, |_, _| v += 1);
+            self.layer_cells(k, |_, _, tris| t += tris.len());
+        }
+        if last {
+            self.plane_edges(k1, |_, _, _| v += 1);
+        }
+        (v, t)
     }
-    b.out
+
+    /// Writes the vertex on the edge from sample `(i, j, k)` along `axis`; returns its index.
+    #[inline]
+    fn vertex(&self, i: usize, j: usize, k: usize, axis: usize, out: &mut SlabOut<'_>) -> u32 {
+        let g = self.g;
+        let mut q = [i, j, k];
+        q[axis] += 1;
+        let (v0, v1) = (g.at(i, j, k) - self.iso, g.at(q[0], q[1], q[2]) - self.iso);
+        let t = edge_t(v0, v1);
+        let mut p = Vec3::new(i as f32, j as f32, k as f32);
+        p[axis] += t;
+        let grad = g.grad(i, j, k).lerp(g.grad(q[0], q[1], q[2]), t) / g.spacing;
+        out.positions[out.nv] = (g.origin + p * g.spacing).into();
+        out.normals[out.nv] = (-grad.normalize_or_zero()).into();
+        out.nv += 1;
+        out.base + out.nv as u32 - 1
+    }
+
+    /// Fills the vertex indices of plane `k`, creating its vertices when `own`, else
+    /// numbering them as the next slab will.
+    fn plane_vertices(&self, k: usize, own: bool, index: &mut PlaneIndex, out: &mut SlabOut<'_>) {
+        let nx = self.g.dims[0];
+        let mut next = out.next;
+        self.plane_edges(k, |i, j, axis| {
+            let id = if own {
+                self.vertex(i, j, k, axis, out)
+            } else {
+                next += 1;
+                next - 1
+            };
+            let slot = if axis == 0 {
+                &mut index.x
+            } else {
+                &mut index.y
+            };
+            slot[j * nx + i] = id;
+        });
+    }
+
+    /// Writes slab `k0..k1`: its vertices, in the order of [`Extractor::count`], and its
+    /// triangles.
+    fn fill(&self, k0: usize, k1: usize, last: bool, out: &mut SlabOut<'_>) {
+        let [nx, ny, _] = self.g.dims;
+        let new_index = || PlaneIndex {
+            x: vec![0; nx * ny],
+            y: vec![0; nx * ny],
+        };
+        let (mut lo, mut hi) = (new_index(), new_index());
+        let mut z = vec![0u32; nx * ny];
+        // Where edge e's vertex index lives, relative to the cell's (i, j): array, offset.
+        let slot: [(usize, usize); 12] = std::array::from_fn(|e| {
+            let c = EDGE_CORNERS[e][0] as usize;
+            let (dx, dy, dz) = (c & 1, (c >> 1) & 1, (c >> 2) & 1);
+            let array = match EDGE_AXIS[e] {
+                0 => dz,
+                1 => 2 + dz,
+                _ => 4,
+            };
+            (array, dx + dy * nx)
+        });
+        self.plane_vertices(k0, true, &mut lo, out);
+        for k in k0..k1 {
+            self.layer_edges(k, |i, j| z[j * nx + i] = self.vertex(i, j, k, 2, out));
+            self.plane_vertices(k + 1, k + 1 < k1 || last, &mut hi, out);
+            let arrays = [&lo.x, &hi.x, &lo.y, &hi.y, &z];
+            self.layer_cells(k, |i, j, tris| {
+                let base = j * nx + i;
+                for t in tris {
+                    out.triangles[out.nt] = t.map(|e| {
+                        let (a, off) = slot[e as usize];
+                        arrays[a][base + off]
+                    });
+                    out.nt += 1;
+                }
+            });
+            std::mem::swap(&mut lo, &mut hi);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -443,8 +477,8 @@ mod tests {
         let (m, _) = mc_dense(&g, 0.0);
         let topo = m.check_topology(None).unwrap();
         assert_eq!(topo.euler_characteristic(), 2);
-        let r = 19.5 * 0.7;
-        let exact = 4.0 / 3.0 * std::f64::consts::PI * (r as f64).powi(3);
+        let r: f64 = 19.5 * 0.7;
+        let exact = 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
         assert!(
             (m.volume() - exact).abs() / exact < 0.01,
             "{} vs {exact}",
@@ -456,6 +490,26 @@ mod tests {
             let vn = Vec3::from(m.normals[t[0] as usize]);
             assert!(n.dot(vn) > 0.0);
         }
+    }
+
+    #[test]
+    fn slabs_weld_and_threads_do_not_matter() {
+        let (v, dims) = sphere_grid(50);
+        let g = DenseGrid::new(&v, dims, Vec3::ZERO, Vec3::ONE).unwrap();
+        let run = |n| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap();
+            pool.install(|| mc_dense(&g, 0.0).0)
+        };
+        let (a, b) = (run(1), run(2));
+        assert!(a == b);
+        // 49 layers make 4 slabs; welded across them, the sphere stays closed.
+        a.check_topology(None).unwrap();
+        let unique: std::collections::BTreeSet<[u32; 3]> =
+            a.positions.iter().map(|p| p.map(f32::to_bits)).collect();
+        assert_eq!(unique.len(), a.positions.len(), "duplicate vertices");
     }
 
     #[test]

@@ -14,7 +14,7 @@ pub mod columns;
 pub mod dense;
 pub mod export;
 pub mod grid;
-pub mod mesh;
+pub mod indexed;
 pub mod npy;
 pub mod polygonize;
 pub mod sample;
@@ -23,7 +23,7 @@ pub mod tables;
 
 pub use dense::{DenseGrid, mc_dense};
 pub use grid::GridSpec;
-pub use mesh::{Attribute, Mesh, Topology, TopologyError};
+pub use indexed::{Attribute, Mesh, Topology, TopologyError};
 pub use polygonize::{MeshOptions, polygonize};
 pub use stats::MeshStats;
 

@@ -29,7 +29,7 @@ use rayon::prelude::*;
 use super::cell::{ambiguity_mask, edge_t};
 use super::columns::{self, Cursor, SampleSpan, Spans, TILE, Tiles};
 use super::grid::GridSpec;
-use super::mesh::Mesh;
+use super::indexed::Mesh;
 use super::stats::MeshStats;
 use super::tables::{EDGE_AXIS, EDGE_CORNERS, TABLES};
 use super::{MeshError, split_parts};
@@ -578,7 +578,8 @@ impl<'f> Ctx<'_, 'f> {
 /// Illinois regula falsi for the root of `g` on `[0, 1]` starting from `t`, with
 /// `g(0) = g0` and `g(1) = g1` of opposite signs; counts evaluations in `evals`.
 fn regula_falsi(g: impl Fn(f32) -> f32, t: f32, g0: f32, g1: f32, evals: &mut u64) -> f32 {
-    if !(g0 * g1 < 0.0) {
+    let p = g0 * g1;
+    if p.is_nan() || p >= 0.0 {
         return t;
     }
     let (mut a, mut fa, mut b, mut fb) = (0.0f32, g0, 1.0f32, g1);
