@@ -5,6 +5,8 @@
 //! [`field`] tree is the single thing the mesher and the tracers consume.
 
 pub mod cli;
+pub mod curves;
 pub mod field;
 pub mod io;
 pub mod scene;
+pub mod voxel;
