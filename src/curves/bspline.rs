@@ -55,11 +55,7 @@ impl BSpline {
         let k = if t >= 1.0 {
             last
         } else {
-            let mut k = p;
-            while k < last && self.knots[k + 1] <= t {
-                k += 1;
-            }
-            k
+            (self.knots.partition_point(|&u| u <= t) - 1).clamp(p, last)
         };
         let mut d = [Vec3::ZERO; 4];
         for (j, dj) in d.iter_mut().enumerate().take(p + 1) {

@@ -89,9 +89,10 @@ fn curve_through(points: Vec<Vec3>, bitangents: Vec<(Vec3, Vec3)>, noise: Vec2) 
 }
 
 impl Tunnel {
-    /// The four curves: floor, ceiling, left wall, right wall. `spacing` is the distance
-    /// between the sections that become their control vertices.
-    pub fn curves(&self, spacing: f32) -> [FeatureCurve; 4] {
+    /// The four curves: floor, ceiling, left wall, right wall. Sections every eighth of
+    /// the smaller of width and height become their control vertices.
+    pub fn curves(&self) -> [FeatureCurve; 4] {
+        let spacing = 0.125 * self.width.max().min(self.height.max());
         let n = sections(&self.path, spacing);
         let mut pts: [Vec<Vec3>; 4] = Default::default();
         let mut bts: [Vec<(Vec3, Vec3)>; 4] = Default::default();
@@ -120,6 +121,11 @@ impl Tunnel {
         })
     }
 
+    /// The smallest width or height along the path.
+    pub fn section(&self) -> f32 {
+        self.width.0.iter().chain(&self.height.0).map(|k| k.1).fold(f32::INFINITY, f32::min)
+    }
+
     /// True when `p` lies inside the tube grown by `margin`.
     pub fn contains(&self, p: Vec3, margin: f32) -> bool {
         let n = 128;
@@ -140,17 +146,28 @@ impl Tunnel {
     }
 }
 
+/// True when `p` is outside every tunnel of `tunnels` but the `i`-th (grown by `margin`):
+/// where tunnel `i`'s curves are kept, so that branches open into each other.
+pub fn outside_others(tunnels: &[Tunnel], i: usize, p: Vec3, margin: f32) -> bool {
+    !tunnels.iter().enumerate().any(|(j, t)| j != i && t.contains(p, margin))
+}
+
+/// The ribbon width used for a tunnel: no wider than a quarter of its section, so the
+/// four ribbons do not cross.
+pub fn tunnel_ribbon(tunnel: &Tunnel, ribbon: f32) -> f32 {
+    ribbon.min(0.25 * tunnel.width.max().min(tunnel.height.max()))
+}
+
 /// The proxy meshes of a set of tunnels: each tunnel's curves leave out the segments
-/// inside the other tunnels, so tunnels sharing a node open into each other.
-pub fn tunnel_proxies(tunnels: &[Tunnel], ribbon: f32, segment: f32) -> ProxyMesh {
+/// inside the other tunnels, so tunnels sharing a node open into each other. Ribbons and
+/// guidance extensions are capped at a quarter of the section.
+pub fn tunnel_proxies(tunnels: &[Tunnel], ribbon: f32, guide: f32, segment: f32) -> ProxyMesh {
     let mut mesh = ProxyMesh::default();
     for (i, tunnel) in tunnels.iter().enumerate() {
-        let others: Vec<&Tunnel> = tunnels.iter().enumerate().filter(|&(j, _)| j != i).map(|(_, t)| t).collect();
-        let keep = |p: Vec3| !others.iter().any(|o| o.contains(p, ribbon));
-        // Ribbons no wider than a quarter of the section, so they do not cross.
-        let w = ribbon.min(0.25 * tunnel.width.max().min(tunnel.height.max()));
-        for c in tunnel.curves(segment.max(0.25 * w)) {
-            mesh.append(&curve_ribbon(&c, w, segment, &keep));
+        let keep = |p: Vec3| outside_others(tunnels, i, p, ribbon);
+        let (w, g) = (tunnel_ribbon(tunnel, ribbon), tunnel_ribbon(tunnel, guide));
+        for c in tunnel.curves() {
+            mesh.append(&curve_ribbon(&c, w, g, segment, &keep));
         }
     }
     mesh
@@ -247,7 +264,7 @@ mod tests {
             height: Profile(vec![(0.0, 6.0), (1.0, 10.0)]),
             noise: Vec2::ZERO,
         };
-        let curves = t.curves(2.0);
+        let curves = t.curves();
         for c in &curves {
             for i in 0..=10 {
                 let s = c.sample(i as f32 / 10.0);
@@ -276,7 +293,7 @@ mod tests {
             path: BSpline::new(vec![Vec3::new(30.0, 0.0, 0.0), Vec3::new(30.0, 40.0, 0.0)]).unwrap(),
             ..main.clone()
         };
-        let mesh = tunnel_proxies(&[main, branch], 1.0, 1.0);
+        let mesh = tunnel_proxies(&[main, branch], 1.0, 1.0, 1.0);
         // No ribbon of either tunnel inside the junction: the main tunnel's left wall is
         // open where the branch leaves, the branch has no walls inside the main tunnel.
         for v in &mesh.vertices {

@@ -83,20 +83,40 @@ pub struct Features {
 }
 
 impl Features {
+    /// Tunnels whose section is at least `min_section` metres (smaller ones are left out
+    /// of coarse levels, whose cells would hold their floor and ceiling at once).
+    pub fn tunnels_from(&self, min_section: f32) -> Vec<Tunnel> {
+        self.tunnels.iter().filter(|t| t.section() >= min_section).cloned().collect()
+    }
+
+    /// True when some seed primitive is present once tunnels thinner than `min_section`
+    /// are left out.
+    pub fn has_seed(&self, min_section: f32) -> bool {
+        self.curves.iter().any(|c| c.seed)
+            || !self.arches.is_empty()
+            || self.quads.iter().any(|q| q.seed)
+            || self.discs.iter().any(|d| d.seed)
+            || self.meshes.iter().any(|m| m.has_seed())
+            || self.tunnels.iter().any(|t| t.section() >= min_section)
+    }
+
     /// All primitives as one proxy mesh: ribbons `ribbon` metres wide unless a curve sets
-    /// its own, segments no longer than `segment` (a voxel or less).
-    pub fn proxy(&self, ribbon: f32, segment: f32) -> ProxyMesh {
+    /// its own, continued by guidance triangles up to `guide` metres, segments no longer
+    /// than `segment` (a voxel or less); tunnels with a section under `min_section` are
+    /// left out.
+    pub fn proxy(&self, ribbon: f32, guide: f32, segment: f32, min_section: f32) -> ProxyMesh {
         let mut mesh = ProxyMesh::default();
         let all = |_: glam::Vec3| true;
         for c in &self.curves {
-            mesh.append(&curve_ribbon(c, c.ribbon.unwrap_or(ribbon), segment, &all));
+            let w = c.ribbon.unwrap_or(ribbon);
+            mesh.append(&curve_ribbon(c, w, guide.max(w), segment, &all));
         }
         for a in &self.arches {
             for c in a.curves() {
-                mesh.append(&curve_ribbon(&c, ribbon, segment, &all));
+                mesh.append(&curve_ribbon(&c, ribbon, guide.max(ribbon), segment, &all));
             }
         }
-        mesh.append(&tunnel_proxies(&self.tunnels, ribbon, segment));
+        mesh.append(&tunnel_proxies(&self.tunnels_from(min_section), ribbon, guide.max(ribbon), segment));
         for q in &self.quads {
             mesh.append(&q.proxy());
         }
@@ -109,19 +129,23 @@ impl Features {
         mesh
     }
 
-    /// Every seed curve's samples `(position, sample)` every `step` metres — what the
-    /// surface must pass through (used by tests and `--stats`).
-    pub fn seed_samples(&self, step: f32) -> Vec<CurveSample> {
+    /// Samples every `step` metres of every seed curve (those the compounds place
+    /// included, junctions of tunnels left out): where the surface must pass.
+    pub fn seed_samples(&self, step: f32, ribbon: f32) -> Vec<CurveSample> {
         let mut out = Vec::new();
-        let mut push = |c: &FeatureCurve| {
+        let mut push = |c: &FeatureCurve, keep: &dyn Fn(glam::Vec3) -> bool| {
             if c.seed {
                 let n = ((c.spline.length(64) / step).ceil() as usize).max(1);
-                out.extend((0..=n).map(|i| c.sample(i as f32 / n as f32)));
+                out.extend((0..=n).map(|i| c.sample(i as f32 / n as f32)).filter(|s| keep(s.pos)));
             }
         };
-        self.curves.iter().for_each(&mut push);
-        self.arches.iter().flat_map(|a| a.curves()).for_each(|c| push(&c));
-        self.tunnels.iter().flat_map(|t| t.curves(step)).for_each(|c| push(&c));
+        self.curves.iter().for_each(|c| push(c, &|_| true));
+        self.arches.iter().flat_map(|a| a.curves()).for_each(|c| push(&c, &|_| true));
+        for (i, t) in self.tunnels.iter().enumerate() {
+            for c in t.curves() {
+                push(&c, &|p| compound::outside_others(&self.tunnels, i, p, ribbon));
+            }
+        }
         out
     }
 }

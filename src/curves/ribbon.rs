@@ -106,9 +106,11 @@ impl ProxyMesh {
 }
 
 /// The proxy ribbons of a curve: segments no longer than `max_segment`, each ribbon
-/// `width` metres wide. Segments whose both end points fail `keep` are left out (used by
-/// tunnels to open junctions).
-pub fn curve_ribbon(curve: &FeatureCurve, width: f32, max_segment: f32, keep: &dyn Fn(Vec3) -> bool) -> ProxyMesh {
+/// `width` metres wide, continued up to `guide` metres by guidance triangles (normals
+/// only, no surface) when `guide > width` — coarse levels of the pipeline use that so a
+/// curve's two sides stay distinct in cells larger than its ribbons. Segments whose both
+/// end points fail `keep` are left out (used by tunnels to open junctions).
+pub fn curve_ribbon(curve: &FeatureCurve, width: f32, guide: f32, max_segment: f32, keep: &dyn Fn(Vec3) -> bool) -> ProxyMesh {
     let len = curve.spline.length(64);
     let n = ((len / max_segment).ceil() as usize).clamp(1, 1 << 16);
     let samples: Vec<_> = (0..=n).map(|i| curve.sample(i as f32 / n as f32)).collect();
@@ -124,30 +126,25 @@ pub fn curve_ribbon(curve: &FeatureCurve, width: f32, max_segment: f32, keep: &d
             bitangent: b,
             noise: s.noise,
         };
-        // Left ribbon: spine0, spine1, outer1, outer0 — counter-clockwise seen from the
+        // Left ribbons: inner0, inner1, outer1, outer0 — counter-clockwise seen from the
         // normal side, so the geometric normal agrees with the vertex normals.
         let (l0, l1) = (s0.left_normal(), s1.left_normal());
-        mesh.push_quad(
-            [
-                vert(s0, s0.left, l0, 0.0),
-                vert(s1, s1.left, l1, 0.0),
-                vert(s1, s1.left, l1, width),
-                vert(s0, s0.left, l0, width),
-            ],
-            Side::Left,
-            curve.seed,
-        );
         let (r0, r1) = (s0.right_normal(), s1.right_normal());
-        mesh.push_quad(
-            [
-                vert(s0, s0.right, r0, 0.0),
-                vert(s0, s0.right, r0, width),
-                vert(s1, s1.right, r1, width),
-                vert(s1, s1.right, r1, 0.0),
-            ],
-            Side::Right,
-            curve.seed,
-        );
+        for (from, to, seed) in [(0.0, width, curve.seed), (width, guide, false)] {
+            if to <= from {
+                continue;
+            }
+            mesh.push_quad(
+                [vert(s0, s0.left, l0, from), vert(s1, s1.left, l1, from), vert(s1, s1.left, l1, to), vert(s0, s0.left, l0, to)],
+                Side::Left,
+                seed,
+            );
+            mesh.push_quad(
+                [vert(s0, s0.right, r0, from), vert(s0, s0.right, r0, to), vert(s1, s1.right, r1, to), vert(s1, s1.right, r1, from)],
+                Side::Right,
+                seed,
+            );
+        }
     }
     mesh
 }
@@ -173,7 +170,7 @@ mod tests {
             seed: true,
             ribbon: None,
         };
-        let mesh = curve_ribbon(&curve, 2.0, 1.0, &|_| true);
+        let mesh = curve_ribbon(&curve, 2.0, 2.0, 1.0, &|_| true);
         assert_eq!(mesh.triangles.len(), 10 * 4);
         for (i, t) in mesh.triangles.iter().enumerate() {
             let [a, b, c] = mesh.triangle(i);
@@ -183,7 +180,9 @@ mod tests {
             let expect_y = if t.side == Side::Left { 1.0 } else { -1.0 };
             assert!(a.normal.y * expect_y > 0.3, "and away from the crest");
         }
-        let none = curve_ribbon(&curve, 2.0, 1.0, &|p| p.x > 20.0);
+        let none = curve_ribbon(&curve, 2.0, 2.0, 1.0, &|p| p.x > 20.0);
+        let guided = curve_ribbon(&curve, 2.0, 5.0, 1.0, &|_| true);
+        assert_eq!(guided.triangles.iter().filter(|t| !t.seed).count(), 10 * 4);
         assert!(none.triangles.is_empty());
     }
 }

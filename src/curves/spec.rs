@@ -557,6 +557,7 @@ impl FeatureVolumeSpec {
             smoothing: self.solver.smoothing,
             propagation: self.propagation,
             max_memory,
+            ribbon: self.ribbon_width(),
         };
         let f = FieldParams {
             domain,
@@ -601,8 +602,7 @@ impl FeatureVolumeSpec {
     /// Runs the pipeline on resolved primitives.
     pub fn build_features(&self, features: &Features, seed: u32, max_memory: u64) -> Result<SField, CurveError> {
         let (p, f) = self.params(seed, max_memory);
-        let mesh = features.proxy(self.ribbon_width(), 0.5 * self.voxel.0);
-        let (vol, _) = run_cached(&mesh, &p)?;
+        let (vol, _) = run_cached(features, &p)?;
         Ok(SField::new(vol, f))
     }
 }

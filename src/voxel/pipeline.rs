@@ -23,7 +23,7 @@ use super::propagate::{relax, streamlines, waves};
 use super::smooth::smooth;
 use super::sparse::{BRICK, BRICK_NODES, Bricks, LevelGeom, prolong};
 use super::voxelize::{Constraint, voxelize};
-use crate::curves::{CurveError, Propagation, ProxyMesh};
+use crate::curves::{CurveError, Features, Propagation};
 use crate::field::Aabb;
 use crate::io::check_budget;
 
@@ -48,7 +48,16 @@ pub struct Params {
     pub propagation: Propagation,
     /// Memory budget (bytes).
     pub max_memory: u64,
+    /// Ribbon width of curves that set none (metres).
+    pub ribbon: f32,
 }
+
+/// Guidance ribbons reach at least this many voxels of each level (see
+/// [`crate::curves::curve_ribbon`]).
+const GUIDE_VOXELS: f32 = 1.5;
+
+/// A level voxelizes a tunnel only if its section spans this many voxels.
+const TUNNEL_VOXELS: f32 = 3.0;
 
 /// What happened on one level.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -84,6 +93,8 @@ pub struct LevelStats {
 /// Wall-clock time per stage, summed over levels (the thesis's Table 7.2 rows).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct StageTimes {
+    /// Proxy meshes of the primitives.
+    pub proxy: Duration,
     /// Allocation and initial values (the thesis's "reset").
     pub reset: Duration,
     /// Voxelization.
@@ -103,7 +114,7 @@ pub struct StageTimes {
 impl StageTimes {
     /// Sum of all stages.
     pub fn total(&self) -> Duration {
-        self.reset + self.voxelize + self.guidance + self.noise + self.propagate + self.smooth + self.finish
+        self.proxy + self.reset + self.voxelize + self.guidance + self.noise + self.propagate + self.smooth + self.finish
     }
 }
 
@@ -114,7 +125,7 @@ pub struct Stats {
     pub levels: Vec<LevelStats>,
     /// Per stage.
     pub times: StageTimes,
-    /// Proxy triangles.
+    /// Proxy triangles of the finest level.
     pub triangles: usize,
     /// Largest memory held by the grids at once (bytes, counted: bricks × bytes per node
     /// plus tables).
@@ -194,20 +205,26 @@ pub fn level_geoms(domain: &Aabb, voxel: f32) -> Result<Vec<LevelGeom>, CurveErr
     Ok(out)
 }
 
-/// Runs the pipeline on `mesh`.
-pub fn run(mesh: &ProxyMesh, p: &Params) -> Result<Volume, CurveError> {
+/// Runs the pipeline on the primitives of `features`: each level voxelizes their proxy
+/// meshes, with segments of half its voxel and guidance ribbons of [`GUIDE_VOXELS`].
+pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
     let geoms = level_geoms(&p.domain, p.voxel)?;
     let top = geoms.len() - 1;
     let base = (0..=top).find(|&l| geoms[l].dims.max_element() <= p.base.max(8) as i32).unwrap_or(top);
     let streamline = p.propagation == Propagation::Streamline;
-    let mut stats = Stats {
-        triangles: mesh.triangles.len(),
-        ..Default::default()
-    };
+    let mut stats = Stats::default();
     let tables: u64 = geoms.iter().map(Bricks::table_bytes).sum();
     let dense_nodes: u64 = geoms[base..].iter().map(|g| g.bdims().as_u64vec3().element_product() * BRICK_NODES as u64).sum();
     check_budget("the dense levels of the voxel pipeline", tables + dense_nodes * kept_bytes(streamline), p.max_memory)?;
 
+    // Levels before the first one with seeds (thin tunnels only appear on fine levels)
+    // hold a constant S behind every surface, just outside the first seeded level's band.
+    let Some(first_seeded) = (0..=top).rev().find(|&l| features.has_seed(TUNNEL_VOXELS * geoms[l].h)) else {
+        stats.empty = true;
+        return Ok(Volume { stats, ..Default::default() });
+    };
+    let behind = -(p.band + 2.0) * geoms[first_seeded].h;
+    let mut seen_seeds = false;
     let mut levels: Vec<Bricks> = Vec::new();
     let (mut n_ch, mut b_ch, mut r_ch, mut s_ch) = (Vec::<Vec<Vec3>>::new(), Vec::<Vec<Vec3>>::new(), Vec::<Vec<Vec2>>::new(), Vec::<Vec<f32>>::new());
     let mut kept = 0u64;
@@ -224,8 +241,13 @@ pub fn run(mesh: &ProxyMesh, p: &Params) -> Result<Volume, CurveError> {
             ..Default::default()
         };
         let clock = Instant::now();
-        let cons = voxelize(mesh, &geom);
+        let mesh = features.proxy(p.ribbon, GUIDE_VOXELS * geom.h, 0.5 * geom.h, TUNNEL_VOXELS * geom.h);
+        t.proxy += clock.elapsed();
+        let clock = Instant::now();
+        let cons = voxelize(&mesh, &geom);
         t.voxelize += clock.elapsed();
+        stats.triangles = mesh.triangles.len();
+        drop(mesh);
         ls.constraints = cons.len();
 
         let clock = Instant::now();
@@ -286,50 +308,70 @@ pub fn run(mesh: &ProxyMesh, p: &Params) -> Result<Volume, CurveError> {
         drop(fixed_r);
         t.noise += clock.elapsed();
 
-        let mut s = Vec::new();
-        if l <= base {
-            let clock = Instant::now();
-            let sp = if l == base { vec![0.0; total] } else { prolong(&levels[top - base..], &s_ch[top - base..], &bricks) };
-            s = sp.clone();
-            let mut wave = vec![0u16; total];
-            for &(i, c) in &at {
-                if let Some(d) = c.seed {
-                    (s[i], wave[i]) = (d, 1);
-                    ls.seeds += 1;
-                }
+        // S: on the coarsest level, distance propagation through the whole level then
+        // relaxation to convergence; below, the prolonged S re-propagated from the level's
+        // own seeds for `band` waves, blended in, and relaxed for a fixed number of sweeps.
+        let clock = Instant::now();
+        let sp = if !seen_seeds { vec![behind; total] } else { prolong(&levels, &s_ch, &bricks) };
+        let mut s = sp.clone();
+        let mut wave = vec![0u16; total];
+        for &(i, c) in &at {
+            if let Some(d) = c.seed {
+                (s[i], wave[i]) = (d, 1);
+                ls.seeds += 1;
             }
-            if l == base && ls.seeds == 0 {
+        }
+        let full = !seen_seeds;
+        if ls.seeds == 0 && (l == 0 || !seen_seeds) {
+            if l == 0 {
                 stats.empty = true;
                 stats.times = times;
                 stats.levels.push(ls);
-                return Ok(Volume {
-                    stats,
-                    ..Default::default()
-                });
+                return Ok(Volume { stats, ..Default::default() });
             }
-            let reach = if l == base { (geom.dims.element_sum() * 2) as u32 } else { p.band.ceil() as u32 };
-            if streamline {
-                ls.streamline_nodes = streamlines(&bricks, &mut s, &mut wave, &n, &b, 2 * reach);
-            }
-            ls.waves = waves(&bricks, &mut s, &mut wave, &n, reach);
-            let fixed_s: Vec<bool> = wave.iter().zip(rim).map(|(&w, &r)| w == 1 || r).collect();
-            if l < base {
-                // Blend the re-propagated values into the prolonged ones over the outer
-                // half of the waves, then relax towards ∇S = N.
-                let k = reach.max(1) as f32;
-                s.par_iter_mut().zip(&sp).zip(&wave).for_each(|((s, &sp), &w)| {
-                    if w > 1 {
-                        let a = ((w as f32 - 1.0 - 0.5 * k) / (0.5 * k)).clamp(0.0, 1.0);
-                        *s += (sp - *s) * a;
-                    }
-                });
-                ls.relax_sweeps = relax(&bricks, &mut s, &n, &fixed_s, p.iterations);
-            }
+            // Nothing here yet: keep the constant.
             t.propagate += clock.elapsed();
-            let clock = Instant::now();
-            smooth(&bricks, &mut s, &fixed_s, p.smoothing);
-            t.smooth += clock.elapsed();
+            kept += total as u64 * kept_bytes(streamline) + bricks.overhead_bytes();
+            levels.push(bricks);
+            n_ch.push(n);
+            b_ch.push(b);
+            r_ch.push(r);
+            s_ch.push(s);
+            stats.levels.push(ls);
+            continue;
         }
+        seen_seeds = true;
+        let reach = if full && first { (geom.dims.element_sum() * 2) as u32 } else { p.band.ceil() as u32 };
+        if streamline {
+            ls.streamline_nodes = streamlines(&bricks, &mut s, &mut wave, &n, &b, 2 * reach);
+        }
+        ls.waves = waves(&bricks, &mut s, &mut wave, &n, reach);
+        let fixed_s: Vec<bool> = wave.iter().zip(rim).map(|(&w, &r)| w == 1 || r).collect();
+        if !(full && first) {
+            // Blend the re-propagated values into the prolonged ones over the outer half
+            // of the waves.
+            let k = reach.max(1) as f32;
+            s.par_iter_mut().zip(&sp).zip(&wave).for_each(|((s, &sp), &w)| {
+                if w > 1 {
+                    let a = ((w as f32 - 1.0 - 0.5 * k) / (0.5 * k)).clamp(0.0, 1.0);
+                    *s += (sp - *s) * a;
+                }
+            });
+        }
+        drop((sp, wave));
+        let relax_sweeps = if full && first {
+            Sweeps::Converge {
+                tol: 1e-3 * geom.h,
+                max: 4096,
+            }
+        } else {
+            Sweeps::Fixed(p.iterations)
+        };
+        ls.relax_sweeps = relax(&bricks, &mut s, &n, &fixed_s, relax_sweeps);
+        t.propagate += clock.elapsed();
+        let clock = Instant::now();
+        smooth(&bricks, &mut s, &fixed_s, p.smoothing);
+        t.smooth += clock.elapsed();
         kept += total as u64 * kept_bytes(streamline) + bricks.overhead_bytes();
         levels.push(bricks);
         n_ch.push(n);
@@ -391,7 +433,14 @@ fn band_bricks(levels: &[Bricks], s_ch: &[Vec<f32>], geom: LevelGeom, width: f32
             out.into_iter()
         })
         .collect();
-    coords.extend(cons.iter().filter(|c| c.seed.is_some()).map(|c| c.node / BRICK));
+    // Seed bricks and their neighbours, so that seeds stay off the rim.
+    let mut seeds: Vec<IVec3> = cons.iter().filter(|c| c.seed.is_some()).map(|c| c.node / BRICK).collect();
+    seeds.dedup();
+    for c in seeds {
+        for k in 0..27 {
+            coords.push(c + IVec3::new(k % 3, (k / 3) % 3, k / 9) - IVec3::ONE);
+        }
+    }
     coords
 }
 
@@ -447,29 +496,23 @@ pub fn content_hash(parts: &[&[u8]]) -> u64 {
     h
 }
 
-/// Bytes identifying a run: the proxy mesh's attributes and the parameters.
-fn run_key(mesh: &ProxyMesh, p: &Params) -> u64 {
-    let mut v: Vec<f32> = Vec::with_capacity(mesh.vertices.len() * 11);
-    for x in &mesh.vertices {
-        v.extend_from_slice(&[x.pos.x, x.pos.y, x.pos.z, x.normal.x, x.normal.y, x.normal.z, x.bitangent.x, x.bitangent.y, x.bitangent.z, x.noise.x, x.noise.y]);
-    }
-    let t: Vec<u32> = mesh.triangles.iter().flat_map(|t| [t.v[0], t.v[1], t.v[2], t.side as u32 | (t.seed as u32) << 8]).collect();
-    let params = format!("{p:?}");
-    content_hash(&[bytemuck::cast_slice(&v), bytemuck::cast_slice(&t), params.as_bytes()])
+/// The content hash of a run: the primitives and the parameters.
+fn run_key(features: &Features, p: &Params) -> u64 {
+    content_hash(&[format!("{features:?}").as_bytes(), format!("{p:?}").as_bytes()])
 }
 
 type Cache = Mutex<Vec<(u64, Arc<Volume>)>>;
 static CACHE: Cache = Mutex::new(Vec::new());
 const CACHE_ENTRIES: usize = 8;
 
-/// [`run`], memoised in-process by the content hash of the mesh and the parameters.
-/// Returns the volume and whether it came from the cache.
-pub fn run_cached(mesh: &ProxyMesh, p: &Params) -> Result<(Arc<Volume>, bool), CurveError> {
-    let key = run_key(mesh, p);
+/// [`run`], memoised in-process by the content hash of the primitives and the
+/// parameters. Returns the volume and whether it came from the cache.
+pub fn run_cached(features: &Features, p: &Params) -> Result<(Arc<Volume>, bool), CurveError> {
+    let key = run_key(features, p);
     if let Some((_, v)) = CACHE.lock().expect("cache lock").iter().find(|(k, _)| *k == key) {
         return Ok((v.clone(), true));
     }
-    let v = Arc::new(run(mesh, p)?);
+    let v = Arc::new(run(features, p)?);
     let mut c = CACHE.lock().expect("cache lock");
     if c.len() >= CACHE_ENTRIES {
         c.remove(0);

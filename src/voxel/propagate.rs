@@ -99,7 +99,7 @@ pub fn waves(bricks: &Bricks, s: &mut [f32], wave: &mut [u16], n: &[Vec3], max_w
 
 /// Jacobi sweeps of the local distance model averaged over the in-domain face
 /// neighbours, with relaxation factor 0.85, on the non-`fixed` nodes.
-pub fn relax(bricks: &Bricks, s: &mut Vec<f32>, n: &[Vec3], fixed: &[bool], sweeps: u32) -> u32 {
+pub fn relax(bricks: &Bricks, s: &mut Vec<f32>, n: &[Vec3], fixed: &[bool], sweeps: Sweeps) -> u32 {
     let h = bricks.geom.h;
     let dims = bricks.geom.dims;
     const OMEGA: f32 = 0.85;
@@ -108,7 +108,7 @@ pub fn relax(bricks: &Bricks, s: &mut Vec<f32>, n: &[Vec3], fixed: &[bool], swee
         s,
         n,
         fixed,
-        Sweeps::Fixed(sweeps),
+        sweeps,
         |ps, pn, i, g| {
             let mut acc = 0.0;
             let mut cnt = 0.0;
@@ -223,7 +223,7 @@ mod tests {
         let fixed: Vec<bool> = wave.iter().zip(b.rim()).map(|(&w, &r)| w == 1 || r).collect();
         let before = s.clone();
         let mut s2 = s.clone();
-        relax(&b, &mut s2, &n, &fixed, 5);
+        relax(&b, &mut s2, &n, &fixed, Sweeps::Fixed(5));
         for i in 0..total {
             assert!((s2[i] - before[i]).abs() < 1e-3);
         }

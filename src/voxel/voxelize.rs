@@ -2,8 +2,13 @@
 //! it) intersects a proxy triangle gathers the triangle's normal, bitangent (left and
 //! right separately) and noise parameters; the gathered values are then averaged, with
 //! the sign-invariant bitangent pairing of §4.2.1. Nodes touched by seed triangles get
-//! a surface value: the signed distance to the triangle's plane (the thesis writes 0;
-//! the plane distance keeps sub-voxel precision and is 0 on the triangle).
+//! a surface value: the signed distance to the plane of the *nearest* seed triangle (the
+//! thesis writes 0; the distance keeps sub-voxel precision and is 0 on the triangle).
+//!
+//! The averages are weighted by `1 / (d + h/4)²`, `d` the node's distance to the
+//! triangle: equal weights where ribbons meet on a curve's spine (the thesis's average),
+//! but on coarse levels, where one cell may hold a tunnel's floor *and* ceiling, the
+//! nearest triangle dominates instead of cancelling out.
 //!
 //! Triangles are processed in parallel; contributions are sorted by node and triangle
 //! before they are summed, so the result does not depend on the thread count.
@@ -35,9 +40,44 @@ struct Gather {
     left: Vec3,
     right: Vec3,
     noise: Vec2,
-    count: f32,
+    weight: f32,
+    /// Distance to the nearest seed triangle (infinite when none) and its plane distance.
+    seed_dist: f32,
     seed: f32,
-    seeds: f32,
+}
+
+/// The point of triangle `t` closest to `p` (Ericson, Real-Time Collision Detection 5.1.5).
+pub fn closest_on_triangle(p: Vec3, t: [Vec3; 3]) -> Vec3 {
+    let [a, b, c] = t;
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let den = 1.0 / (va + vb + vc);
+    a + ab * (vb * den) + ac * (vc * den)
 }
 
 /// Triangle–box overlap by the separating axis theorem (Akenine-Möller): box centred at
@@ -104,19 +144,22 @@ pub fn voxelize(mesh: &ProxyMesh, geom: &LevelGeom) -> Vec<Constraint> {
                         if !tri_box(p, 0.5 * h * 1.0001, tri) {
                             continue;
                         }
+                        let d = p.distance(closest_on_triangle(p, tri));
+                        let w = 1.0 / ((d + 0.25 * h) * (d + 0.25 * h));
                         let mut gth = Gather {
-                            normal: vn,
-                            noise,
-                            count: 1.0,
+                            normal: vn * w,
+                            noise: noise * w,
+                            weight: w,
+                            seed_dist: f32::INFINITY,
                             ..Default::default()
                         };
                         match t.side {
-                            Side::Left | Side::Face => gth.left = bt,
-                            Side::Right => gth.right = bt,
+                            Side::Left | Side::Face => gth.left = bt * w,
+                            Side::Right => gth.right = bt * w,
                         }
                         if t.seed {
                             gth.seed = (p - tri[0]).dot(geo);
-                            gth.seeds = 1.0;
+                            gth.seed_dist = d;
                         }
                         let key = x as u64 + geom.dims.x as u64 * (y as u64 + geom.dims.y as u64 * z as u64);
                         out.push((key, ti as u32, gth));
@@ -131,16 +174,20 @@ pub fn voxelize(mesh: &ProxyMesh, geom: &LevelGeom) -> Vec<Constraint> {
     let mut i = 0;
     while i < contrib.len() {
         let key = contrib[i].0;
-        let mut s = Gather::default();
+        let mut s = Gather {
+            seed_dist: f32::INFINITY,
+            ..Default::default()
+        };
         while i < contrib.len() && contrib[i].0 == key {
             let g = &contrib[i].2;
             s.normal += g.normal;
             s.left += g.left;
             s.right += g.right;
             s.noise += g.noise;
-            s.count += g.count;
-            s.seed += g.seed;
-            s.seeds += g.seeds;
+            s.weight += g.weight;
+            if g.seed_dist < s.seed_dist {
+                (s.seed_dist, s.seed) = (g.seed_dist, g.seed);
+            }
             i += 1;
         }
         let (dx, dy) = (geom.dims.x as u64, geom.dims.y as u64);
@@ -149,8 +196,8 @@ pub fn voxelize(mesh: &ProxyMesh, geom: &LevelGeom) -> Vec<Constraint> {
             node,
             normal: s.normal.normalize_or_zero(),
             bitangent: pair_bitangents(s.left.normalize_or_zero(), s.right.normalize_or_zero()),
-            noise: s.noise / s.count,
-            seed: (s.seeds > 0.0).then(|| s.seed / s.seeds),
+            noise: s.noise / s.weight,
+            seed: s.seed_dist.is_finite().then_some(s.seed),
         });
     }
     out
@@ -189,6 +236,43 @@ mod tests {
                 assert!(hit, "missed overlap at {c}");
             }
         }
+    }
+
+    #[test]
+    fn closest_point_agrees_with_sampling() {
+        let tri = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(3.0, 0.5, 0.2), Vec3::new(0.7, 2.0, -0.4)];
+        for i in 0..300 {
+            let p = Vec3::new((i as f32 * 0.37).sin() * 4.0, (i as f32 * 0.91).cos() * 4.0, (i % 9) as f32 - 4.0);
+            let d = p.distance(closest_on_triangle(p, tri));
+            let mut best = f32::INFINITY;
+            for a in 0..=60 {
+                for b in 0..=(60 - a) {
+                    let q = tri[0] + (tri[1] - tri[0]) * (a as f32 / 60.0) + (tri[2] - tri[0]) * (b as f32 / 60.0);
+                    best = best.min(p.distance(q));
+                }
+            }
+            assert!(d <= best + 1e-4 && d >= best - 0.05, "{d} vs {best}");
+        }
+    }
+
+    #[test]
+    fn the_nearest_seed_wins_where_sheets_share_a_cell() {
+        // A floor at z = 0.1 (normal up) and a ceiling at z = 0.7 (normal down) in the
+        // same cell of size 2: the node at z = 0 is below the floor, in the rock.
+        let quad = |z: f32, up: bool| {
+            let mut c = [Vec3::new(-3.0, -3.0, z), Vec3::new(3.0, -3.0, z), Vec3::new(3.0, 3.0, z), Vec3::new(-3.0, 3.0, z)];
+            if !up {
+                c.reverse();
+            }
+            Quad { corners: c, seed: true, noise: Vec2::ZERO }.proxy()
+        };
+        let mut mesh = quad(0.1, true);
+        mesh.append(&quad(0.7, false));
+        let geom = LevelGeom { origin: Vec3::splat(-4.0), h: 2.0, dims: IVec3::splat(5) };
+        let c = voxelize(&mesh, &geom);
+        let centre = c.iter().find(|k| k.node == IVec3::splat(2)).unwrap();
+        assert!((centre.seed.unwrap() - -0.1).abs() < 1e-5);
+        assert!(centre.normal.z > 0.5, "the nearer floor dominates: {}", centre.normal);
     }
 
     #[test]
