@@ -63,3 +63,20 @@ fn debug_points() {
     let pts: Vec<Vec3> = std::env::var("PTS").unwrap_or("64,50,55;64,50,40;64,10,40;64,10,55".into()).split(';').map(|s| { let v: Vec<f32> = s.split(',').map(|x| x.parse().unwrap()).collect(); Vec3::new(v[0], v[1], v[2]) }).collect();
     for q in pts { eprintln!("{q}: S'={} f={}", f.s_value(q), f.value(q)); }
 }
+
+#[test]
+#[ignore]
+fn debug_lip() {
+    let name = std::env::var("SCENE").unwrap_or("ridge".into());
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/curves");
+    let spec: FeatureVolumeSpec = load_ron(&dir.join(format!("{name}.ron"))).unwrap();
+    let features = spec.feature_set(&dir).unwrap().resolve(&|_| None).unwrap();
+    let (p, _) = spec.params(1, 1 << 33);
+    let vol = karstic::voxel::run(&features, &p).unwrap();
+    for (l, b) in vol.bounds.iter().enumerate() {
+        let mut worst = (0.0f32, 0usize);
+        for (i, bb) in b.iter().enumerate() { if bb.grad_s.length() > worst.0 { worst = (bb.grad_s.length(), i); } }
+        let c = vol.levels[l].coords()[worst.1];
+        eprintln!("level {l} h={} max|grad S| = {} at brick {c}", vol.levels[l].geom.h, worst.0);
+    }
+}

@@ -79,6 +79,14 @@ const EMPTY_BOUNDS: BrickBounds = BrickBounds {
     grad_beta: 0.0,
 };
 
+/// Lipschitz bound of the displacement `α·fbm(β q)`, `q = p − origin`, where α, β and
+/// their slopes are bounded by `b` and `‖q‖ ≤ reach`:
+/// `∇(α n(β q)) = n ∇α + α [β ∇n + (∇n · q) ∇β]`.
+fn noise_lipschitz(params: &FieldParams, b: &BrickBounds, reach: f32) -> f32 {
+    let (a, l) = (params.fbm.amplitude(), params.fbm.lipschitz());
+    b.grad_alpha * a + b.alpha[1].max(0.0) * l * (b.beta[1].max(0.0) + reach * b.grad_beta)
+}
+
 impl SField {
     /// The field of a pipeline result.
     pub fn new(vol: Arc<Volume>, params: FieldParams) -> Self {
@@ -86,14 +94,9 @@ impl SField {
         let all = level_bounds.iter().fold(EMPTY_BOUNDS, |a, x| hull(&a, x));
         let lip_s = all.grad_s.length();
         let (alpha_max, beta_max) = (all.alpha[1].max(0.0), all.beta[1].max(0.0));
-        let (lip_noise, noise_amp) = if alpha_max > 0.0 && params.fbm.octaves > 0 {
-            let (a, l) = (params.fbm.amplitude(), params.fbm.lipschitz());
-            let reach = params.domain.size().length();
-            // ∇(α n(β q)) = n ∇α + α [β ∇n + (∇n · q) ∇β],  q = p − origin.
-            (all.grad_alpha * a + alpha_max * l * (beta_max + reach * all.grad_beta), alpha_max * a)
-        } else {
-            (0.0, 0.0)
-        };
+        let noise_amp = if alpha_max > 0.0 && params.fbm.octaves > 0 { alpha_max * params.fbm.amplitude() } else { 0.0 };
+        let lip_noise = if noise_amp > 0.0 { noise_lipschitz(&params, &all, params.domain.size().length()) } else { 0.0 };
+        let _ = beta_max;
         SField {
             vol,
             params,
@@ -257,7 +260,9 @@ impl Field for SField {
         let amp = if self.noise_amp > 0.0 { bb.alpha[1].max(0.0) * self.params.fbm.amplitude() } else { 0.0 };
         let bricks = Interval::new(bb.s[0], bb.s[1]).dilate(amp);
         let c = bc.center();
-        let lip = Interval::point(self.s_value(c)).dilate((bb.grad_s.length() + self.lip_noise) * bc.radius());
+        let reach = bc.corners().iter().map(|c| c.distance(self.params.domain.min)).fold(0.0, f32::max);
+        let lip_noise = if self.noise_amp > 0.0 { noise_lipschitz(&self.params, &bb, reach) } else { 0.0 };
+        let lip = Interval::point(self.s_value(c)).dilate((bb.grad_s.length() + lip_noise) * bc.radius());
         let mut s = bricks.intersect(lip);
         if s.is_empty() {
             s = bricks;
@@ -286,7 +291,13 @@ impl Field for SField {
         }
         let bc = b.intersection(self.params.domain);
         let bb = self.box_bounds(&bc);
-        let ls = bb.grad_s.length() + self.lip_noise;
+        let lip_noise = if self.noise_amp > 0.0 {
+            let reach = bc.corners().iter().map(|c| c.distance(self.params.domain.min)).fold(0.0, f32::max);
+            noise_lipschitz(&self.params, &bb, reach)
+        } else {
+            0.0
+        };
+        let ls = bb.grad_s.length() + lip_noise;
         let s = Interval::new(bb.s[0], bb.s[1]).dilate(self.noise_amp);
         let x = if self.params.orientation == Orientation::Solid { s.scale(-1.0) } else { s };
         let sig = sigma_slope(x, self.params.transition) * ls;
