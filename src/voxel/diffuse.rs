@@ -45,14 +45,17 @@ pub const FACES: [(isize, usize, i32); 6] = [
     (-((PAD * PAD) as isize), 2, -1),
 ];
 
-/// Runs Jacobi sweeps of `update` over the non-`fixed` nodes of `data`.
+/// Runs Jacobi sweeps of `update` over the non-`fixed` nodes of `data`, in the bricks
+/// marked in `active` (all bricks when `active` is empty; the others keep their values).
 ///
 /// `update(pad, aux_pad, i, g)` gets brick copies with a one-node halo of `data` and
 /// `aux` (empty `aux` is not gathered), the padded index `i` of the node and its global
 /// coordinates `g`; it returns the node's new value. `change` measures a node's update;
 /// returns the number of sweeps run.
+#[allow(clippy::too_many_arguments)]
 pub fn jacobi<T, A>(
     bricks: &Bricks,
+    active: &[bool],
     data: &mut Vec<T>,
     aux: &[A],
     fixed: &[bool],
@@ -71,6 +74,7 @@ where
     if max == 0 || bricks.is_empty() {
         return 0;
     }
+    let measure = tol >= 0.0;
     let mut src = std::mem::take(data);
     let mut dst = src.clone();
     let mut done = 0;
@@ -81,6 +85,9 @@ where
             .map_init(
                 || (vec![T::default(); PAD_NODES], vec![A::default(); if aux.is_empty() { 0 } else { PAD_NODES }]),
                 |(pt, pa), (b, out)| {
+                    if !active.is_empty() && !active[b] {
+                        return 0.0;
+                    }
                     bricks.gather(&src, b, pt);
                     if !aux.is_empty() {
                         bricks.gather(aux, b, pa);
@@ -96,7 +103,9 @@ where
                                     src[i]
                                 } else {
                                     let v = update(pt, pa, padded(x, y, z), base + IVec3::new(x, y, z));
-                                    worst = worst.max(change(v, src[i]));
+                                    if measure {
+                                        worst = worst.max(change(v, src[i]));
+                                    }
                                     v
                                 };
                                 l += 1;
@@ -118,10 +127,11 @@ where
 }
 
 /// Perona–Malik diffusion of the normal field (§4.3.1) with edge parameter `k`.
-pub fn diffuse_normals(bricks: &Bricks, n: &mut Vec<Vec3>, fixed: &[bool], k: f32, sweeps: Sweeps) -> u32 {
+pub fn diffuse_normals(bricks: &Bricks, active: &[bool], n: &mut Vec<Vec3>, fixed: &[bool], k: f32, sweeps: Sweeps) -> u32 {
     let inv_k2 = 1.0 / (k * k);
     jacobi(
         bricks,
+        active,
         n,
         &[] as &[()],
         fixed,
@@ -159,9 +169,10 @@ fn avg(v: Vec3, w: Vec3) -> Vec3 {
 
 /// Bitangent diffusion by sign-invariant averaging of the neighbours (§4.3.2):
 /// `avg(avg(b_x, b_y), b_z)` of the per-axis pair averages.
-pub fn diffuse_bitangents(bricks: &Bricks, b: &mut Vec<Vec3>, fixed: &[bool], sweeps: Sweeps) -> u32 {
+pub fn diffuse_bitangents(bricks: &Bricks, active: &[bool], b: &mut Vec<Vec3>, fixed: &[bool], sweeps: Sweeps) -> u32 {
     jacobi(
         bricks,
+        active,
         b,
         &[] as &[()],
         fixed,
@@ -176,9 +187,10 @@ pub fn diffuse_bitangents(bricks: &Bricks, b: &mut Vec<Vec3>, fixed: &[bool], sw
 }
 
 /// Laplace diffusion of the noise parameters `(α, β)` (§4.4).
-pub fn diffuse_noise(bricks: &Bricks, r: &mut Vec<Vec2>, fixed: &[bool], sweeps: Sweeps) -> u32 {
+pub fn diffuse_noise(bricks: &Bricks, active: &[bool], r: &mut Vec<Vec2>, fixed: &[bool], sweeps: Sweeps) -> u32 {
     jacobi(
         bricks,
+        active,
         r,
         &[] as &[()],
         fixed,
@@ -220,7 +232,7 @@ mod tests {
                 r[i] = Vec2::splat(g.x as f32 / 15.0);
             }
         }
-        let n = diffuse_noise(&b, &mut r, &fixed, Sweeps::Converge { tol: 1e-6, max: 5000 });
+        let n = diffuse_noise(&b, &[], &mut r, &fixed, Sweeps::Converge { tol: 1e-6, max: 5000 });
         assert!(n < 5000);
         for i in 0..r.len() {
             let g = b.node_coord(i);
@@ -246,8 +258,8 @@ mod tests {
             }
         }
         let (mut sharp, mut smooth) = (n.clone(), n.clone());
-        diffuse_normals(&b, &mut sharp, &fixed, 0.01, Sweeps::Fixed(200));
-        diffuse_normals(&b, &mut smooth, &fixed, 1e3, Sweeps::Fixed(200));
+        diffuse_normals(&b, &[], &mut sharp, &fixed, 0.01, Sweeps::Fixed(200));
+        diffuse_normals(&b, &[], &mut smooth, &fixed, 1e3, Sweeps::Fixed(200));
         let at = |v: &[Vec3], x: i32| v[b.node(IVec3::new(x, 10, 10)).unwrap()];
         for x in 0..24 {
             assert!((at(&sharp, x).length() - 1.0).abs() < 1e-4);
@@ -271,7 +283,7 @@ mod tests {
                 (v[i], fixed[i]) = (-Vec3::Y, true);
             }
         }
-        diffuse_bitangents(&b, &mut v, &fixed, Sweeps::Fixed(20));
+        diffuse_bitangents(&b, &[], &mut v, &fixed, Sweeps::Fixed(20));
         for (i, x) in v.iter().enumerate() {
             if b.geom.contains(b.node_coord(i)) {
                 assert!(x.y.abs() > 0.999, "{x}: opposite signs must not cancel");

@@ -72,6 +72,8 @@ pub struct LevelStats {
     pub dense: bool,
     /// Allocated bricks.
     pub bricks: usize,
+    /// Bricks the sweeps ran on (near constraints).
+    pub active_bricks: usize,
     /// Voxelized nodes.
     pub constraints: usize,
     /// Seed nodes.
@@ -224,6 +226,9 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
         return Ok(Volume { stats, ..Default::default() });
     };
     let behind = -(p.band + 2.0) * geoms[first_seeded].h;
+    let finest = features.proxy(p.ribbon, p.ribbon, 0.5 * p.voxel, 0.0);
+    let uniform_noise = finest.vertices.windows(2).all(|w| w[0].noise == w[1].noise);
+    drop(finest);
     let mut seen_seeds = false;
     let mut levels: Vec<Bricks> = Vec::new();
     let (mut n_ch, mut b_ch, mut r_ch, mut s_ch) = (Vec::<Vec<Vec3>>::new(), Vec::<Vec<Vec3>>::new(), Vec::<Vec<Vec2>>::new(), Vec::<Vec<f32>>::new());
@@ -265,6 +270,11 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
         let rim = bricks.rim();
         // Constraint data indices (constraints in missing bricks are dropped).
         let at: Vec<(usize, &Constraint)> = cons.iter().filter_map(|c| bricks.node(c.node).map(|i| (i, c))).filter(|(i, _)| !rim[*i]).collect();
+        // Below the coarsest level, sweeps only run near this level's constraints (one
+        // brick around them): elsewhere the prolonged coarse solution already is the
+        // smooth solution, and a sweep would not change it.
+        let active = if first { Vec::new() } else { active_bricks(&bricks, &at) };
+        ls.active_bricks = if first { bricks.len() } else { active.iter().filter(|&&a| a).count() };
         let sweeps = if first {
             Sweeps::Converge {
                 tol: 1e-4,
@@ -297,14 +307,17 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
         t.reset += clock.elapsed();
 
         let clock = Instant::now();
-        ls.normal_sweeps = diffuse_normals(&bricks, &mut n, &fixed_n, p.k, sweeps);
+        ls.normal_sweeps = diffuse_normals(&bricks, &active, &mut n, &fixed_n, p.k, sweeps);
         if streamline {
-            ls.bitangent_sweeps = diffuse_bitangents(&bricks, &mut b, &fixed_b, sweeps);
+            ls.bitangent_sweeps = diffuse_bitangents(&bricks, &active, &mut b, &fixed_b, sweeps);
         }
         drop((fixed_n, fixed_b));
         t.guidance += clock.elapsed();
         let clock = Instant::now();
-        ls.noise_sweeps = diffuse_noise(&bricks, &mut r, &fixed_r, sweeps);
+        // Uniform noise parameters are already the solution of Laplace's equation.
+        if !uniform_noise {
+            ls.noise_sweeps = diffuse_noise(&bricks, &active, &mut r, &fixed_r, sweeps);
+        }
         drop(fixed_r);
         t.noise += clock.elapsed();
 
@@ -367,10 +380,10 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
         } else {
             Sweeps::Fixed(p.iterations)
         };
-        ls.relax_sweeps = relax(&bricks, &mut s, &n, &fixed_s, relax_sweeps);
+        ls.relax_sweeps = relax(&bricks, &active, &mut s, &n, &fixed_s, relax_sweeps);
         t.propagate += clock.elapsed();
         let clock = Instant::now();
-        smooth(&bricks, &mut s, &fixed_s, p.smoothing);
+        smooth(&bricks, &active, &mut s, &fixed_s, p.smoothing);
         t.smooth += clock.elapsed();
         kept += total as u64 * kept_bytes(streamline) + bricks.overhead_bytes();
         levels.push(bricks);
@@ -444,6 +457,22 @@ fn band_bricks(levels: &[Bricks], s_ch: &[Vec<f32>], geom: LevelGeom, width: f32
     coords
 }
 
+/// Bricks holding a constraint node and their 26 neighbours.
+fn active_bricks(bricks: &Bricks, at: &[(usize, &Constraint)]) -> Vec<bool> {
+    let mut near = vec![false; bricks.len()];
+    for &(i, _) in at {
+        near[i / BRICK_NODES] = true;
+    }
+    let mut active = near.clone();
+    {
+        let prev = active.clone();
+        for (b, a) in active.iter_mut().enumerate() {
+            *a = *a || bricks.neighbours(b).iter().any(|&k| k != super::sparse::NONE && prev[k as usize]);
+        }
+    }
+    active
+}
+
 /// Ranges and slopes of the channels per brick.
 fn brick_bounds(bricks: &Bricks, s: &[f32], alpha: &[f32], beta: &[f32]) -> Vec<BrickBounds> {
     let g = bricks.geom;
@@ -467,10 +496,16 @@ fn brick_bounds(bricks: &Bricks, s: &[f32], alpha: &[f32], beta: &[f32]) -> Vec<
                 grow(&mut out.s, s[i]);
                 grow(&mut out.alpha, alpha[i]);
                 grow(&mut out.beta, beta[i]);
+                let l = c & 7;
                 for a in 0..3 {
                     let mut e = IVec3::ZERO;
                     e[a] = 1;
-                    if let Some(j) = g.contains(c + e).then(|| bricks.node(c + e)).flatten() {
+                    let next = if l[a] < BRICK - 1 {
+                        Some(i + [1, 8, 64][a])
+                    } else {
+                        bricks.node(c + e)
+                    };
+                    if let Some(j) = next.filter(|_| g.contains(c + e)) {
                         out.grad_s[a] = out.grad_s[a].max((s[j] - s[i]).abs() / g.h);
                         ga[a] = ga[a].max((alpha[j] - alpha[i]).abs() / g.h);
                         gb[a] = gb[a].max((beta[j] - beta[i]).abs() / g.h);

@@ -99,12 +99,13 @@ pub fn waves(bricks: &Bricks, s: &mut [f32], wave: &mut [u16], n: &[Vec3], max_w
 
 /// Jacobi sweeps of the local distance model averaged over the in-domain face
 /// neighbours, with relaxation factor 0.85, on the non-`fixed` nodes.
-pub fn relax(bricks: &Bricks, s: &mut Vec<f32>, n: &[Vec3], fixed: &[bool], sweeps: Sweeps) -> u32 {
+pub fn relax(bricks: &Bricks, active: &[bool], s: &mut Vec<f32>, n: &[Vec3], fixed: &[bool], sweeps: Sweeps) -> u32 {
     let h = bricks.geom.h;
     let dims = bricks.geom.dims;
     const OMEGA: f32 = 0.85;
     jacobi(
         bricks,
+        active,
         s,
         n,
         fixed,
@@ -118,8 +119,8 @@ pub fn relax(bricks: &Bricks, s: &mut Vec<f32>, n: &[Vec3], fixed: &[bool], swee
                     continue;
                 }
                 let q = (i as isize + o) as usize;
-                let nbar = (pn[i] + pn[q]).normalize_or_zero();
-                acc += ps[q] - dir as f32 * h * nbar[axis];
+                // The normal interpolated half-way between the two nodes.
+                acc += ps[q] - dir as f32 * h * 0.5 * (pn[i][axis] + pn[q][axis]);
                 cnt += 1.0;
             }
             if cnt == 0.0 { ps[i] } else { (1.0 - OMEGA) * ps[i] + OMEGA * acc / cnt }
@@ -223,7 +224,7 @@ mod tests {
         let fixed: Vec<bool> = wave.iter().zip(b.rim()).map(|(&w, &r)| w == 1 || r).collect();
         let before = s.clone();
         let mut s2 = s.clone();
-        relax(&b, &mut s2, &n, &fixed, Sweeps::Fixed(5));
+        relax(&b, &[], &mut s2, &n, &fixed, Sweeps::Fixed(5));
         for i in 0..total {
             assert!((s2[i] - before[i]).abs() < 1e-3);
         }

@@ -154,11 +154,13 @@ impl Bricks {
     /// Nodes that are fixed to the coarser levels' values: those with one of their 26
     /// neighbours (inside the domain) in a missing brick, and those outside the domain.
     fn compute_rim(&self) -> Vec<bool> {
-        let dims = self.geom.dims;
         let mut rim = vec![false; self.coords.len() * BRICK_NODES];
         rim.par_chunks_mut(BRICK_NODES).enumerate().for_each(|(b, out)| {
             let base = self.coords[b] * BRICK;
-            let full = self.neighbours[b].iter().all(|&n| n != NONE);
+            let nb = &self.neighbours[b];
+            let full = nb.iter().all(|&n| n != NONE);
+            // Offsets a node at local coordinate l reaches: 0, and ±1 on the brick's faces.
+            let reach = |l: i32| -> (i32, i32) { (if l == 0 { -1 } else { 0 }, if l == BRICK - 1 { 1 } else { 0 }) };
             for z in 0..BRICK {
                 for y in 0..BRICK {
                     for x in 0..BRICK {
@@ -168,13 +170,15 @@ impl Bricks {
                         } else if full {
                             false
                         } else {
-                            let lo = (g - IVec3::ONE).max(IVec3::ZERO);
-                            let hi = (g + IVec3::ONE).min(dims - IVec3::ONE);
+                            let (rx, ry, rz) = (reach(x), reach(y), reach(z));
                             let mut missing = false;
-                            for nz in lo.z..=hi.z {
-                                for ny in lo.y..=hi.y {
-                                    for nx in lo.x..=hi.x {
-                                        missing |= self.brick(IVec3::new(nx, ny, nz) >> 3) == NONE;
+                            for dz in rz.0..=rz.1 {
+                                for dy in ry.0..=ry.1 {
+                                    for dx in rx.0..=rx.1 {
+                                        let d = IVec3::new(dx, dy, dz);
+                                        // Only neighbours inside the domain count.
+                                        let inside = self.geom.contains(g + d);
+                                        missing |= inside && nb[((dx + 1) + 3 * (dy + 1) + 9 * (dz + 1)) as usize] == NONE;
                                     }
                                 }
                             }
@@ -258,22 +262,37 @@ impl Bricks {
             }
         }
         let nb = &self.neighbours[b];
+        let own = &data[b * BRICK_NODES..(b + 1) * BRICK_NODES];
+        // A node of the brick at offset (dx, dy, dz), local (lx, ly, lz); the nearest own
+        // node when that brick is missing.
+        let at = |dx: i32, dy: i32, dz: i32, lx: i32, ly: i32, lz: i32| -> T {
+            let n = nb[((dx + 1) + 3 * (dy + 1) + 9 * (dz + 1)) as usize];
+            if n == NONE {
+                let f = |d: i32, l: i32| if d < 0 { 0 } else if d > 0 { 7 } else { l };
+                own[local(IVec3::new(f(dx, lx), f(dy, ly), f(dz, lz)))]
+            } else {
+                data[n as usize * BRICK_NODES + local(IVec3::new(lx, ly, lz))]
+            }
+        };
+        let (x0, x9) = (ax[0][0], ax[0][PAD - 1]);
+        let inner_x = (1..PAD - 1).all(|p| ax[0][p] == (0, p as i32 - 1));
         let mut k = 0;
         for &(dz, lz) in &ax[2] {
             for &(dy, ly) in &ax[1] {
-                for &(dx, lx) in &ax[0] {
-                    let n = nb[((dx + 1) + 3 * (dy + 1) + 9 * (dz + 1)) as usize];
-                    pad[k] = if n == NONE {
-                        let l = IVec3::new(lx, ly, lz);
-                        let own = IVec3::new(dx, dy, dz);
-                        // The nearest node of `b` along the missing direction.
-                        let l = IVec3::select(own.cmplt(IVec3::ZERO), IVec3::ZERO, IVec3::select(own.cmpgt(IVec3::ZERO), IVec3::splat(7), l));
-                        data[b * BRICK_NODES + local(l)]
-                    } else {
-                        data[n as usize * BRICK_NODES + local(IVec3::new(lx, ly, lz))]
-                    };
-                    k += 1;
+                pad[k] = at(x0.0, dy, dz, x0.1, ly, lz);
+                // The eight middle nodes of a row come from one brick.
+                let n = nb[(1 + 3 * (dy + 1) + 9 * (dz + 1)) as usize];
+                if inner_x && n != NONE {
+                    let start = n as usize * BRICK_NODES + local(IVec3::new(0, ly, lz));
+                    pad[k + 1..k + 9].copy_from_slice(&data[start..start + 8]);
+                } else {
+                    for p in 1..PAD - 1 {
+                        let (dx, lx) = ax[0][p];
+                        pad[k + p] = at(dx, dy, dz, lx, ly, lz);
+                    }
                 }
+                pad[k + PAD - 1] = at(x9.0, dy, dz, x9.1, ly, lz);
+                k += PAD;
             }
         }
     }
