@@ -16,7 +16,11 @@ fn dir() -> PathBuf {
 
 fn load(name: &str) -> (FeatureVolumeSpec, Features) {
     let spec: FeatureVolumeSpec = load_ron(&dir().join(format!("{name}.ron"))).unwrap();
-    let f = spec.feature_set(&dir()).unwrap().resolve(&|_| None).unwrap();
+    let f = spec
+        .feature_set(&dir())
+        .unwrap()
+        .resolve(&|_| None)
+        .unwrap();
     (spec, f)
 }
 
@@ -40,7 +44,10 @@ fn noisy_ridge() -> SField {
 struct Rng(u64);
 impl Rng {
     fn f(&mut self) -> f32 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (self.0 >> 40) as f32 / (1u64 << 24) as f32
     }
     fn point(&mut self, b: &Aabb) -> Vec3 {
@@ -60,13 +67,23 @@ fn check_soundness(f: &SField, seed: u64, loose: f32) {
     for _ in 0..3000 {
         // Lipschitz on random pairs, some close, some far, some outside the support.
         let a = rng.point(&around);
-        let b = if rng.f() < 0.5 { a + (Vec3::new(rng.f(), rng.f(), rng.f()) - 0.5) * 3.0 } else { rng.point(&around) };
+        let b = if rng.f() < 0.5 {
+            a + (Vec3::new(rng.f(), rng.f(), rng.f()) - 0.5) * 3.0
+        } else {
+            rng.point(&around)
+        };
         let (fa, fb) = (f.value(a), f.value(b));
         let d = a.distance(b).max(1e-6);
         max_ratio = max_ratio.max((fa - fb).abs() / d);
-        assert!((fa - fb).abs() <= lip * d + 1e-5, "global Lipschitz {lip} broken: {fa} {fb} over {d}");
+        assert!(
+            (fa - fb).abs() <= lip * d + 1e-5,
+            "global Lipschitz {lip} broken: {fa} {fb} over {d}"
+        );
         let seg = f.lipschitz_segment(a, b);
-        assert!((fa - fb).abs() <= seg * d + 1e-5, "segment Lipschitz {seg} broken");
+        assert!(
+            (fa - fb).abs() <= seg * d + 1e-5,
+            "segment Lipschitz {seg} broken"
+        );
     }
     let _ = max_ratio;
     // Near the surface, the box bound is within a sane factor of the true slope.
@@ -79,10 +96,19 @@ fn check_soundness(f: &SField, seed: u64, loose: f32) {
         }
     }
     ratios.sort_by(f32::total_cmp);
-    assert!(ratios.len() > 10 && ratios[0] >= 1.0 - 1e-3, "box bound below the gradient: {:?}", ratios.first());
+    assert!(
+        ratios.len() > 10 && ratios[0] >= 1.0 - 1e-3,
+        "box bound below the gradient: {:?}",
+        ratios.first()
+    );
     let median = ratios[ratios.len() / 2];
-    eprintln!("Lipschitz box bound / gradient near the surface: median {median:.2}, global bound {lip:.2}");
-    assert!(median < loose, "box Lipschitz bound too loose (median ratio {median})");
+    eprintln!(
+        "Lipschitz box bound / gradient near the surface: median {median:.2}, global bound {lip:.2}"
+    );
+    assert!(
+        median < loose,
+        "box Lipschitz bound too loose (median ratio {median})"
+    );
     for _ in 0..300 {
         // Intervals and box Lipschitz bounds over random boxes of all sizes.
         let c = rng.point(&around);
@@ -96,7 +122,10 @@ fn check_soundness(f: &SField, seed: u64, loose: f32) {
             let v = f.value(p);
             assert!(iv.contains(v), "interval {iv:?} misses {v} at {p} in {b:?}");
             if let Some((q, w)) = prev {
-                assert!((v - w).abs() <= lb * p.distance(q) + 1e-5, "box Lipschitz {lb} broken in {b:?}");
+                assert!(
+                    (v - w).abs() <= lb * p.distance(q) + 1e-5,
+                    "box Lipschitz {lb} broken in {b:?}"
+                );
             }
             prev = Some((p, v));
         }
@@ -119,7 +148,10 @@ fn check_soundness(f: &SField, seed: u64, loose: f32) {
             f.value(p + Vec3::Z * 2.0 * e) - f.value(p - Vec3::Z * 2.0 * e),
         ) / (4.0 * e);
         if (fd - fd2).length() < 1e-3 * (1.0 + fd.length()) {
-            assert!((fd - g).length() < 2e-2 * (1.0 + g.length()), "gradient {g} vs differences {fd} at {p}");
+            assert!(
+                (fd - g).length() < 2e-2 * (1.0 + g.length()),
+                "gradient {g} vs differences {fd} at {p}"
+            );
         }
     }
 }
@@ -166,7 +198,10 @@ fn z_bands_contain_the_surface() {
                 let now = f.value(xy.extend(z)) > T;
                 if now != last {
                     let zc = z + 0.5 * (d.size().z + 2.0) / 400.0;
-                    assert!(bands.as_slice().iter().any(|b| b.dilate(0.2).contains(zc)), "crossing at z = {zc} outside {bands:?}");
+                    assert!(
+                        bands.as_slice().iter().any(|b| b.dilate(0.2).contains(zc)),
+                        "crossing at z = {zc} outside {bands:?}"
+                    );
                 }
                 last = now;
             }
@@ -178,12 +213,23 @@ fn z_bands_contain_the_surface() {
 fn deterministic_whatever_the_thread_count() {
     let (spec, f) = load("ridges");
     let (p, _) = spec.params(0, 1 << 32);
-    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| run(&f, &p).unwrap());
-    let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap().install(|| run(&f, &p).unwrap());
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(|| run(&f, &p).unwrap());
+    let three = rayon::ThreadPoolBuilder::new()
+        .num_threads(3)
+        .build()
+        .unwrap()
+        .install(|| run(&f, &p).unwrap());
     assert_eq!(one.levels.len(), three.levels.len());
     for l in 0..one.levels.len() {
         assert_eq!(one.levels[l].coords(), three.levels[l].coords());
-        let (a, b): (Vec<u32>, Vec<u32>) = (one.s[l].iter().map(|x| x.to_bits()).collect(), three.s[l].iter().map(|x| x.to_bits()).collect());
+        let (a, b): (Vec<u32>, Vec<u32>) = (
+            one.s[l].iter().map(|x| x.to_bits()).collect(),
+            three.s[l].iter().map(|x| x.to_bits()).collect(),
+        );
         assert!(a == b, "level {l} differs");
     }
 }
@@ -194,12 +240,22 @@ fn builds_are_cached_by_content() {
     let a = spec.build_features(&f, 0, 1 << 32).unwrap();
     let t = std::time::Instant::now();
     let b = spec.build_features(&f, 0, 1 << 32).unwrap();
-    assert!(t.elapsed().as_millis() < 50, "second build took {:?}", t.elapsed());
-    assert!(std::ptr::eq(a.levels().as_ptr(), b.levels().as_ptr()), "the same volume is shared");
+    assert!(
+        t.elapsed().as_millis() < 50,
+        "second build took {:?}",
+        t.elapsed()
+    );
+    assert!(
+        std::ptr::eq(a.levels().as_ptr(), b.levels().as_ptr()),
+        "the same volume is shared"
+    );
     let mut g = f.clone();
     g.curves[0].constraints[0].left = -g.curves[0].constraints[0].left;
     let c = spec.build_features(&g, 0, 1 << 32).unwrap();
-    assert!(!std::ptr::eq(a.levels().as_ptr(), c.levels().as_ptr()), "changed curves rebuild");
+    assert!(
+        !std::ptr::eq(a.levels().as_ptr(), c.levels().as_ptr()),
+        "changed curves rebuild"
+    );
 }
 
 #[test]
@@ -214,14 +270,29 @@ fn tunnel_in_a_1024_cube_stays_under_a_gigabyte() {
         domain: ((0, 0, 0), (1023, 1023, 1023)),
         voxel: 1.0,
     )"#;
-    let spec: FeatureVolumeSpec = karstic::curves::spec::parse_ron(text, Path::new("<test>")).unwrap();
+    let spec: FeatureVolumeSpec =
+        karstic::curves::spec::parse_ron(text, Path::new("<test>")).unwrap();
     let f = spec.build(Path::new("."), 0).unwrap();
     let st = f.stats();
     let fine = st.levels.last().unwrap();
     assert_eq!(fine.dims, glam::IVec3::splat(1024));
     assert!(st.peak_bytes < 1 << 30, "peak {} bytes", st.peak_bytes);
-    eprintln!("peak {} MiB, field {} MiB, fine bricks {}", st.peak_bytes >> 20, st.field_bytes >> 20, fine.bricks);
-    let path = &spec.feature_set(Path::new(".")).unwrap().resolve(&|_| None).unwrap().tunnels[0].path;
+    eprintln!(
+        "peak {} MiB, field {} MiB, fine bricks {}",
+        st.peak_bytes >> 20,
+        st.field_bytes >> 20,
+        fine.bricks
+    );
+    let path = &spec
+        .feature_set(Path::new("."))
+        .unwrap()
+        .resolve(&|_| None)
+        .unwrap()
+        .tunnels[0]
+        .path;
     assert!(f.value(path.eval(0.5)) < T, "the tunnel is open");
-    assert!(f.value(path.eval(0.5) + Vec3::Z * 30.0) > T, "rock above it");
+    assert!(
+        f.value(path.eval(0.5) + Vec3::Z * 30.0) > T,
+        "rock above it"
+    );
 }

@@ -21,9 +21,17 @@ struct Scene {
 
 fn scene(name: &str) -> Scene {
     let spec: FeatureVolumeSpec = load_ron(&dir().join(format!("{name}.ron"))).unwrap();
-    let features = spec.feature_set(&dir()).unwrap().resolve(&|_| None).unwrap();
+    let features = spec
+        .feature_set(&dir())
+        .unwrap()
+        .resolve(&|_| None)
+        .unwrap();
     let field = spec.build(&dir(), 7).unwrap();
-    Scene { spec, features, field }
+    Scene {
+        spec,
+        features,
+        field,
+    }
 }
 
 impl Scene {
@@ -59,12 +67,21 @@ impl Scene {
             if n == Vec3::ZERO {
                 continue;
             }
-            let (front, back) = (self.field.value(s.pos + n * h), self.field.value(s.pos - n * h));
+            let (front, back) = (
+                self.field.value(s.pos + n * h),
+                self.field.value(s.pos - n * h),
+            );
             if !(front < T && back > T) {
                 bad.push((s.pos, front, back));
             }
         }
-        assert!(bad.is_empty(), "{} of {} samples miss the surface: {:?}", bad.len(), samples.len(), &bad[..bad.len().min(8)]);
+        assert!(
+            bad.is_empty(),
+            "{} of {} samples miss the surface: {:?}",
+            bad.len(),
+            samples.len(),
+            &bad[..bad.len().min(8)]
+        );
     }
 
     /// At the Constraint Points of the scene's explicit seed curves, and at the points in
@@ -77,10 +94,18 @@ impl Scene {
         let seeds: Vec<_> = self.features.curves.iter().filter(|c| c.seed).collect();
         // Where two curves meet their constraints conflict; those points are skipped.
         let near_other = |k: usize, p: Vec3| {
-            seeds.iter().enumerate().any(|(j, o)| j != k && (0..=200).any(|i| o.sample(i as f32 / 200.0).pos.distance(p) < 6.0 * self.h()))
+            seeds.iter().enumerate().any(|(j, o)| {
+                j != k
+                    && (0..=200)
+                        .any(|i| o.sample(i as f32 / 200.0).pos.distance(p) < 6.0 * self.h())
+            })
         };
         for (k, c) in seeds.iter().enumerate() {
-            let ts = c.constraints.iter().map(|cp| cp.t).chain((0..=40).map(|i| i as f32 / 40.0));
+            let ts = c
+                .constraints
+                .iter()
+                .map(|cp| cp.t)
+                .chain((0..=40).map(|i| i as f32 / 40.0));
             for t in ts {
                 let s = c.sample(t);
                 for (b, want) in [(s.left, s.left_normal()), (s.right, s.right_normal())] {
@@ -99,7 +124,12 @@ impl Scene {
         }
         assert!(n > 0, "no constraint point inside the domain");
         eprintln!("worst normal deviation {:.1}° at {}", worst.0, worst.1);
-        assert!(worst.0 <= deg, "worst normal deviation {:.1}° at {} > {deg}°", worst.0, worst.1);
+        assert!(
+            worst.0 <= deg,
+            "worst normal deviation {:.1}° at {} > {deg}°",
+            worst.0,
+            worst.1
+        );
     }
 
     /// Number of times the vertical line at `(x, y)` crosses the surface, away from the
@@ -144,7 +174,11 @@ fn overhanging_cliff_with_ground() {
     s.assert_constraint_normals(20.0);
     // Under the lip: air above, rock of the lip, air under the overhang, the ground.
     for x in [24.0, 48.0, 72.0] {
-        assert!(s.crossings(x, 33.0) >= 3, "column x = {x} crosses {} times", s.crossings(x, 33.0));
+        assert!(
+            s.crossings(x, 33.0) >= 3,
+            "column x = {x} crosses {} times",
+            s.crossings(x, 33.0)
+        );
     }
 }
 
@@ -170,7 +204,10 @@ fn riverbed() {
     s.assert_constraint_normals(20.0);
     // The river's bottom lies below the land on both sides.
     let top = |y: f32| {
-        (0..256).map(|i| 63.0 - i as f32 * 0.25).find(|&z| s.field.value(Vec3::new(64.0, y, z)) > T).unwrap()
+        (0..256)
+            .map(|i| 63.0 - i as f32 * 0.25)
+            .find(|&z| s.field.value(Vec3::new(64.0, y, z)) > T)
+            .unwrap()
     };
     assert!(top(64.0) < top(24.0) - 8.0 && top(64.0) < top(104.0) - 8.0);
 }
@@ -180,9 +217,17 @@ fn hill() {
     let s = scene("hill");
     s.assert_surface_through_seeds();
     s.assert_constraint_normals(20.0);
-    let top = |x: f32, y: f32| (0..256).map(|i| 63.0 - i as f32 * 0.25).find(|&z| s.field.value(Vec3::new(x, y, z)) > T).unwrap();
+    let top = |x: f32, y: f32| {
+        (0..256)
+            .map(|i| 63.0 - i as f32 * 0.25)
+            .find(|&z| s.field.value(Vec3::new(x, y, z)) > T)
+            .unwrap()
+    };
     eprintln!("hill top {} ground {}", top(64.0, 64.0), top(10.0, 10.0));
-    assert!(top(64.0, 64.0) > top(10.0, 10.0) + 8.0, "the hill rises above the ground");
+    assert!(
+        top(64.0, 64.0) > top(10.0, 10.0) + 8.0,
+        "the hill rises above the ground"
+    );
 }
 
 #[test]
@@ -214,7 +259,10 @@ fn branching_tunnel() {
     s.assert_surface_through_seeds();
     for t in &s.features.tunnels {
         let pts: Vec<Vec3> = (0..=400).map(|i| t.path.eval(i as f32 / 400.0)).collect();
-        assert!(pts.windows(2).all(|w| s.clear(w[0], w[1])), "a tunnel's axis hits rock");
+        assert!(
+            pts.windows(2).all(|w| s.clear(w[0], w[1])),
+            "a tunnel's axis hits rock"
+        );
     }
 }
 
@@ -231,7 +279,11 @@ fn guidance_curves_alone_create_no_surface() {
     let s = scene("guidance");
     assert!(s.field.is_empty());
     for i in 0..1000 {
-        let p = Vec3::new((i % 10) as f32 * 6.3, ((i / 10) % 10) as f32 * 6.3, (i / 100) as f32 * 6.3);
+        let p = Vec3::new(
+            (i % 10) as f32 * 6.3,
+            ((i / 10) % 10) as f32 * 6.3,
+            (i / 100) as f32 * 6.3,
+        );
         assert_eq!(s.field.value(p), 0.0);
     }
 }

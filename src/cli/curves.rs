@@ -66,7 +66,12 @@ fn build(args: BuildArgs) -> anyhow::Result<()> {
     let budget = args.max_memory << 20;
     if let Some(path) = &args.ribbons {
         let features = spec.feature_set(base)?.resolve(&|_| None)?;
-        let mesh = features.proxy(spec.ribbon_width(), spec.ribbon_width(), 0.5 * spec.voxel.0, 0.0);
+        let mesh = features.proxy(
+            spec.ribbon_width(),
+            spec.ribbon_width(),
+            0.5 * spec.voxel.0,
+            0.0,
+        );
         write_atomic(path, |w| mesh.write_obj(w))?;
     }
     let clock = Instant::now();
@@ -108,8 +113,14 @@ pub fn print_stats(st: &Stats, total_ms: f64) {
     ] {
         println!("{name:<20} {:>8.1}", ms(d));
     }
-    println!("{:<20} {:>8.1}  (build incl. cache lookup: {total_ms:.1})", "total", ms(t.total()));
-    println!("level  voxel  dims            dense  bricks  active  seeds  N-sweeps  R-sweeps  waves  relax");
+    println!(
+        "{:<20} {:>8.1}  (build incl. cache lookup: {total_ms:.1})",
+        "total",
+        ms(t.total())
+    );
+    println!(
+        "level  voxel  dims            dense  bricks  active  seeds  N-sweeps  R-sweeps  waves  relax"
+    );
     for l in &st.levels {
         println!(
             "{:>5}  {:>5}  {:<14}  {:>5}  {:>6}  {:>6}  {:>5}  {:>8}  {:>8}  {:>5}  {:>5}",
@@ -131,23 +142,44 @@ pub fn print_stats(st: &Stats, total_ms: f64) {
         st.triangles,
         human_bytes(st.peak_bytes),
         human_bytes(st.field_bytes),
-        if st.empty { "  (no seed: empty field)" } else { "" }
+        if st.empty {
+            "  (no seed: empty field)"
+        } else {
+            ""
+        }
     );
 }
 
 /// Writes the field sampled on the finest grid as a NumPy `.npy` array.
-fn write_npy(field: &SField, spec: &FeatureVolumeSpec, out: &Path, budget: u64) -> anyhow::Result<()> {
+fn write_npy(
+    field: &SField,
+    spec: &FeatureVolumeSpec,
+    out: &Path,
+    budget: u64,
+) -> anyhow::Result<()> {
     let d = field.params().domain;
     let h = spec.voxel.0;
     let n = ((d.size() / h).floor().as_ivec3() + IVec3::ONE).max(IVec3::ONE);
     let count = n.as_u64vec3().element_product();
-    check_budget(format!("a {}x{}x{} field", n.x, n.y, n.z), count * 4, budget)?;
+    check_budget(
+        format!("a {}x{}x{} field", n.x, n.y, n.z),
+        count * 4,
+        budget,
+    )?;
     let mut data = vec![0f32; count as usize];
     let slab = (n.x * n.y) as usize;
     data.par_chunks_mut(slab).enumerate().for_each(|(k, out)| {
-        field.eval_block(d.min + Vec3::new(0.0, 0.0, k as f32 * h), Vec3::splat(h), [n.x as usize, n.y as usize, 1], out);
+        field.eval_block(
+            d.min + Vec3::new(0.0, 0.0, k as f32 * h),
+            Vec3::splat(h),
+            [n.x as usize, n.y as usize, 1],
+            out,
+        );
     });
-    let mut header = format!("{{'descr': '<f4', 'fortran_order': False, 'shape': ({}, {}, {}), }}", n.z, n.y, n.x);
+    let mut header = format!(
+        "{{'descr': '<f4', 'fortran_order': False, 'shape': ({}, {}, {}), }}",
+        n.z, n.y, n.x
+    );
     while (10 + header.len() + 1) % 64 != 0 {
         header.push(' ');
     }

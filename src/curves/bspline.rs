@@ -33,7 +33,11 @@ impl BSpline {
             knots.push(i as f32 / (inner + 1) as f32);
         }
         knots.extend(std::iter::repeat_n(1.0, degree + 1));
-        Some(BSpline { ctrl, knots, degree })
+        Some(BSpline {
+            ctrl,
+            knots,
+            degree,
+        })
     }
 
     /// The control vertices.
@@ -65,7 +69,11 @@ impl BSpline {
             for j in (r..=p).rev() {
                 let i = j + k - p;
                 let den = self.knots[i + 1 + p - r] - self.knots[i];
-                let a = if den > 0.0 { (t - self.knots[i]) / den } else { 0.0 };
+                let a = if den > 0.0 {
+                    (t - self.knots[i]) / den
+                } else {
+                    0.0
+                };
                 d[j] = d[j - 1] * (1.0 - a) + d[j] * a;
             }
         }
@@ -88,7 +96,9 @@ impl BSpline {
     pub fn length(&self, n: usize) -> f32 {
         let n = n.max(1);
         (0..n)
-            .map(|i| (self.eval((i + 1) as f32 / n as f32) - self.eval(i as f32 / n as f32)).length())
+            .map(|i| {
+                (self.eval((i + 1) as f32 / n as f32) - self.eval(i as f32 / n as f32)).length()
+            })
             .sum()
     }
 }
@@ -99,7 +109,13 @@ mod tests {
 
     #[test]
     fn interpolates_end_points_and_degenerates_gracefully() {
-        let c = vec![Vec3::ZERO, Vec3::new(1.0, 2.0, 0.0), Vec3::new(3.0, 2.0, 1.0), Vec3::new(4.0, 0.0, 0.0), Vec3::new(6.0, 1.0, 2.0)];
+        let c = vec![
+            Vec3::ZERO,
+            Vec3::new(1.0, 2.0, 0.0),
+            Vec3::new(3.0, 2.0, 1.0),
+            Vec3::new(4.0, 0.0, 0.0),
+            Vec3::new(6.0, 1.0, 2.0),
+        ];
         let s = BSpline::new(c.clone()).unwrap();
         assert_eq!(s.degree(), 3);
         assert!((s.eval(0.0) - c[0]).length() < 1e-6);

@@ -123,7 +123,12 @@ impl Tunnel {
 
     /// The smallest width or height along the path.
     pub fn section(&self) -> f32 {
-        self.width.0.iter().chain(&self.height.0).map(|k| k.1).fold(f32::INFINITY, f32::min)
+        self.width
+            .0
+            .iter()
+            .chain(&self.height.0)
+            .map(|k| k.1)
+            .fold(f32::INFINITY, f32::min)
     }
 
     /// True when `p` lies inside the tube grown by `margin`.
@@ -149,7 +154,10 @@ impl Tunnel {
 /// True when `p` is outside every tunnel of `tunnels` but the `i`-th (grown by `margin`):
 /// where tunnel `i`'s curves are kept, so that branches open into each other.
 pub fn outside_others(tunnels: &[Tunnel], i: usize, p: Vec3, margin: f32) -> bool {
-    !tunnels.iter().enumerate().any(|(j, t)| j != i && t.contains(p, margin))
+    !tunnels
+        .iter()
+        .enumerate()
+        .any(|(j, t)| j != i && t.contains(p, margin))
 }
 
 /// The ribbon width used for a tunnel: no wider than a quarter of its section, so the
@@ -208,7 +216,11 @@ impl Arch {
         };
         let inset = dir * self.thickness;
         let top = arc(self.from, self.to, base + self.height);
-        let under = arc(self.from + inset, self.to - inset, base + self.height - self.thickness);
+        let under = arc(
+            self.from + inset,
+            self.to - inset,
+            base + self.height - self.thickness,
+        );
         let (c, s) = (self.flank.to_radians().cos(), self.flank.to_radians().sin());
         let along = |spline: BSpline, upper: bool| {
             let n = 24;
@@ -240,9 +252,17 @@ impl Arch {
         };
         let mut out = vec![along(top, true), along(under, false)];
         if let Some(g) = self.ground {
-            let mid = Vec3::new(0.5 * (self.from.x + self.to.x), 0.5 * (self.from.y + self.to.y), base);
+            let mid = Vec3::new(
+                0.5 * (self.from.x + self.to.x),
+                0.5 * (self.from.y + self.to.y),
+                base,
+            );
             // Running along `side`, its horizontal left is `-dir`.
-            out.push(curve_through(vec![mid - side * g, mid + side * g], vec![(-dir, dir); 2], self.noise));
+            out.push(curve_through(
+                vec![mid - side * g, mid + side * g],
+                vec![(-dir, dir); 2],
+                self.noise,
+            ));
         }
         out
     }
@@ -290,7 +310,8 @@ mod tests {
             noise: Vec2::ZERO,
         };
         let branch = Tunnel {
-            path: BSpline::new(vec![Vec3::new(30.0, 0.0, 0.0), Vec3::new(30.0, 40.0, 0.0)]).unwrap(),
+            path: BSpline::new(vec![Vec3::new(30.0, 0.0, 0.0), Vec3::new(30.0, 40.0, 0.0)])
+                .unwrap(),
             ..main.clone()
         };
         let mesh = tunnel_proxies(&[main, branch], 1.0, 1.0, 1.0);
@@ -298,9 +319,15 @@ mod tests {
         // open where the branch leaves, the branch has no walls inside the main tunnel.
         for v in &mesh.vertices {
             let p = v.pos;
-            assert!(!(p.y > 0.0 && p.y < 3.0 && (p.x - 30.0).abs() < 2.5 && p.z.abs() < 2.0), "{p}");
+            assert!(
+                !(p.y > 0.0 && p.y < 3.0 && (p.x - 30.0).abs() < 2.5 && p.z.abs() < 2.0),
+                "{p}"
+            );
         }
-        assert!(mesh.vertices.iter().any(|v| v.pos.y > 10.0), "the branch has walls");
+        assert!(
+            mesh.vertices.iter().any(|v| v.pos.y > 10.0),
+            "the branch has walls"
+        );
     }
 
     #[test]
@@ -317,7 +344,10 @@ mod tests {
         let c = a.curves();
         assert_eq!(c.len(), 3);
         let top = c[0].sample(0.5);
-        assert!((top.pos - Vec3::new(20.0, 0.0, 20.0)).length() < 1e-3, "{top:?}");
+        assert!(
+            (top.pos - Vec3::new(20.0, 0.0, 20.0)).length() < 1e-3,
+            "{top:?}"
+        );
         assert!(top.left_normal().z > 0.5 && top.right_normal().z > 0.5);
         let under = c[1].sample(0.5);
         assert!((under.pos.z - 15.0).abs() < 1e-3);

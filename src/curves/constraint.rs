@@ -103,7 +103,8 @@ impl FeatureCurve {
             tangent: v,
             left: blend(p0.left, p1.left),
             right: blend(p0.right, p1.right),
-            noise: Vec2::new(p0.amplitude, p0.roughness).lerp(Vec2::new(p1.amplitude, p1.roughness), a),
+            noise: Vec2::new(p0.amplitude, p0.roughness)
+                .lerp(Vec2::new(p1.amplitude, p1.roughness), a),
         }
     }
 
@@ -157,7 +158,13 @@ mod tests {
     use super::*;
 
     fn cp(t: f32, left: Vec3, right: Vec3) -> ConstraintPoint {
-        ConstraintPoint { t, left, right, amplitude: t, roughness: 1.0 }
+        ConstraintPoint {
+            t,
+            left,
+            right,
+            amplitude: t,
+            roughness: 1.0,
+        }
     }
 
     #[test]
@@ -173,7 +180,10 @@ mod tests {
         let left = Vec3::new(0.0, 1.0, 0.0);
         let curve = FeatureCurve {
             spline,
-            constraints: vec![cp(0.0, left, -left), cp(1.0, Vec3::new(-1.0, 0.0, 0.0), Vec3::X)],
+            constraints: vec![
+                cp(0.0, left, -left),
+                cp(1.0, Vec3::new(-1.0, 0.0, 0.0), Vec3::X),
+            ],
             seed: true,
             ribbon: None,
         };
@@ -199,16 +209,24 @@ mod tests {
             noise: Vec2::ZERO,
         };
         let flat = s(0.0, 0.0);
-        assert!((flat.left - Vec3::Y).length() < 1e-6 && (flat.left_normal() - Vec3::Z).length() < 1e-6);
+        assert!(
+            (flat.left - Vec3::Y).length() < 1e-6 && (flat.left_normal() - Vec3::Z).length() < 1e-6
+        );
         assert!((flat.right_normal() - Vec3::Z).length() < 1e-6);
         let cliff = s(0.0, 90.0);
         assert!((cliff.right - -Vec3::Z).length() < 1e-6);
-        assert!((cliff.right_normal() - -Vec3::Y).length() < 1e-6, "the face looks out to the right");
+        assert!(
+            (cliff.right_normal() - -Vec3::Y).length() < 1e-6,
+            "the face looks out to the right"
+        );
         let ceiling = s(180.0, 180.0);
         assert!((ceiling.left_normal() - -Vec3::Z).length() < 1e-6);
         assert!((ceiling.right_normal() - -Vec3::Z).length() < 1e-6);
         let over = s(0.0, 110.0);
-        assert!(over.right_normal().z < -0.3, "an overhanging face looks down");
+        assert!(
+            over.right_normal().z < -0.3,
+            "an overhanging face looks down"
+        );
         assert!(slope_bitangent(Vec3::Z, true, 0.0).is_none());
     }
 

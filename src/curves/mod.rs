@@ -86,7 +86,11 @@ impl Features {
     /// Tunnels whose section is at least `min_section` metres (smaller ones are left out
     /// of coarse levels, whose cells would hold their floor and ceiling at once).
     pub fn tunnels_from(&self, min_section: f32) -> Vec<Tunnel> {
-        self.tunnels.iter().filter(|t| t.section() >= min_section).cloned().collect()
+        self.tunnels
+            .iter()
+            .filter(|t| t.section() >= min_section)
+            .cloned()
+            .collect()
     }
 
     /// True when some seed primitive is present once tunnels thinner than `min_section`
@@ -116,7 +120,12 @@ impl Features {
                 mesh.append(&curve_ribbon(&c, ribbon, guide.max(ribbon), segment, &all));
             }
         }
-        mesh.append(&tunnel_proxies(&self.tunnels_from(min_section), ribbon, guide.max(ribbon), segment));
+        mesh.append(&tunnel_proxies(
+            &self.tunnels_from(min_section),
+            ribbon,
+            guide.max(ribbon),
+            segment,
+        ));
         for q in &self.quads {
             mesh.append(&q.proxy());
         }
@@ -136,14 +145,23 @@ impl Features {
         let mut push = |c: &FeatureCurve, keep: &dyn Fn(glam::Vec3) -> bool| {
             if c.seed {
                 let n = ((c.spline.length(64) / step).ceil() as usize).max(1);
-                out.extend((0..=n).map(|i| c.sample(i as f32 / n as f32)).filter(|s| keep(s.pos)));
+                out.extend(
+                    (0..=n)
+                        .map(|i| c.sample(i as f32 / n as f32))
+                        .filter(|s| keep(s.pos)),
+                );
             }
         };
         self.curves.iter().for_each(|c| push(c, &|_| true));
-        self.arches.iter().flat_map(|a| a.curves()).for_each(|c| push(&c, &|_| true));
+        self.arches
+            .iter()
+            .flat_map(|a| a.curves())
+            .for_each(|c| push(&c, &|_| true));
         for (i, t) in self.tunnels.iter().enumerate() {
             for c in t.curves() {
-                push(&c, &|p| compound::outside_others(&self.tunnels, i, p, ribbon));
+                push(&c, &|p| {
+                    compound::outside_others(&self.tunnels, i, p, ribbon)
+                });
             }
         }
         out

@@ -60,10 +60,11 @@ impl ProxyMesh {
     pub fn append(&mut self, other: &ProxyMesh) {
         let base = self.vertices.len() as u32;
         self.vertices.extend_from_slice(&other.vertices);
-        self.triangles.extend(other.triangles.iter().map(|t| ProxyTriangle {
-            v: t.v.map(|i| i + base),
-            ..*t
-        }));
+        self.triangles
+            .extend(other.triangles.iter().map(|t| ProxyTriangle {
+                v: t.v.map(|i| i + base),
+                ..*t
+            }));
     }
 
     /// Adds the quad `a b c d` (in order around it) as two triangles.
@@ -110,7 +111,13 @@ impl ProxyMesh {
 /// only, no surface) when `guide > width` — coarse levels of the pipeline use that so a
 /// curve's two sides stay distinct in cells larger than its ribbons. Segments whose both
 /// end points fail `keep` are left out (used by tunnels to open junctions).
-pub fn curve_ribbon(curve: &FeatureCurve, width: f32, guide: f32, max_segment: f32, keep: &dyn Fn(Vec3) -> bool) -> ProxyMesh {
+pub fn curve_ribbon(
+    curve: &FeatureCurve,
+    width: f32,
+    guide: f32,
+    max_segment: f32,
+    keep: &dyn Fn(Vec3) -> bool,
+) -> ProxyMesh {
     let len = curve.spline.length(64);
     let n = ((len / max_segment).ceil() as usize).clamp(1, 1 << 16);
     let samples: Vec<_> = (0..=n).map(|i| curve.sample(i as f32 / n as f32)).collect();
@@ -135,12 +142,22 @@ pub fn curve_ribbon(curve: &FeatureCurve, width: f32, guide: f32, max_segment: f
                 continue;
             }
             mesh.push_quad(
-                [vert(s0, s0.left, l0, from), vert(s1, s1.left, l1, from), vert(s1, s1.left, l1, to), vert(s0, s0.left, l0, to)],
+                [
+                    vert(s0, s0.left, l0, from),
+                    vert(s1, s1.left, l1, from),
+                    vert(s1, s1.left, l1, to),
+                    vert(s0, s0.left, l0, to),
+                ],
                 Side::Left,
                 seed,
             );
             mesh.push_quad(
-                [vert(s0, s0.right, r0, from), vert(s0, s0.right, r0, to), vert(s1, s1.right, r1, to), vert(s1, s1.right, r1, from)],
+                [
+                    vert(s0, s0.right, r0, from),
+                    vert(s0, s0.right, r0, to),
+                    vert(s1, s1.right, r1, to),
+                    vert(s1, s1.right, r1, from),
+                ],
                 Side::Right,
                 seed,
             );

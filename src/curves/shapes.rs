@@ -44,7 +44,9 @@ impl Quad {
     pub fn proxy(&self) -> ProxyMesh {
         let n = self.normal();
         let [a, b, ..] = self.corners;
-        let bt = (b - a).reject_from(n).normalize_or(n.any_orthonormal_vector());
+        let bt = (b - a)
+            .reject_from(n)
+            .normalize_or(n.any_orthonormal_vector());
         let mut mesh = ProxyMesh::default();
         mesh.push_quad(
             self.corners.map(|pos| ProxyVertex {
@@ -67,7 +69,8 @@ impl Disc {
         let n = self.normal.normalize();
         let u = n.any_orthonormal_vector();
         let v = n.cross(u);
-        let k = ((std::f32::consts::TAU * self.radius / max_segment).ceil() as usize).clamp(8, 4096);
+        let k =
+            ((std::f32::consts::TAU * self.radius / max_segment).ceil() as usize).clamp(8, 4096);
         let mut mesh = ProxyMesh::default();
         mesh.vertices.push(ProxyVertex {
             pos: self.center,

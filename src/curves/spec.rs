@@ -29,7 +29,7 @@ use super::shapes::{Disc, Quad};
 use super::{BSpline, CurveError, Features};
 use crate::field::Aabb;
 use crate::scene::{Dir3, Finite, NonNegative, P3, Positive, Unit};
-use crate::voxel::{FieldParams, Fbm, Params, SField, run_cached};
+use crate::voxel::{Fbm, FieldParams, Params, SField, run_cached};
 
 /// A point: absolute, or anchored to the ground.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -358,7 +358,10 @@ impl Resolver<'_> {
                     Some(h) if h.is_finite() => Ok(xy.extend(h + off.0)),
                     _ => Err(CurveError::invalid(
                         what(),
-                        format!("Ground({}, {}, {}) has no ground height there (no terrain given, or outside it)", x, y, off),
+                        format!(
+                            "Ground({}, {}, {}) has no ground height there (no terrain given, or outside it)",
+                            x, y, off
+                        ),
                     )),
                 }
             }
@@ -380,15 +383,27 @@ fn label(kind: &str, i: usize, name: &Option<String>) -> String {
     }
 }
 
-fn bitangent(b: &Bitangent, tangent: Vec3, left: bool, what: &dyn Fn() -> String) -> Result<Vec3, CurveError> {
+fn bitangent(
+    b: &Bitangent,
+    tangent: Vec3,
+    left: bool,
+    what: &dyn Fn() -> String,
+) -> Result<Vec3, CurveError> {
     let v = match *b {
-        Bitangent::Slope(deg) => slope_bitangent(tangent, left, deg.0)
-            .ok_or_else(|| CurveError::invalid(what(), "Slope(..) needs a non-vertical curve here; use Dir(x, y, z)"))?,
+        Bitangent::Slope(deg) => slope_bitangent(tangent, left, deg.0).ok_or_else(|| {
+            CurveError::invalid(
+                what(),
+                "Slope(..) needs a non-vertical curve here; use Dir(x, y, z)",
+            )
+        })?,
         Bitangent::Dir(x, y, z) => Vec3::new(x.0, y.0, z.0),
     };
     let p = v.reject_from_normalized(tangent);
     if p.length() < 1e-3 * v.length().max(1e-12) {
-        return Err(CurveError::invalid(what(), "bitangent is zero or parallel to the curve"));
+        return Err(CurveError::invalid(
+            what(),
+            "bitangent is zero or parallel to the curve",
+        ));
     }
     Ok(reproject(p, tangent))
 }
@@ -396,10 +411,16 @@ fn bitangent(b: &Bitangent, tangent: Vec3, left: bool, what: &dyn Fn() -> String
 fn profile(p: &ProfileSpec, what: &dyn Fn() -> String) -> Result<Profile, CurveError> {
     match p {
         ProfileSpec::Const(v) => Ok(Profile::constant(v.0)),
-        ProfileSpec::Keys(k) if k.is_empty() => Err(CurveError::invalid(what(), "a profile needs at least one key")),
+        ProfileSpec::Keys(k) if k.is_empty() => Err(CurveError::invalid(
+            what(),
+            "a profile needs at least one key",
+        )),
         ProfileSpec::Keys(k) => {
             if k.windows(2).any(|w| w[1].0.0 < w[0].0.0) {
-                return Err(CurveError::invalid(what(), "profile keys must be sorted by t"));
+                return Err(CurveError::invalid(
+                    what(),
+                    "profile keys must be sorted by t",
+                ));
             }
             Ok(Profile(k.iter().map(|(t, v)| (t.0, v.0)).collect()))
         }
@@ -408,7 +429,10 @@ fn profile(p: &ProfileSpec, what: &dyn Fn() -> String) -> Result<Profile, CurveE
 
 fn spline(points: Vec<Vec3>, what: &dyn Fn() -> String) -> Result<BSpline, CurveError> {
     if points.windows(2).all(|w| w[0].distance(w[1]) < 1e-6) {
-        return Err(CurveError::invalid(what(), "needs at least two distinct points"));
+        return Err(CurveError::invalid(
+            what(),
+            "needs at least two distinct points",
+        ));
     }
     BSpline::new(points).ok_or_else(|| CurveError::invalid(what(), "needs at least two points"))
 }
@@ -423,13 +447,19 @@ impl FeatureSet {
             let what = || label("curve", i, &c.name);
             let spline = spline(r.points(&c.points, &what)?, &what)?;
             if c.constraints.is_empty() {
-                return Err(CurveError::invalid(what(), "needs at least one Constraint Point"));
+                return Err(CurveError::invalid(
+                    what(),
+                    "needs at least one Constraint Point",
+                ));
             }
             let mut constraints = Vec::with_capacity(c.constraints.len());
             for (k, cs) in c.constraints.iter().enumerate() {
                 let cwhat = || format!("{} constraint {k}", what());
                 if k > 0 && cs.t.0 < c.constraints[k - 1].t.0 {
-                    return Err(CurveError::invalid(cwhat(), "Constraint Points must be sorted by t"));
+                    return Err(CurveError::invalid(
+                        cwhat(),
+                        "Constraint Points must be sorted by t",
+                    ));
                 }
                 let v = spline.tangent(cs.t.0);
                 constraints.push(ConstraintPoint {
@@ -456,7 +486,10 @@ impl FeatureSet {
                 noise: Vec2::new(q.amplitude.0, q.roughness.0),
             };
             if quad.normal() == Vec3::ZERO {
-                return Err(CurveError::invalid(what(), "the corners are degenerate (no normal)"));
+                return Err(CurveError::invalid(
+                    what(),
+                    "the corners are degenerate (no normal)",
+                ));
             }
             out.quads.push(quad);
         }
@@ -483,10 +516,16 @@ impl FeatureSet {
             let what = || format!("arch {i}");
             let (from, to) = (r.point(&a.from, &what)?, r.point(&a.to, &what)?);
             if Vec2::new(to.x - from.x, to.y - from.y).length() < 1e-3 {
-                return Err(CurveError::invalid(what(), "the feet must be apart horizontally"));
+                return Err(CurveError::invalid(
+                    what(),
+                    "the feet must be apart horizontally",
+                ));
             }
             if a.thickness.0 >= a.height.0 {
-                return Err(CurveError::invalid(what(), "thickness must be less than height"));
+                return Err(CurveError::invalid(
+                    what(),
+                    "thickness must be less than height",
+                ));
             }
             out.arches.push(Arch {
                 from,
@@ -582,25 +621,42 @@ impl FeatureVolumeSpec {
     /// Runs the pipeline (or takes its cached result) and returns the S-field primitive.
     /// Curve files are found relative to `base_dir`.
     pub fn build(&self, base_dir: &Path, seed: u32) -> Result<SField, CurveError> {
-        self.build_with(base_dir, &BuildOptions { seed, ..Default::default() })
+        self.build_with(
+            base_dir,
+            &BuildOptions {
+                seed,
+                ..Default::default()
+            },
+        )
     }
 
     /// [`FeatureVolumeSpec::build`] with a ground callback and a memory budget.
-    pub fn build_with(&self, base_dir: &Path, opts: &BuildOptions<'_>) -> Result<SField, CurveError> {
+    pub fn build_with(
+        &self,
+        base_dir: &Path,
+        opts: &BuildOptions<'_>,
+    ) -> Result<SField, CurveError> {
         let no_ground = |_: Vec2| None;
         let set = self.feature_set(base_dir)?;
-        let features = set.resolve(opts.ground.unwrap_or(&no_ground)).map_err(|e| match e {
-            CurveError::Invalid { what, msg } => CurveError::Invalid {
-                what: format!("{}: {what}", self.label()),
-                msg,
-            },
-            e => e,
-        })?;
+        let features = set
+            .resolve(opts.ground.unwrap_or(&no_ground))
+            .map_err(|e| match e {
+                CurveError::Invalid { what, msg } => CurveError::Invalid {
+                    what: format!("{}: {what}", self.label()),
+                    msg,
+                },
+                e => e,
+            })?;
         self.build_features(&features, opts.seed, opts.max_memory)
     }
 
     /// Runs the pipeline on resolved primitives.
-    pub fn build_features(&self, features: &Features, seed: u32, max_memory: u64) -> Result<SField, CurveError> {
+    pub fn build_features(
+        &self,
+        features: &Features,
+        seed: u32,
+        max_memory: u64,
+    ) -> Result<SField, CurveError> {
         let (p, f) = self.params(seed, max_memory);
         let (vol, _) = run_cached(features, &p)?;
         Ok(SField::new(vol, f))
@@ -641,20 +697,44 @@ mod tests {
         assert_eq!(f.tunnels.len(), 1);
         let none = |_: Vec2| None;
         let e = set.resolve(&none).unwrap_err().to_string();
-        assert!(e.contains("curve 0 point 1") && e.contains("Ground(64, 40, -2)"), "{e}");
+        assert!(
+            e.contains("curve 0 point 1") && e.contains("Ground(64, 40, -2)"),
+            "{e}"
+        );
     }
 
     #[test]
     fn bad_values_are_reported_with_position_or_field() {
         let bad = SPEC.replace("voxel: 1.0", "voxel: -1.0");
-        let e = parse_ron::<FeatureVolumeSpec>(&bad, Path::new("x.ron")).unwrap_err().to_string();
-        assert!(e.starts_with("x.ron:") && e.contains("expected a number > 0"), "{e}");
+        let e = parse_ron::<FeatureVolumeSpec>(&bad, Path::new("x.ron"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("x.ron:") && e.contains("expected a number > 0"),
+            "{e}"
+        );
         let bad = SPEC.replace("Dir(0, 1, 0)", "Dir(0, 0, 0)");
         let spec: FeatureVolumeSpec = parse_ron(&bad, Path::new("x.ron")).unwrap();
-        let e = spec.feature_set(Path::new(".")).unwrap().resolve(&|_| Some(0.0)).unwrap_err().to_string();
-        assert!(e.contains("curve 0 constraint 1 left") && e.contains("zero or parallel"), "{e}");
+        let e = spec
+            .feature_set(Path::new("."))
+            .unwrap()
+            .resolve(&|_| Some(0.0))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("curve 0 constraint 1 left") && e.contains("zero or parallel"),
+            "{e}"
+        );
         let missing = CurveSource::Path("does/not/exist.ron".into());
-        let spec = FeatureVolumeSpec { curves: missing, ..spec };
-        assert!(spec.feature_set(Path::new("/tmp")).unwrap_err().to_string().contains("does/not/exist.ron"));
+        let spec = FeatureVolumeSpec {
+            curves: missing,
+            ..spec
+        };
+        assert!(
+            spec.feature_set(Path::new("/tmp"))
+                .unwrap_err()
+                .to_string()
+                .contains("does/not/exist.ron")
+        );
     }
 }

@@ -83,7 +83,12 @@ where
             .par_chunks_mut(BRICK_NODES)
             .enumerate()
             .map_init(
-                || (vec![T::default(); PAD_NODES], vec![A::default(); if aux.is_empty() { 0 } else { PAD_NODES }]),
+                || {
+                    (
+                        vec![T::default(); PAD_NODES],
+                        vec![A::default(); if aux.is_empty() { 0 } else { PAD_NODES }],
+                    )
+                },
                 |(pt, pa), (b, out)| {
                     if !active.is_empty() && !active[b] {
                         return 0.0;
@@ -102,7 +107,8 @@ where
                                 out[l] = if fixed[i] {
                                     src[i]
                                 } else {
-                                    let v = update(pt, pa, padded(x, y, z), base + IVec3::new(x, y, z));
+                                    let v =
+                                        update(pt, pa, padded(x, y, z), base + IVec3::new(x, y, z));
                                     if measure {
                                         worst = worst.max(change(v, src[i]));
                                     }
@@ -127,7 +133,14 @@ where
 }
 
 /// Perona–Malik diffusion of the normal field (§4.3.1) with edge parameter `k`.
-pub fn diffuse_normals(bricks: &Bricks, active: &[bool], n: &mut Vec<Vec3>, fixed: &[bool], k: f32, sweeps: Sweeps) -> u32 {
+pub fn diffuse_normals(
+    bricks: &Bricks,
+    active: &[bool],
+    n: &mut Vec<Vec3>,
+    fixed: &[bool],
+    k: f32,
+    sweeps: Sweeps,
+) -> u32 {
     let inv_k2 = 1.0 / (k * k);
     jacobi(
         bricks,
@@ -169,7 +182,13 @@ fn avg(v: Vec3, w: Vec3) -> Vec3 {
 
 /// Bitangent diffusion by sign-invariant averaging of the neighbours (§4.3.2):
 /// `avg(avg(b_x, b_y), b_z)` of the per-axis pair averages.
-pub fn diffuse_bitangents(bricks: &Bricks, active: &[bool], b: &mut Vec<Vec3>, fixed: &[bool], sweeps: Sweeps) -> u32 {
+pub fn diffuse_bitangents(
+    bricks: &Bricks,
+    active: &[bool],
+    b: &mut Vec<Vec3>,
+    fixed: &[bool],
+    sweeps: Sweeps,
+) -> u32 {
     jacobi(
         bricks,
         active,
@@ -187,7 +206,13 @@ pub fn diffuse_bitangents(bricks: &Bricks, active: &[bool], b: &mut Vec<Vec3>, f
 }
 
 /// Laplace diffusion of the noise parameters `(α, β)` (§4.4).
-pub fn diffuse_noise(bricks: &Bricks, active: &[bool], r: &mut Vec<Vec2>, fixed: &[bool], sweeps: Sweeps) -> u32 {
+pub fn diffuse_noise(
+    bricks: &Bricks,
+    active: &[bool],
+    r: &mut Vec<Vec2>,
+    fixed: &[bool],
+    sweeps: Sweeps,
+) -> u32 {
     jacobi(
         bricks,
         active,
@@ -232,7 +257,16 @@ mod tests {
                 r[i] = Vec2::splat(g.x as f32 / 15.0);
             }
         }
-        let n = diffuse_noise(&b, &[], &mut r, &fixed, Sweeps::Converge { tol: 1e-6, max: 5000 });
+        let n = diffuse_noise(
+            &b,
+            &[],
+            &mut r,
+            &fixed,
+            Sweeps::Converge {
+                tol: 1e-6,
+                max: 5000,
+            },
+        );
         assert!(n < 5000);
         for i in 0..r.len() {
             let g = b.node_coord(i);

@@ -30,7 +30,10 @@ const OCTAVE_LIPSCHITZ: f32 = 3.0 * 1.732_050_8;
 #[inline]
 fn lattice(g: IVec3, seed: u32) -> f32 {
     // A 32-bit integer hash (lowbias32-style mixing) mapped to [-1, 1].
-    let mut h = (g.x as u32).wrapping_mul(0x8da6_b343) ^ (g.y as u32).wrapping_mul(0xd816_3841) ^ (g.z as u32).wrapping_mul(0xcb1a_b31f) ^ seed.wrapping_mul(0x9e37_79b9);
+    let mut h = (g.x as u32).wrapping_mul(0x8da6_b343)
+        ^ (g.y as u32).wrapping_mul(0xd816_3841)
+        ^ (g.z as u32).wrapping_mul(0xcb1a_b31f)
+        ^ seed.wrapping_mul(0x9e37_79b9);
     h ^= h >> 16;
     h = h.wrapping_mul(0x7feb_352d);
     h ^= h >> 15;
@@ -57,7 +60,11 @@ fn value_noise(q: Vec3, seed: u32) -> (f32, Vec3) {
     let y0 = lerp(x00, x10, s.y);
     let y1 = lerp(x01, x11, s.y);
     let val = lerp(y0, y1, s.z);
-    let gx = lerp(lerp(v100 - v000, v110 - v010, s.y), lerp(v101 - v001, v111 - v011, s.y), s.z) * ds.x;
+    let gx = lerp(
+        lerp(v100 - v000, v110 - v010, s.y),
+        lerp(v101 - v001, v111 - v011, s.y),
+        s.z,
+    ) * ds.x;
     let gy = lerp(x10 - x00, x11 - x01, s.z) * ds.y;
     let gz = (y1 - y0) * ds.z;
     (val, Vec3::new(gx, gy, gz))
@@ -92,7 +99,10 @@ impl Fbm {
 
     /// `max ‖∇fbm‖`: `3√3 · Σ (gain · lacunarity)ⁱ`.
     pub fn lipschitz(&self) -> f32 {
-        OCTAVE_LIPSCHITZ * (0..self.octaves).map(|o| (self.gain * self.lacunarity).powi(o as i32)).sum::<f32>()
+        OCTAVE_LIPSCHITZ
+            * (0..self.octaves)
+                .map(|o| (self.gain * self.lacunarity).powi(o as i32))
+                .sum::<f32>()
     }
 }
 
@@ -112,7 +122,11 @@ mod tests {
         let (amp, lip) = (F.amplitude(), F.lipschitz());
         let mut seen = 0.0f32;
         for i in 0..4000 {
-            let p = Vec3::new((i as f32 * 0.731).sin() * 40.0, (i as f32 * 1.37).cos() * 40.0, i as f32 * 0.0123);
+            let p = Vec3::new(
+                (i as f32 * 0.731).sin() * 40.0,
+                (i as f32 * 1.37).cos() * 40.0,
+                i as f32 * 0.0123,
+            );
             let q = p + Vec3::new(0.013, -0.021, 0.017) * ((i % 7) as f32 + 1.0);
             let (v, g) = F.value_grad(p);
             assert!(v.abs() <= amp);
@@ -126,9 +140,15 @@ mod tests {
             ) / (2.0 * e);
             assert!((fd - g).length() < 0.02 * (1.0 + g.length()), "{fd} vs {g}");
         }
-        assert!(seen > 0.1 * lip, "the bound is not absurdly loose ({seen} vs {lip})");
+        assert!(
+            seen > 0.1 * lip,
+            "the bound is not absurdly loose ({seen} vs {lip})"
+        );
         // Deterministic and seed-dependent.
         assert_eq!(F.value(Vec3::splat(0.3)), F.value(Vec3::splat(0.3)));
-        assert_ne!(F.value(Vec3::splat(0.3)), Fbm { seed: 8, ..F }.value(Vec3::splat(0.3)));
+        assert_ne!(
+            F.value(Vec3::splat(0.3)),
+            Fbm { seed: 8, ..F }.value(Vec3::splat(0.3))
+        );
     }
 }

@@ -116,7 +116,14 @@ pub struct StageTimes {
 impl StageTimes {
     /// Sum of all stages.
     pub fn total(&self) -> Duration {
-        self.proxy + self.reset + self.voxelize + self.guidance + self.noise + self.propagate + self.smooth + self.finish
+        self.proxy
+            + self.reset
+            + self.voxelize
+            + self.guidance
+            + self.noise
+            + self.propagate
+            + self.smooth
+            + self.finish
     }
 }
 
@@ -181,18 +188,28 @@ fn work_bytes(streamline: bool) -> u64 {
 
 /// Bytes per node kept by a finished level until the end (N for prolongation, R, S).
 fn kept_bytes(streamline: bool) -> u64 {
-    if streamline { 12 + 12 + 8 + 4 } else { 12 + 8 + 4 }
+    if streamline {
+        12 + 12 + 8 + 4
+    } else {
+        12 + 8 + 4
+    }
 }
 
 /// The levels' lattices, finest first.
 pub fn level_geoms(domain: &Aabb, voxel: f32) -> Result<Vec<LevelGeom>, CurveError> {
     let size = domain.size();
     if domain.is_empty() || !size.is_finite() || size.min_element() <= 0.0 {
-        return Err(CurveError::invalid("domain", "must be a box with min < max on every axis"));
+        return Err(CurveError::invalid(
+            "domain",
+            "must be a box with min < max on every axis",
+        ));
     }
     let n = (size / voxel).ceil() + Vec3::ONE;
     if n.max_element() > (1 << 20) as f32 {
-        return Err(CurveError::invalid("voxel", format!("{voxel} m gives {} nodes along an axis", n.max_element())));
+        return Err(CurveError::invalid(
+            "voxel",
+            format!("{voxel} m gives {} nodes along an axis", n.max_element()),
+        ));
     }
     let mut g = LevelGeom {
         origin: domain.min,
@@ -212,18 +229,33 @@ pub fn level_geoms(domain: &Aabb, voxel: f32) -> Result<Vec<LevelGeom>, CurveErr
 pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
     let geoms = level_geoms(&p.domain, p.voxel)?;
     let top = geoms.len() - 1;
-    let base = (0..=top).find(|&l| geoms[l].dims.max_element() <= p.base.max(8) as i32).unwrap_or(top);
+    let base = (0..=top)
+        .find(|&l| geoms[l].dims.max_element() <= p.base.max(8) as i32)
+        .unwrap_or(top);
     let streamline = p.propagation == Propagation::Streamline;
     let mut stats = Stats::default();
     let tables: u64 = geoms.iter().map(Bricks::table_bytes).sum();
-    let dense_nodes: u64 = geoms[base..].iter().map(|g| g.bdims().as_u64vec3().element_product() * BRICK_NODES as u64).sum();
-    check_budget("the dense levels of the voxel pipeline", tables + dense_nodes * kept_bytes(streamline), p.max_memory)?;
+    let dense_nodes: u64 = geoms[base..]
+        .iter()
+        .map(|g| g.bdims().as_u64vec3().element_product() * BRICK_NODES as u64)
+        .sum();
+    check_budget(
+        "the dense levels of the voxel pipeline",
+        tables + dense_nodes * kept_bytes(streamline),
+        p.max_memory,
+    )?;
 
     // Levels before the first one with seeds (thin tunnels only appear on fine levels)
     // hold a constant S behind every surface, just outside the first seeded level's band.
-    let Some(first_seeded) = (0..=top).rev().find(|&l| features.has_seed(TUNNEL_VOXELS * geoms[l].h)) else {
+    let Some(first_seeded) = (0..=top)
+        .rev()
+        .find(|&l| features.has_seed(TUNNEL_VOXELS * geoms[l].h))
+    else {
         stats.empty = true;
-        return Ok(Volume { stats, ..Default::default() });
+        return Ok(Volume {
+            stats,
+            ..Default::default()
+        });
     };
     let behind = -(p.band + 2.0) * geoms[first_seeded].h;
     let finest = features.proxy(p.ribbon, p.ribbon, 0.5 * p.voxel, 0.0);
@@ -231,7 +263,12 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
     drop(finest);
     let mut seen_seeds = false;
     let mut levels: Vec<Bricks> = Vec::new();
-    let (mut n_ch, mut b_ch, mut r_ch, mut s_ch) = (Vec::<Vec<Vec3>>::new(), Vec::<Vec<Vec3>>::new(), Vec::<Vec<Vec2>>::new(), Vec::<Vec<f32>>::new());
+    let (mut n_ch, mut b_ch, mut r_ch, mut s_ch) = (
+        Vec::<Vec<Vec3>>::new(),
+        Vec::<Vec<Vec3>>::new(),
+        Vec::<Vec<Vec2>>::new(),
+        Vec::<Vec<f32>>::new(),
+    );
     let mut kept = 0u64;
     let mut times = StageTimes::default();
     let t = &mut times;
@@ -246,7 +283,12 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
             ..Default::default()
         };
         let clock = Instant::now();
-        let mesh = features.proxy(p.ribbon, GUIDE_VOXELS * geom.h, 0.5 * geom.h, TUNNEL_VOXELS * geom.h);
+        let mesh = features.proxy(
+            p.ribbon,
+            GUIDE_VOXELS * geom.h,
+            0.5 * geom.h,
+            TUNNEL_VOXELS * geom.h,
+        );
         t.proxy += clock.elapsed();
         let clock = Instant::now();
         let cons = voxelize(&mesh, &geom);
@@ -261,20 +303,38 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
         } else {
             let coords = band_bricks(&levels, &s_ch, geom, p.band * geom.h, &cons);
             let need = kept + coords.len() as u64 * BRICK_NODES as u64 * work_bytes(streamline);
-            check_budget(format!("level {l} of the voxel pipeline ({} bricks)", coords.len()), need, p.max_memory)?;
+            check_budget(
+                format!("level {l} of the voxel pipeline ({} bricks)", coords.len()),
+                need,
+                p.max_memory,
+            )?;
             Bricks::new(geom, coords)
         };
         ls.bricks = bricks.len();
         let total = bricks.len() * BRICK_NODES;
-        stats.peak_bytes = stats.peak_bytes.max(kept + total as u64 * work_bytes(streamline) + bricks.overhead_bytes());
+        stats.peak_bytes = stats
+            .peak_bytes
+            .max(kept + total as u64 * work_bytes(streamline) + bricks.overhead_bytes());
         let rim = bricks.rim();
         // Constraint data indices (constraints in missing bricks are dropped).
-        let at: Vec<(usize, &Constraint)> = cons.iter().filter_map(|c| bricks.node(c.node).map(|i| (i, c))).filter(|(i, _)| !rim[*i]).collect();
+        let at: Vec<(usize, &Constraint)> = cons
+            .iter()
+            .filter_map(|c| bricks.node(c.node).map(|i| (i, c)))
+            .filter(|(i, _)| !rim[*i])
+            .collect();
         // Below the coarsest level, sweeps only run near this level's constraints (one
         // brick around them): elsewhere the prolonged coarse solution already is the
         // smooth solution, and a sweep would not change it.
-        let active = if first { Vec::new() } else { active_bricks(&bricks, &at) };
-        ls.active_bricks = if first { bricks.len() } else { active.iter().filter(|&&a| a).count() };
+        let active = if first {
+            Vec::new()
+        } else {
+            active_bricks(&bricks, &at)
+        };
+        ls.active_bricks = if first {
+            bricks.len()
+        } else {
+            active.iter().filter(|&&a| a).count()
+        };
         let sweeps = if first {
             Sweeps::Converge {
                 tol: 1e-4,
@@ -283,7 +343,13 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
         } else {
             Sweeps::Fixed(p.iterations)
         };
-        let init = |ch: &[Vec<Vec3>]| if first { vec![Vec3::ZERO; total] } else { prolong(&levels, ch, &bricks) };
+        let init = |ch: &[Vec<Vec3>]| {
+            if first {
+                vec![Vec3::ZERO; total]
+            } else {
+                prolong(&levels, ch, &bricks)
+            }
+        };
         let mut n = init(&n_ch);
         let mut b = if streamline { init(&b_ch) } else { Vec::new() };
         let mut r = if first {
@@ -325,7 +391,11 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
         // relaxation to convergence; below, the prolonged S re-propagated from the level's
         // own seeds for `band` waves, blended in, and relaxed for a fixed number of sweeps.
         let clock = Instant::now();
-        let sp = if !seen_seeds { vec![behind; total] } else { prolong(&levels, &s_ch, &bricks) };
+        let sp = if !seen_seeds {
+            vec![behind; total]
+        } else {
+            prolong(&levels, &s_ch, &bricks)
+        };
         let mut s = sp.clone();
         let mut wave = vec![0u16; total];
         for &(i, c) in &at {
@@ -340,7 +410,10 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
                 stats.empty = true;
                 stats.times = times;
                 stats.levels.push(ls);
-                return Ok(Volume { stats, ..Default::default() });
+                return Ok(Volume {
+                    stats,
+                    ..Default::default()
+                });
             }
             // Nothing here yet: keep the constant.
             t.propagate += clock.elapsed();
@@ -354,7 +427,11 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
             continue;
         }
         seen_seeds = true;
-        let reach = if full && first { (geom.dims.element_sum() * 2) as u32 } else { p.band.ceil() as u32 };
+        let reach = if full && first {
+            (geom.dims.element_sum() * 2) as u32
+        } else {
+            p.band.ceil() as u32
+        };
         if streamline {
             ls.streamline_nodes = streamlines(&bricks, &mut s, &mut wave, &n, &b, 2 * reach);
         }
@@ -364,12 +441,15 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
             // Blend the re-propagated values into the prolonged ones over the outer half
             // of the waves.
             let k = reach.max(1) as f32;
-            s.par_iter_mut().zip(&sp).zip(&wave).for_each(|((s, &sp), &w)| {
-                if w > 1 {
-                    let a = ((w as f32 - 1.0 - 0.5 * k) / (0.5 * k)).clamp(0.0, 1.0);
-                    *s += (sp - *s) * a;
-                }
-            });
+            s.par_iter_mut()
+                .zip(&sp)
+                .zip(&wave)
+                .for_each(|((s, &sp), &w)| {
+                    if w > 1 {
+                        let a = ((w as f32 - 1.0 - 0.5 * k) / (0.5 * k)).clamp(0.0, 1.0);
+                        *s += (sp - *s) * a;
+                    }
+                });
         }
         drop((sp, wave));
         let relax_sweeps = if full && first {
@@ -399,11 +479,22 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
     let first = top - base;
     let levels: Vec<Bricks> = levels.drain(first..).collect();
     let s: Vec<Vec<f32>> = s_ch.drain(first..).collect();
-    let alpha: Vec<Vec<f32>> = r_ch[first..].iter().map(|r| r.iter().map(|v| v.x).collect()).collect();
-    let beta: Vec<Vec<f32>> = r_ch[first..].iter().map(|r| r.iter().map(|v| v.y).collect()).collect();
+    let alpha: Vec<Vec<f32>> = r_ch[first..]
+        .iter()
+        .map(|r| r.iter().map(|v| v.x).collect())
+        .collect();
+    let beta: Vec<Vec<f32>> = r_ch[first..]
+        .iter()
+        .map(|r| r.iter().map(|v| v.y).collect())
+        .collect();
     drop((n_ch, b_ch, r_ch));
-    let bounds = (0..levels.len()).map(|l| brick_bounds(&levels[l], &s[l], &alpha[l], &beta[l])).collect();
-    stats.field_bytes = levels.iter().map(|b| b.len() as u64 * BRICK_NODES as u64 * 12 + b.overhead_bytes()).sum();
+    let bounds = (0..levels.len())
+        .map(|l| brick_bounds(&levels[l], &s[l], &alpha[l], &beta[l]))
+        .collect();
+    stats.field_bytes = levels
+        .iter()
+        .map(|b| b.len() as u64 * BRICK_NODES as u64 * 12 + b.overhead_bytes())
+        .sum();
     stats.times.finish += clock.elapsed();
     Ok(Volume {
         levels,
@@ -417,7 +508,13 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
 
 /// Bricks of a level below the base: those covering the coarser surface band
 /// (`|S| < width` on the finest level built so far) and the level's seed nodes.
-fn band_bricks(levels: &[Bricks], s_ch: &[Vec<f32>], geom: LevelGeom, width: f32, cons: &[Constraint]) -> Vec<IVec3> {
+fn band_bricks(
+    levels: &[Bricks],
+    s_ch: &[Vec<f32>],
+    geom: LevelGeom,
+    width: f32,
+    cons: &[Constraint],
+) -> Vec<IVec3> {
     let parent = levels.last().expect("a coarser level");
     let s = s_ch.last().expect("S on the coarser level");
     let mut coords: Vec<IVec3> = (0..parent.len())
@@ -447,7 +544,11 @@ fn band_bricks(levels: &[Bricks], s_ch: &[Vec<f32>], geom: LevelGeom, width: f32
         })
         .collect();
     // Seed bricks and their neighbours, so that seeds stay off the rim.
-    let mut seeds: Vec<IVec3> = cons.iter().filter(|c| c.seed.is_some()).map(|c| c.node / BRICK).collect();
+    let mut seeds: Vec<IVec3> = cons
+        .iter()
+        .filter(|c| c.seed.is_some())
+        .map(|c| c.node / BRICK)
+        .collect();
     seeds.dedup();
     for c in seeds {
         for k in 0..27 {
@@ -467,7 +568,11 @@ fn active_bricks(bricks: &Bricks, at: &[(usize, &Constraint)]) -> Vec<bool> {
     {
         let prev = active.clone();
         for (b, a) in active.iter_mut().enumerate() {
-            *a = *a || bricks.neighbours(b).iter().any(|&k| k != super::sparse::NONE && prev[k as usize]);
+            *a = *a
+                || bricks
+                    .neighbours(b)
+                    .iter()
+                    .any(|&k| k != super::sparse::NONE && prev[k as usize]);
         }
     }
     active
@@ -533,7 +638,10 @@ pub fn content_hash(parts: &[&[u8]]) -> u64 {
 
 /// The content hash of a run: the primitives and the parameters.
 fn run_key(features: &Features, p: &Params) -> u64 {
-    content_hash(&[format!("{features:?}").as_bytes(), format!("{p:?}").as_bytes()])
+    content_hash(&[
+        format!("{features:?}").as_bytes(),
+        format!("{p:?}").as_bytes(),
+    ])
 }
 
 type Cache = Mutex<Vec<(u64, Arc<Volume>)>>;
@@ -544,7 +652,12 @@ const CACHE_ENTRIES: usize = 8;
 /// parameters. Returns the volume and whether it came from the cache.
 pub fn run_cached(features: &Features, p: &Params) -> Result<(Arc<Volume>, bool), CurveError> {
     let key = run_key(features, p);
-    if let Some((_, v)) = CACHE.lock().expect("cache lock").iter().find(|(k, _)| *k == key) {
+    if let Some((_, v)) = CACHE
+        .lock()
+        .expect("cache lock")
+        .iter()
+        .find(|(k, _)| *k == key)
+    {
         return Ok((v.clone(), true));
     }
     let v = Arc::new(run(features, p)?);

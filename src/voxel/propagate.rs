@@ -26,18 +26,35 @@ pub fn waves(bricks: &Bricks, s: &mut [f32], wave: &mut [u16], n: &[Vec3], max_w
     let h = bricks.geom.h;
     let nb = bricks.len();
     let rim = bricks.rim();
-    let mut active: Vec<bool> = (0..nb).map(|b| wave[b * BRICK_NODES..(b + 1) * BRICK_NODES].iter().any(|&w| w > 0)).collect();
+    let mut active: Vec<bool> = (0..nb)
+        .map(|b| {
+            wave[b * BRICK_NODES..(b + 1) * BRICK_NODES]
+                .iter()
+                .any(|&w| w > 0)
+        })
+        .collect();
     let mut done = 0;
     for w in 0..max_waves {
         let stamp = (w + 2).min(u16::MAX as u32) as u16;
         // Bricks next to an active one may change in this wave.
         let todo: Vec<bool> = (0..nb)
-            .map(|b| bricks.neighbours(b).iter().any(|&k| k != super::sparse::NONE && active[k as usize]))
+            .map(|b| {
+                bricks
+                    .neighbours(b)
+                    .iter()
+                    .any(|&k| k != super::sparse::NONE && active[k as usize])
+            })
             .collect();
         let updates: Vec<Vec<(u32, f32)>> = (0..nb)
             .into_par_iter()
             .map_init(
-                || (vec![0f32; PAD_NODES], vec![0u16; PAD_NODES], vec![Vec3::ZERO; PAD_NODES]),
+                || {
+                    (
+                        vec![0f32; PAD_NODES],
+                        vec![0u16; PAD_NODES],
+                        vec![Vec3::ZERO; PAD_NODES],
+                    )
+                },
                 |(ps, pw, pn), b| {
                     let mut out = Vec::new();
                     if !todo[b] {
@@ -99,7 +116,14 @@ pub fn waves(bricks: &Bricks, s: &mut [f32], wave: &mut [u16], n: &[Vec3], max_w
 
 /// Jacobi sweeps of the local distance model averaged over the in-domain face
 /// neighbours, with relaxation factor 0.85, on the non-`fixed` nodes.
-pub fn relax(bricks: &Bricks, active: &[bool], s: &mut Vec<f32>, n: &[Vec3], fixed: &[bool], sweeps: Sweeps) -> u32 {
+pub fn relax(
+    bricks: &Bricks,
+    active: &[bool],
+    s: &mut Vec<f32>,
+    n: &[Vec3],
+    fixed: &[bool],
+    sweeps: Sweeps,
+) -> u32 {
     let h = bricks.geom.h;
     let dims = bricks.geom.dims;
     const OMEGA: f32 = 0.85;
@@ -123,7 +147,11 @@ pub fn relax(bricks: &Bricks, active: &[bool], s: &mut Vec<f32>, n: &[Vec3], fix
                 acc += ps[q] - dir as f32 * h * 0.5 * (pn[i][axis] + pn[q][axis]);
                 cnt += 1.0;
             }
-            if cnt == 0.0 { ps[i] } else { (1.0 - OMEGA) * ps[i] + OMEGA * acc / cnt }
+            if cnt == 0.0 {
+                ps[i]
+            } else {
+                (1.0 - OMEGA) * ps[i] + OMEGA * acc / cnt
+            }
         },
         |a, b| (a - b).abs(),
     )
@@ -134,7 +162,14 @@ pub fn relax(bricks: &Bricks, active: &[bool], s: &mut Vec<f32>, n: &[Vec3], fix
 /// found so far), in steps of `h/2`, up to `max_steps`, inside complete cells of the
 /// level. Every node passed becomes a surface node whose S is its distance to the
 /// traced point along N. Marks are applied in seed order, so the result is deterministic.
-pub fn streamlines(bricks: &Bricks, s: &mut [f32], wave: &mut [u16], n: &[Vec3], b: &[Vec3], max_steps: u32) -> usize {
+pub fn streamlines(
+    bricks: &Bricks,
+    s: &mut [f32],
+    wave: &mut [u16],
+    n: &[Vec3],
+    b: &[Vec3],
+    max_steps: u32,
+) -> usize {
     use super::sparse::trilinear;
     let g = bricks.geom;
     let step = 0.5 * g.h;
@@ -150,10 +185,16 @@ pub fn streamlines(bricks: &Bricks, s: &mut [f32], wave: &mut [u16], n: &[Vec3],
                     let (idx, f) = bricks.cell(x)?;
                     let nn = trilinear(n, &idx, f).normalize_or_zero();
                     let bb = trilinear(b, &idx, f).normalize_or_zero();
-                    let v = if pass == 0 { bb } else { bb.cross(nn).normalize_or_zero() };
+                    let v = if pass == 0 {
+                        bb
+                    } else {
+                        bb.cross(nn).normalize_or_zero()
+                    };
                     (v != Vec3::ZERO).then_some((v, nn))
                 };
-                let Some((mut v, _)) = dir_at(x) else { return out };
+                let Some((mut v, _)) = dir_at(x) else {
+                    return out;
+                };
                 for _ in 0..max_steps {
                     x += v * step;
                     let Some((nv, nn)) = dir_at(x) else { break };
@@ -221,7 +262,11 @@ mod tests {
             }
         }
         // Relaxation keeps the exact solution where it already holds.
-        let fixed: Vec<bool> = wave.iter().zip(b.rim()).map(|(&w, &r)| w == 1 || r).collect();
+        let fixed: Vec<bool> = wave
+            .iter()
+            .zip(b.rim())
+            .map(|(&w, &r)| w == 1 || r)
+            .collect();
         let before = s.clone();
         let mut s2 = s.clone();
         relax(&b, &[], &mut s2, &n, &fixed, Sweeps::Fixed(5));

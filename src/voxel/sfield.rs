@@ -22,7 +22,10 @@ use super::noise::Fbm;
 use super::pipeline::{BrickBounds, Stats, Volume};
 use super::sparse::{BRICK, Bricks, locate, trilinear_grad};
 use crate::curves::Orientation;
-use crate::field::falloff::{T, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope, wyvill, wyvill_d, wyvill_interval, wyvill_slope};
+use crate::field::falloff::{
+    T, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope, wyvill,
+    wyvill_d, wyvill_interval, wyvill_slope,
+};
 use crate::field::{Aabb, Field, Interval};
 
 /// How S becomes a field.
@@ -90,12 +93,24 @@ fn noise_lipschitz(params: &FieldParams, b: &BrickBounds, reach: f32) -> f32 {
 impl SField {
     /// The field of a pipeline result.
     pub fn new(vol: Arc<Volume>, params: FieldParams) -> Self {
-        let level_bounds: Vec<BrickBounds> = vol.bounds.iter().map(|b| b.iter().fold(EMPTY_BOUNDS, |a, x| hull(&a, x))).collect();
+        let level_bounds: Vec<BrickBounds> = vol
+            .bounds
+            .iter()
+            .map(|b| b.iter().fold(EMPTY_BOUNDS, |a, x| hull(&a, x)))
+            .collect();
         let all = level_bounds.iter().fold(EMPTY_BOUNDS, |a, x| hull(&a, x));
         let lip_s = all.grad_s.length();
         let (alpha_max, beta_max) = (all.alpha[1].max(0.0), all.beta[1].max(0.0));
-        let noise_amp = if alpha_max > 0.0 && params.fbm.octaves > 0 { alpha_max * params.fbm.amplitude() } else { 0.0 };
-        let lip_noise = if noise_amp > 0.0 { noise_lipschitz(&params, &all, params.domain.size().length()) } else { 0.0 };
+        let noise_amp = if alpha_max > 0.0 && params.fbm.octaves > 0 {
+            alpha_max * params.fbm.amplitude()
+        } else {
+            0.0
+        };
+        let lip_noise = if noise_amp > 0.0 {
+            noise_lipschitz(&params, &all, params.domain.size().length())
+        } else {
+            0.0
+        };
         let _ = beta_max;
         SField {
             vol,
@@ -179,7 +194,11 @@ impl SField {
                 best = (hi[a], -e);
             }
         }
-        if best.0 <= 0.0 { (0.0, Vec3::ZERO) } else { best }
+        if best.0 <= 0.0 {
+            (0.0, Vec3::ZERO)
+        } else {
+            best
+        }
     }
 
     /// Range of `d_in` over `b`.
@@ -196,9 +215,20 @@ impl SField {
         let mut acc = EMPTY_BOUNDS;
         for (l, bricks) in self.vol.levels.iter().enumerate() {
             let g = bricks.geom;
-            let lo = ((b.min - g.origin) / g.h - Vec3::ONE).floor().as_ivec3().max(glam::IVec3::ZERO) / BRICK;
-            let hi = ((b.max - g.origin) / g.h + Vec3::ONE).ceil().as_ivec3().min(g.dims - glam::IVec3::ONE) / BRICK;
-            let count = (hi - lo + glam::IVec3::ONE).max(glam::IVec3::ZERO).as_i64vec3().element_product();
+            let lo = ((b.min - g.origin) / g.h - Vec3::ONE)
+                .floor()
+                .as_ivec3()
+                .max(glam::IVec3::ZERO)
+                / BRICK;
+            let hi = ((b.max - g.origin) / g.h + Vec3::ONE)
+                .ceil()
+                .as_ivec3()
+                .min(g.dims - glam::IVec3::ONE)
+                / BRICK;
+            let count = (hi - lo + glam::IVec3::ONE)
+                .max(glam::IVec3::ZERO)
+                .as_i64vec3()
+                .element_product();
             if count > MAX_QUERY_BRICKS {
                 acc = hull(&acc, &self.level_bounds[l]);
                 continue;
@@ -236,17 +266,29 @@ impl Field for SField {
             return (0.0, Vec3::ZERO);
         }
         let (s, gs) = self.s_grad(p);
-        let sign = if self.params.orientation == Orientation::Solid { -1.0 } else { 1.0 };
+        let sign = if self.params.orientation == Orientation::Solid {
+            -1.0
+        } else {
+            1.0
+        };
         let (v, dv) = sigma_d(sign * s, self.params.transition);
         let (d, gd) = self.d_in(p);
         let rf = self.params.falloff;
         let (w, dw) = wyvill_d(d / rf);
         let face = 2.0 * T * (1.0 - w);
-        if face < v { (face, gd * (-2.0 * T * dw / rf)) } else { (v, gs * (sign * dv)) }
+        if face < v {
+            (face, gd * (-2.0 * T * dw / rf))
+        } else {
+            (v, gs * (sign * dv))
+        }
     }
 
     fn support(&self) -> Aabb {
-        if self.is_empty() { Aabb::EMPTY } else { self.params.domain }
+        if self.is_empty() {
+            Aabb::EMPTY
+        } else {
+            self.params.domain
+        }
     }
 
     fn interval(&self, b: &Aabb) -> Interval {
@@ -257,24 +299,45 @@ impl Field for SField {
         let bb = self.box_bounds(&bc);
         // Brick ranges of S widened by the noise, and the Lipschitz bound around the
         // centre (tighter on small boxes); both are sound, so is their intersection.
-        let amp = if self.noise_amp > 0.0 { bb.alpha[1].max(0.0) * self.params.fbm.amplitude() } else { 0.0 };
+        let amp = if self.noise_amp > 0.0 {
+            bb.alpha[1].max(0.0) * self.params.fbm.amplitude()
+        } else {
+            0.0
+        };
         let bricks = Interval::new(bb.s[0], bb.s[1]).dilate(amp);
         let c = bc.center();
-        let reach = bc.corners().iter().map(|c| c.distance(self.params.domain.min)).fold(0.0, f32::max);
-        let lip_noise = if self.noise_amp > 0.0 { noise_lipschitz(&self.params, &bb, reach) } else { 0.0 };
-        let lip = Interval::point(self.s_value(c)).dilate((bb.grad_s.length() + lip_noise) * bc.radius());
+        let reach = bc
+            .corners()
+            .iter()
+            .map(|c| c.distance(self.params.domain.min))
+            .fold(0.0, f32::max);
+        let lip_noise = if self.noise_amp > 0.0 {
+            noise_lipschitz(&self.params, &bb, reach)
+        } else {
+            0.0
+        };
+        let lip =
+            Interval::point(self.s_value(c)).dilate((bb.grad_s.length() + lip_noise) * bc.radius());
         let mut s = bricks.intersect(lip);
         if s.is_empty() {
             s = bricks;
         }
         let s = s.dilate(1e-5 * (1.0 + s.lo.abs().max(s.hi.abs())));
-        let x = if self.params.orientation == Orientation::Solid { s.scale(-1.0) } else { s };
+        let x = if self.params.orientation == Orientation::Solid {
+            s.scale(-1.0)
+        } else {
+            s
+        };
         let v = sigma_interval(x, self.params.transition);
         let d = self.d_in_range(&bc);
         let wi = wyvill_interval(d.scale(1.0 / self.params.falloff));
         let face = Interval::new(2.0 * T * (1.0 - wi.hi), 2.0 * T * (1.0 - wi.lo));
         let f = v.min(face);
-        if self.params.domain.contains_box(b) { f } else { f.hull(Interval::ZERO) }
+        if self.params.domain.contains_box(b) {
+            f
+        } else {
+            f.hull(Interval::ZERO)
+        }
     }
 
     fn lipschitz(&self) -> f32 {
@@ -292,14 +355,22 @@ impl Field for SField {
         let bc = b.intersection(self.params.domain);
         let bb = self.box_bounds(&bc);
         let lip_noise = if self.noise_amp > 0.0 {
-            let reach = bc.corners().iter().map(|c| c.distance(self.params.domain.min)).fold(0.0, f32::max);
+            let reach = bc
+                .corners()
+                .iter()
+                .map(|c| c.distance(self.params.domain.min))
+                .fold(0.0, f32::max);
             noise_lipschitz(&self.params, &bb, reach)
         } else {
             0.0
         };
         let ls = bb.grad_s.length() + lip_noise;
         let s = Interval::new(bb.s[0], bb.s[1]).dilate(self.noise_amp);
-        let x = if self.params.orientation == Orientation::Solid { s.scale(-1.0) } else { s };
+        let x = if self.params.orientation == Orientation::Solid {
+            s.scale(-1.0)
+        } else {
+            s
+        };
         let sig = sigma_slope(x, self.params.transition) * ls;
         let d = self.d_in_range(&bc);
         let face = 2.0 * T * wyvill_slope(d.scale(1.0 / self.params.falloff)) / self.params.falloff;

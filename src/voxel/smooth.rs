@@ -49,14 +49,18 @@ mod tests {
         let b = Bricks::dense(geom);
         let fixed = b.rim().to_vec();
         let lin = |g: IVec3| 0.2 * g.x as f32 - 0.7 * g.y as f32 + 0.1 * g.z as f32;
-        let mut s: Vec<f32> = (0..b.len() * BRICK_NODES).map(|i| lin(b.node_coord(i))).collect();
+        let mut s: Vec<f32> = (0..b.len() * BRICK_NODES)
+            .map(|i| lin(b.node_coord(i)))
+            .collect();
         smooth(&b, &[], &mut s, &fixed, 3);
         for (i, v) in s.iter().enumerate() {
             if geom.contains(b.node_coord(i)) {
                 assert!((v - lin(b.node_coord(i))).abs() < 1e-4);
             }
         }
-        let mut noisy: Vec<f32> = (0..b.len() * BRICK_NODES).map(|i| if i % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let mut noisy: Vec<f32> = (0..b.len() * BRICK_NODES)
+            .map(|i| if i % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
         smooth(&b, &[], &mut noisy, &fixed, 1);
         let inner = b.node(IVec3::new(6, 4, 8)).unwrap();
         assert!(noisy[inner].abs() < 1e-6, "a checkerboard along x vanishes");

@@ -28,7 +28,10 @@ pub const PAD_NODES: usize = PAD * PAD * PAD;
 pub const NONE: u32 = u32::MAX;
 
 /// Values the grids hold: interpolable by weights.
-pub trait Lerp: Copy + Default + Add<Output = Self> + Mul<f32, Output = Self> + Send + Sync {}
+pub trait Lerp:
+    Copy + Default + Add<Output = Self> + Mul<f32, Output = Self> + Send + Sync
+{
+}
 impl Lerp for f32 {}
 impl Lerp for Vec2 {}
 impl Lerp for Vec3 {}
@@ -155,40 +158,50 @@ impl Bricks {
     /// neighbours (inside the domain) in a missing brick, and those outside the domain.
     fn compute_rim(&self) -> Vec<bool> {
         let mut rim = vec![false; self.coords.len() * BRICK_NODES];
-        rim.par_chunks_mut(BRICK_NODES).enumerate().for_each(|(b, out)| {
-            let base = self.coords[b] * BRICK;
-            let nb = &self.neighbours[b];
-            let full = nb.iter().all(|&n| n != NONE);
-            // Offsets a node at local coordinate l reaches: 0, and ±1 on the brick's faces.
-            let reach = |l: i32| -> (i32, i32) { (if l == 0 { -1 } else { 0 }, if l == BRICK - 1 { 1 } else { 0 }) };
-            for z in 0..BRICK {
-                for y in 0..BRICK {
-                    for x in 0..BRICK {
-                        let g = base + IVec3::new(x, y, z);
-                        let r = if !self.geom.contains(g) {
-                            true
-                        } else if full {
-                            false
-                        } else {
-                            let (rx, ry, rz) = (reach(x), reach(y), reach(z));
-                            let mut missing = false;
-                            for dz in rz.0..=rz.1 {
-                                for dy in ry.0..=ry.1 {
-                                    for dx in rx.0..=rx.1 {
-                                        let d = IVec3::new(dx, dy, dz);
-                                        // Only neighbours inside the domain count.
-                                        let inside = self.geom.contains(g + d);
-                                        missing |= inside && nb[((dx + 1) + 3 * (dy + 1) + 9 * (dz + 1)) as usize] == NONE;
+        rim.par_chunks_mut(BRICK_NODES)
+            .enumerate()
+            .for_each(|(b, out)| {
+                let base = self.coords[b] * BRICK;
+                let nb = &self.neighbours[b];
+                let full = nb.iter().all(|&n| n != NONE);
+                // Offsets a node at local coordinate l reaches: 0, and ±1 on the brick's faces.
+                let reach = |l: i32| -> (i32, i32) {
+                    (
+                        if l == 0 { -1 } else { 0 },
+                        if l == BRICK - 1 { 1 } else { 0 },
+                    )
+                };
+                for z in 0..BRICK {
+                    for y in 0..BRICK {
+                        for x in 0..BRICK {
+                            let g = base + IVec3::new(x, y, z);
+                            let r = if !self.geom.contains(g) {
+                                true
+                            } else if full {
+                                false
+                            } else {
+                                let (rx, ry, rz) = (reach(x), reach(y), reach(z));
+                                let mut missing = false;
+                                for dz in rz.0..=rz.1 {
+                                    for dy in ry.0..=ry.1 {
+                                        for dx in rx.0..=rx.1 {
+                                            let d = IVec3::new(dx, dy, dz);
+                                            // Only neighbours inside the domain count.
+                                            let inside = self.geom.contains(g + d);
+                                            missing |= inside
+                                                && nb[((dx + 1) + 3 * (dy + 1) + 9 * (dz + 1))
+                                                    as usize]
+                                                    == NONE;
+                                        }
                                     }
                                 }
-                            }
-                            missing
-                        };
-                        out[local(IVec3::new(x, y, z))] = r;
+                                missing
+                            };
+                            out[local(IVec3::new(x, y, z))] = r;
+                        }
                     }
                 }
-            }
-        });
+            });
         rim
     }
 
@@ -242,7 +255,10 @@ impl Bricks {
 
     /// Bytes taken by the allocation itself (table, neighbours, rim mask).
     pub fn overhead_bytes(&self) -> u64 {
-        (self.table.len() * 4 + self.neighbours.len() * 27 * 4 + self.coords.len() * 12 + self.rim.len()) as u64
+        (self.table.len() * 4
+            + self.neighbours.len() * 27 * 4
+            + self.coords.len() * 12
+            + self.rim.len()) as u64
     }
 
     /// Copies brick `b` of `data` with a one-node halo into `pad`. Halo nodes outside the
@@ -268,7 +284,15 @@ impl Bricks {
         let at = |dx: i32, dy: i32, dz: i32, lx: i32, ly: i32, lz: i32| -> T {
             let n = nb[((dx + 1) + 3 * (dy + 1) + 9 * (dz + 1)) as usize];
             if n == NONE {
-                let f = |d: i32, l: i32| if d < 0 { 0 } else if d > 0 { 7 } else { l };
+                let f = |d: i32, l: i32| {
+                    if d < 0 {
+                        0
+                    } else if d > 0 {
+                        7
+                    } else {
+                        l
+                    }
+                };
                 own[local(IVec3::new(f(dx, lx), f(dy, ly), f(dz, lz)))]
             } else {
                 data[n as usize * BRICK_NODES + local(IVec3::new(lx, ly, lz))]
@@ -367,7 +391,11 @@ pub fn trilinear_grad(data: &[f32], idx: &[u32; 8], f: Vec3, h: f32) -> (f32, Ve
     let val = lerp(c0, c1, z);
     let dz = c1 - c0;
     let dy = lerp(c10 - c00, c11 - c01, z);
-    let dx = lerp(lerp(v[1] - v[0], v[3] - v[2], y), lerp(v[5] - v[4], v[7] - v[6], y), z);
+    let dx = lerp(
+        lerp(v[1] - v[0], v[3] - v[2], y),
+        lerp(v[5] - v[4], v[7] - v[6], y),
+        z,
+    );
     (val, Vec3::new(dx, dy, dz) / h)
 }
 
@@ -375,7 +403,11 @@ pub fn trilinear_grad(data: &[f32], idx: &[u32; 8], f: Vec3, h: f32) -> (f32, Ve
 /// its corners and fraction. `None` only when the coarsest level is incomplete there.
 #[inline]
 pub fn locate(levels: &[Bricks], p: Vec3) -> Option<(usize, [u32; 8], Vec3)> {
-    levels.iter().enumerate().rev().find_map(|(l, b)| b.cell(p).map(|(i, f)| (l, i, f)))
+    levels
+        .iter()
+        .enumerate()
+        .rev()
+        .find_map(|(l, b)| b.cell(p).map(|(i, f)| (l, i, f)))
 }
 
 /// The value of `channel` (one data vector per level of `levels`) at `p`.
@@ -392,41 +424,44 @@ pub fn prolong<T: Lerp>(levels: &[Bricks], channel: &[Vec<T>], fine: &Bricks) ->
     let top = levels.len() - 1;
     let parent = &levels[top];
     let mut out = vec![T::default(); fine.len() * BRICK_NODES];
-    out.par_chunks_mut(BRICK_NODES).enumerate().for_each(|(b, out)| {
-        // Parent nodes 4c .. 4c + 4 per axis.
-        let pbase = fine.coords[b] * (BRICK / 2);
-        let mut block = [T::default(); 125];
-        for z in 0..5 {
-            for y in 0..5 {
-                for x in 0..5 {
-                    let g = (pbase + IVec3::new(x, y, z)).min(parent.geom.dims - IVec3::ONE);
-                    block[(x + 5 * (y + 5 * z)) as usize] = match parent.node(g) {
-                        Some(i) => channel[top][i],
-                        None => sample(levels, channel, parent.geom.pos(g)),
-                    };
+    out.par_chunks_mut(BRICK_NODES)
+        .enumerate()
+        .for_each(|(b, out)| {
+            // Parent nodes 4c .. 4c + 4 per axis.
+            let pbase = fine.coords[b] * (BRICK / 2);
+            let mut block = [T::default(); 125];
+            for z in 0..5 {
+                for y in 0..5 {
+                    for x in 0..5 {
+                        let g = (pbase + IVec3::new(x, y, z)).min(parent.geom.dims - IVec3::ONE);
+                        block[(x + 5 * (y + 5 * z)) as usize] = match parent.node(g) {
+                            Some(i) => channel[top][i],
+                            None => sample(levels, channel, parent.geom.pos(g)),
+                        };
+                    }
                 }
             }
-        }
-        for z in 0..BRICK {
-            for y in 0..BRICK {
-                for x in 0..BRICK {
-                    let (px, py, pz) = (x / 2, y / 2, z / 2);
-                    let (ox, oy, oz) = (x & 1, y & 1, z & 1);
-                    let mut acc = T::default();
-                    let mut n = 0;
-                    for dz in 0..=oz {
-                        for dy in 0..=oy {
-                            for dx in 0..=ox {
-                                acc = acc + block[(px + dx + 5 * (py + dy + 5 * (pz + dz))) as usize];
-                                n += 1;
+            for z in 0..BRICK {
+                for y in 0..BRICK {
+                    for x in 0..BRICK {
+                        let (px, py, pz) = (x / 2, y / 2, z / 2);
+                        let (ox, oy, oz) = (x & 1, y & 1, z & 1);
+                        let mut acc = T::default();
+                        let mut n = 0;
+                        for dz in 0..=oz {
+                            for dy in 0..=oy {
+                                for dx in 0..=ox {
+                                    acc = acc
+                                        + block[(px + dx + 5 * (py + dy + 5 * (pz + dz))) as usize];
+                                    n += 1;
+                                }
                             }
                         }
+                        out[local(IVec3::new(x, y, z))] = acc * (1.0 / n as f32);
                     }
-                    out[local(IVec3::new(x, y, z))] = acc * (1.0 / n as f32);
                 }
             }
-        }
-    });
+        });
     out
 }
 
@@ -459,8 +494,12 @@ mod tests {
             for z in -1..=8 {
                 for y in -1..=8 {
                     for x in -1..=8 {
-                        let gc = (base + IVec3::new(x, y, z)).clamp(IVec3::ZERO, g.dims - IVec3::ONE);
-                        assert_eq!(pad[padded(x, y, z)], (gc.x + 100 * gc.y + 10_000 * gc.z) as f32);
+                        let gc =
+                            (base + IVec3::new(x, y, z)).clamp(IVec3::ZERO, g.dims - IVec3::ONE);
+                        assert_eq!(
+                            pad[padded(x, y, z)],
+                            (gc.x + 100 * gc.y + 10_000 * gc.z) as f32
+                        );
                     }
                 }
             }
@@ -477,8 +516,14 @@ mod tests {
         assert!(!at(IVec3::new(12, 12, 12)));
         assert!(!at(IVec3::new(15, 12, 12)), "the +x neighbour exists");
         assert!(at(IVec3::new(23, 12, 12)));
-        assert!(b.cell(g.pos(IVec3::new(9, 9, 9)) + Vec3::splat(0.1)).is_some());
-        assert!(b.cell(g.pos(IVec3::new(23, 9, 9)) + Vec3::splat(0.1)).is_none());
+        assert!(
+            b.cell(g.pos(IVec3::new(9, 9, 9)) + Vec3::splat(0.1))
+                .is_some()
+        );
+        assert!(
+            b.cell(g.pos(IVec3::new(23, 9, 9)) + Vec3::splat(0.1))
+                .is_none()
+        );
     }
 
     #[test]
@@ -486,7 +531,9 @@ mod tests {
         let coarse_g = geom(24).coarser();
         let coarse = Bricks::dense(coarse_g);
         let lin = |p: Vec3| 0.3 * p.x - 1.2 * p.y + 0.7 * p.z + 2.0;
-        let cdata: Vec<f32> = (0..coarse.len() * BRICK_NODES).map(|i| lin(coarse_g.pos(coarse.node_coord(i)))).collect();
+        let cdata: Vec<f32> = (0..coarse.len() * BRICK_NODES)
+            .map(|i| lin(coarse_g.pos(coarse.node_coord(i))))
+            .collect();
         let fine_g = geom(24);
         let fine = Bricks::new(fine_g, vec![IVec3::new(1, 1, 1), IVec3::new(1, 2, 1)]);
         let fdata = prolong(std::slice::from_ref(&coarse), &[cdata.clone()], &fine);
@@ -499,7 +546,12 @@ mod tests {
         let levels = vec![coarse, fine];
         let ch = vec![cdata, fdata];
         for k in 0..200 {
-            let p = fine_g.origin + Vec3::new(k as f32 * 0.055, 2.0 + k as f32 * 0.037, 13.0 - k as f32 * 0.061);
+            let p = fine_g.origin
+                + Vec3::new(
+                    k as f32 * 0.055,
+                    2.0 + k as f32 * 0.037,
+                    13.0 - k as f32 * 0.061,
+                );
             assert!((sample(&levels, &ch, p) - lin(p)).abs() < 1e-4);
         }
     }

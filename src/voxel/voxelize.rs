@@ -87,7 +87,11 @@ pub fn tri_box(c: Vec3, e: f32, tri: [Vec3; 3]) -> bool {
     let f = [v[1] - v[0], v[2] - v[1], v[0] - v[2]];
     // Nine edge cross-product axes.
     for fe in f {
-        for a in [Vec3::new(0.0, -fe.z, fe.y), Vec3::new(fe.z, 0.0, -fe.x), Vec3::new(-fe.y, fe.x, 0.0)] {
+        for a in [
+            Vec3::new(0.0, -fe.z, fe.y),
+            Vec3::new(fe.z, 0.0, -fe.x),
+            Vec3::new(-fe.y, fe.x, 0.0),
+        ] {
             let p = v.map(|x| x.dot(a));
             let r = e * (a.x.abs() + a.y.abs() + a.z.abs());
             let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
@@ -98,7 +102,10 @@ pub fn tri_box(c: Vec3, e: f32, tri: [Vec3; 3]) -> bool {
     }
     // The box's face normals.
     for a in 0..3 {
-        let (lo, hi) = (v[0][a].min(v[1][a]).min(v[2][a]), v[0][a].max(v[1][a]).max(v[2][a]));
+        let (lo, hi) = (
+            v[0][a].min(v[1][a]).min(v[2][a]),
+            v[0][a].max(v[1][a]).max(v[2][a]),
+        );
         if lo > e || hi < -e {
             return false;
         }
@@ -134,7 +141,8 @@ pub fn voxelize(mesh: &ProxyMesh, geom: &LevelGeom) -> Vec<Constraint> {
             let lo = tri[0].min(tri[1]).min(tri[2]);
             let hi = tri[0].max(tri[1]).max(tri[2]);
             let glo = (((lo - geom.origin) / h - 0.5).ceil().as_ivec3()).max(IVec3::ZERO);
-            let ghi = (((hi - geom.origin) / h + 0.5).floor().as_ivec3()).min(geom.dims - IVec3::ONE);
+            let ghi =
+                (((hi - geom.origin) / h + 0.5).floor().as_ivec3()).min(geom.dims - IVec3::ONE);
             for z in glo.z..=ghi.z {
                 for y in glo.y..=ghi.y {
                     for x in glo.x..=ghi.x {
@@ -161,7 +169,8 @@ pub fn voxelize(mesh: &ProxyMesh, geom: &LevelGeom) -> Vec<Constraint> {
                             gth.seed = (p - tri[0]).dot(geo);
                             gth.seed_dist = d;
                         }
-                        let key = x as u64 + geom.dims.x as u64 * (y as u64 + geom.dims.y as u64 * z as u64);
+                        let key = x as u64
+                            + geom.dims.x as u64 * (y as u64 + geom.dims.y as u64 * z as u64);
                         out.push((key, ti as u32, gth));
                     }
                 }
@@ -191,7 +200,11 @@ pub fn voxelize(mesh: &ProxyMesh, geom: &LevelGeom) -> Vec<Constraint> {
             i += 1;
         }
         let (dx, dy) = (geom.dims.x as u64, geom.dims.y as u64);
-        let node = IVec3::new((key % dx) as i32, ((key / dx) % dy) as i32, (key / (dx * dy)) as i32);
+        let node = IVec3::new(
+            (key % dx) as i32,
+            ((key / dx) % dy) as i32,
+            (key / (dx * dy)) as i32,
+        );
         out.push(Constraint {
             node,
             normal: s.normal.normalize_or_zero(),
@@ -216,19 +229,29 @@ pub fn pair_bitangents(left: Vec3, right: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::curves::{Quad, ProxyMesh};
+    use crate::curves::{ProxyMesh, Quad};
 
     #[test]
     fn tri_box_agrees_with_sampling() {
-        let tri = [Vec3::new(0.1, 0.2, 0.3), Vec3::new(2.3, 0.4, 1.1), Vec3::new(0.5, 1.9, -0.7)];
+        let tri = [
+            Vec3::new(0.1, 0.2, 0.3),
+            Vec3::new(2.3, 0.4, 1.1),
+            Vec3::new(0.5, 1.9, -0.7),
+        ];
         for i in 0..2000 {
-            let c = Vec3::new((i % 13) as f32 * 0.25 - 0.5, ((i / 13) % 13) as f32 * 0.25 - 0.5, (i / 169) as f32 * 0.25 - 1.0);
+            let c = Vec3::new(
+                (i % 13) as f32 * 0.25 - 0.5,
+                ((i / 13) % 13) as f32 * 0.25 - 0.5,
+                (i / 169) as f32 * 0.25 - 1.0,
+            );
             let hit = tri_box(c, 0.125, tri);
             // A sampled point of the triangle inside the box proves overlap.
             let mut sampled = false;
             for a in 0..=40 {
                 for b in 0..=(40 - a) {
-                    let p = tri[0] + (tri[1] - tri[0]) * (a as f32 / 40.0) + (tri[2] - tri[0]) * (b as f32 / 40.0);
+                    let p = tri[0]
+                        + (tri[1] - tri[0]) * (a as f32 / 40.0)
+                        + (tri[2] - tri[0]) * (b as f32 / 40.0);
                     sampled |= ((p - c).abs().max_element()) <= 0.125;
                 }
             }
@@ -240,14 +263,24 @@ mod tests {
 
     #[test]
     fn closest_point_agrees_with_sampling() {
-        let tri = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(3.0, 0.5, 0.2), Vec3::new(0.7, 2.0, -0.4)];
+        let tri = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(3.0, 0.5, 0.2),
+            Vec3::new(0.7, 2.0, -0.4),
+        ];
         for i in 0..300 {
-            let p = Vec3::new((i as f32 * 0.37).sin() * 4.0, (i as f32 * 0.91).cos() * 4.0, (i % 9) as f32 - 4.0);
+            let p = Vec3::new(
+                (i as f32 * 0.37).sin() * 4.0,
+                (i as f32 * 0.91).cos() * 4.0,
+                (i % 9) as f32 - 4.0,
+            );
             let d = p.distance(closest_on_triangle(p, tri));
             let mut best = f32::INFINITY;
             for a in 0..=60 {
                 for b in 0..=(60 - a) {
-                    let q = tri[0] + (tri[1] - tri[0]) * (a as f32 / 60.0) + (tri[2] - tri[0]) * (b as f32 / 60.0);
+                    let q = tri[0]
+                        + (tri[1] - tri[0]) * (a as f32 / 60.0)
+                        + (tri[2] - tri[0]) * (b as f32 / 60.0);
                     best = best.min(p.distance(q));
                 }
             }
@@ -260,19 +293,37 @@ mod tests {
         // A floor at z = 0.1 (normal up) and a ceiling at z = 0.7 (normal down) in the
         // same cell of size 2: the node at z = 0 is below the floor, in the rock.
         let quad = |z: f32, up: bool| {
-            let mut c = [Vec3::new(-3.0, -3.0, z), Vec3::new(3.0, -3.0, z), Vec3::new(3.0, 3.0, z), Vec3::new(-3.0, 3.0, z)];
+            let mut c = [
+                Vec3::new(-3.0, -3.0, z),
+                Vec3::new(3.0, -3.0, z),
+                Vec3::new(3.0, 3.0, z),
+                Vec3::new(-3.0, 3.0, z),
+            ];
             if !up {
                 c.reverse();
             }
-            Quad { corners: c, seed: true, noise: Vec2::ZERO }.proxy()
+            Quad {
+                corners: c,
+                seed: true,
+                noise: Vec2::ZERO,
+            }
+            .proxy()
         };
         let mut mesh = quad(0.1, true);
         mesh.append(&quad(0.7, false));
-        let geom = LevelGeom { origin: Vec3::splat(-4.0), h: 2.0, dims: IVec3::splat(5) };
+        let geom = LevelGeom {
+            origin: Vec3::splat(-4.0),
+            h: 2.0,
+            dims: IVec3::splat(5),
+        };
         let c = voxelize(&mesh, &geom);
         let centre = c.iter().find(|k| k.node == IVec3::splat(2)).unwrap();
         assert!((centre.seed.unwrap() - -0.1).abs() < 1e-5);
-        assert!(centre.normal.z > 0.5, "the nearer floor dominates: {}", centre.normal);
+        assert!(
+            centre.normal.z > 0.5,
+            "the nearer floor dominates: {}",
+            centre.normal
+        );
     }
 
     #[test]
@@ -280,7 +331,12 @@ mod tests {
         let mut mesh = ProxyMesh::default();
         mesh.append(
             &Quad {
-                corners: [Vec3::new(0.0, 0.0, 2.3), Vec3::new(6.0, 0.0, 2.3), Vec3::new(6.0, 6.0, 2.3), Vec3::new(0.0, 6.0, 2.3)],
+                corners: [
+                    Vec3::new(0.0, 0.0, 2.3),
+                    Vec3::new(6.0, 0.0, 2.3),
+                    Vec3::new(6.0, 6.0, 2.3),
+                    Vec3::new(0.0, 6.0, 2.3),
+                ],
                 seed: true,
                 noise: Vec2::new(1.0, 0.5),
             }
@@ -299,6 +355,9 @@ mod tests {
             assert_eq!(k.normal, Vec3::Z);
             assert_eq!(k.noise, Vec2::new(1.0, 0.5));
         }
-        assert!(c.windows(2).all(|w| (w[0].node.z, w[0].node.y, w[0].node.x) < (w[1].node.z, w[1].node.y, w[1].node.x)));
+        assert!(
+            c.windows(2).all(|w| (w[0].node.z, w[0].node.y, w[0].node.x)
+                < (w[1].node.z, w[1].node.y, w[1].node.x))
+        );
     }
 }
