@@ -6,8 +6,10 @@
 
 pub mod cli;
 pub mod dem;
+pub mod curves;
 pub mod field;
 pub mod io;
 pub mod mesh;
 pub mod render;
 pub mod scene;
+pub mod voxel;

@@ -5,6 +5,7 @@ pub mod dem;
 pub mod eval;
 pub mod sample;
 pub mod tree;
+pub mod curves;
 
 use clap::{Parser, Subcommand};
 
@@ -34,6 +35,8 @@ pub enum Command {
     Sample(sample::SampleArgs),
     /// Render a PNG preview of a tree by tracing its implicit surface.
     Render(render::RenderArgs),
+    /// Feature Curves: run the voxel pipeline on a `FeatureVolume` file.
+    Curves(curves::CurvesArgs),
 }
 
 /// Loads and compiles a tree file.
@@ -54,5 +57,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Eval(a) => eval::run(a),
         Command::Sample(a) => sample::run(a),
         Command::Render(args) => render::run(args),
+        Command::Curves(a) => curves::run(a),
     }
 }

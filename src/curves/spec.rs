@@ -1,0 +1,740 @@
+//! The RON format of Feature Curves: a [`FeatureSet`] (curves, shapes, tunnels, arches)
+//! and the [`FeatureVolumeSpec`] tree node that runs the voxel pipeline on one.
+//!
+//! ```ron
+//! FeatureVolume(
+//!     curves: Inline((
+//!         curves: [(
+//!             points: [Abs(0, 32, 40), Abs(64, 40, 44), Abs(127, 32, 40)],
+//!             constraints: [(t: 0, left: Slope(35), right: Slope(35))],
+//!         )],
+//!     )),
+//!     domain: ((0, 0, 0), (127, 63, 63)),
+//!     voxel: 1.0,
+//! )
+//! ```
+//!
+//! Points are `Abs(x, y, z)` or `Ground(x, y, offset)` (`offset` metres above the ground
+//! given to [`FeatureVolumeSpec::build_with_ground`]). Bitangents are `Slope(degrees)` (see
+//! [`slope_bitangent`]) or `Dir(x, y, z)`.
+
+use std::path::{Path, PathBuf};
+
+use glam::{Vec2, Vec3};
+use serde::{Deserialize, Serialize};
+
+use super::compound::{Arch, Profile, Tunnel};
+use super::constraint::{ConstraintPoint, FeatureCurve, reproject, slope_bitangent};
+use super::shapes::{Disc, Quad};
+use super::{BSpline, CurveError, Features};
+use crate::field::Aabb;
+use crate::scene::{Dir3, Finite, NonNegative, P3, Positive, Unit};
+use crate::voxel::{Fbm, FieldParams, Params, SField, run_cached};
+
+/// A point: absolute, or anchored to the ground.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Point {
+    /// `(x, y, z)` in metres.
+    Abs(Finite, Finite, Finite),
+    /// `offset` metres above the ground at `(x, y)` (negative: below).
+    Ground(Finite, Finite, Finite),
+}
+
+/// A bitangent of a Constraint Point.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Bitangent {
+    /// Degrees below the horizontal, on this side of the curve (see [`slope_bitangent`]).
+    Slope(Finite),
+    /// An explicit direction, projected onto the plane normal to the tangent.
+    Dir(Finite, Finite, Finite),
+}
+
+fn zero() -> NonNegative {
+    NonNegative(0.0)
+}
+
+/// A Constraint Point.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ConstraintSpec {
+    /// Position on the curve, in `[0, 1]`.
+    pub t: Unit,
+    /// Left-hand bitangent.
+    pub left: Bitangent,
+    /// Right-hand bitangent.
+    pub right: Bitangent,
+    /// Noise amplitude α (metres).
+    #[serde(default = "zero")]
+    pub amplitude: NonNegative,
+    /// Noise roughness β: base frequency of the noise (1/m).
+    #[serde(default = "zero")]
+    pub roughness: NonNegative,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// A Feature Curve.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CurveSpec {
+    /// A name for messages.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Control vertices (at least two; the curve interpolates the first and the last).
+    pub points: Vec<Point>,
+    /// Constraint Points (at least one), sorted by `t`.
+    pub constraints: Vec<ConstraintSpec>,
+    /// Seed (the surface passes through it) or guidance (it only steers normals).
+    #[serde(default = "yes")]
+    pub seed: bool,
+    /// Ribbon width in metres (default: the volume's).
+    #[serde(default)]
+    pub ribbon: Option<Positive>,
+}
+
+/// A quad; the normal follows the corners' winding (counter-clockwise seen from the air).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct QuadSpec {
+    /// Corners in order.
+    pub corners: [Point; 4],
+    /// Seed or guidance.
+    #[serde(default = "yes")]
+    pub seed: bool,
+    /// Noise amplitude.
+    #[serde(default = "zero")]
+    pub amplitude: NonNegative,
+    /// Noise roughness.
+    #[serde(default = "zero")]
+    pub roughness: NonNegative,
+}
+
+/// A disc.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DiscSpec {
+    /// Centre.
+    pub center: Point,
+    /// Normal (into the air).
+    pub normal: Dir3,
+    /// Radius.
+    pub radius: Positive,
+    /// Seed or guidance.
+    #[serde(default = "yes")]
+    pub seed: bool,
+    /// Noise amplitude.
+    #[serde(default = "zero")]
+    pub amplitude: NonNegative,
+    /// Noise roughness.
+    #[serde(default = "zero")]
+    pub roughness: NonNegative,
+}
+
+/// A profile along a path.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum ProfileSpec {
+    /// The same everywhere.
+    Const(Positive),
+    /// `(t, value)` keys, sorted by `t`, linear in between.
+    Keys(Vec<(Unit, Positive)>),
+}
+
+/// A tunnel (an elliptic tube around `path`); tunnels sharing a point branch.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TunnelSpec {
+    /// A name for messages.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// The axis' control vertices.
+    pub path: Vec<Point>,
+    /// Full width.
+    pub width: ProfileSpec,
+    /// Full height.
+    pub height: ProfileSpec,
+    /// Noise amplitude.
+    #[serde(default = "zero")]
+    pub amplitude: NonNegative,
+    /// Noise roughness.
+    #[serde(default = "zero")]
+    pub roughness: NonNegative,
+}
+
+/// A natural arch from three curves (top, underside, ground).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ArchSpec {
+    /// One foot.
+    pub from: Point,
+    /// The other foot.
+    pub to: Point,
+    /// Apex height of the top above the feet.
+    pub height: Positive,
+    /// Vertical thickness at the apex.
+    pub thickness: Positive,
+    /// Flank slope in degrees below the horizontal (default 45).
+    #[serde(default)]
+    pub flank: Option<Finite>,
+    /// Half-length of a ground curve under the apex, across the span (none by default).
+    #[serde(default)]
+    pub ground: Option<Positive>,
+    /// Noise amplitude.
+    #[serde(default = "zero")]
+    pub amplitude: NonNegative,
+    /// Noise roughness.
+    #[serde(default = "zero")]
+    pub roughness: NonNegative,
+}
+
+/// The modelling primitives of a curve file.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct FeatureSet {
+    /// Feature Curves.
+    #[serde(default)]
+    pub curves: Vec<CurveSpec>,
+    /// Quads.
+    #[serde(default)]
+    pub quads: Vec<QuadSpec>,
+    /// Discs.
+    #[serde(default)]
+    pub discs: Vec<DiscSpec>,
+    /// Tunnels.
+    #[serde(default)]
+    pub tunnels: Vec<TunnelSpec>,
+    /// Arches.
+    #[serde(default)]
+    pub arches: Vec<ArchSpec>,
+}
+
+/// Where the curves of a volume come from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum CurveSource {
+    /// Written in the tree file.
+    Inline(FeatureSet),
+    /// A `FeatureSet` RON file, relative to the tree file's folder.
+    Path(PathBuf),
+}
+
+/// Which side of the surface the primitive's field is solid on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Orientation {
+    /// Solid behind the surface (opposite the normals): `f = σ(−S)`. Rock, ground.
+    #[default]
+    Solid,
+    /// Solid on the normals' side: `f = σ(S)`. The air of a cave, to carve with.
+    Air,
+}
+
+/// Surface propagation method (seed 000 §4.6).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Propagation {
+    /// Signed distance propagation (§4.6.2).
+    #[default]
+    Distance,
+    /// Streamlines along the bitangent field add surface cells first (§4.6.1), then the
+    /// distance propagation signs the field.
+    Streamline,
+}
+
+/// Solver settings of the pipeline (all have defaults).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct SolverSpec {
+    /// Perona–Malik edge parameter `k` (§4.3.1).
+    pub k: Positive,
+    /// Jacobi iterations per level below the coarsest (the coarse-to-fine cascade).
+    pub iterations: u32,
+    /// Half-width of the fine band around the surface, in voxels of each level.
+    pub band: Positive,
+    /// Largest node count per axis of the dense base level.
+    pub base: u32,
+    /// Gaussian smoothing passes on S (§4.6.3).
+    pub smoothing: u32,
+}
+
+impl Default for SolverSpec {
+    fn default() -> Self {
+        SolverSpec {
+            k: Positive(0.01),
+            iterations: 8,
+            band: Positive(6.0),
+            base: 32,
+            smoothing: 1,
+        }
+    }
+}
+
+/// fBm settings of the surface noise.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct NoiseSpec {
+    /// Octaves.
+    pub octaves: u32,
+    /// Amplitude ratio between octaves.
+    pub gain: Unit,
+    /// Frequency ratio between octaves.
+    pub lacunarity: Positive,
+}
+
+impl Default for NoiseSpec {
+    fn default() -> Self {
+        NoiseSpec {
+            octaves: 4,
+            gain: Unit(0.5),
+            lacunarity: Positive(2.0),
+        }
+    }
+}
+
+/// A tree node: Feature Curves compiled by the voxel pipeline into an S-field primitive.
+/// Written `FeatureVolume(..)` in RON.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "FeatureVolume")]
+pub struct FeatureVolumeSpec {
+    /// A name for messages.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// The primitives.
+    pub curves: CurveSource,
+    /// The domain box `(min, max)`; the field's support.
+    pub domain: (P3, P3),
+    /// Voxel size (metres).
+    pub voxel: Positive,
+    /// Solid side.
+    #[serde(default)]
+    pub orientation: Orientation,
+    /// Width `R` of the sigmoid `σ_R` turning S into the field (default 2 voxels).
+    #[serde(default)]
+    pub transition: Option<Positive>,
+    /// Width of the fade to 0 inside the domain's faces (default 4 voxels).
+    #[serde(default)]
+    pub falloff: Option<Positive>,
+    /// Surface propagation method.
+    #[serde(default)]
+    pub propagation: Propagation,
+    /// Default ribbon width (default 2 voxels).
+    #[serde(default)]
+    pub ribbon: Option<Positive>,
+    /// Solver settings.
+    #[serde(default)]
+    pub solver: SolverSpec,
+    /// Noise settings.
+    #[serde(default)]
+    pub noise: NoiseSpec,
+}
+
+/// Reads a RON file, reporting parse errors with the path, line and column.
+pub fn parse_ron<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<T, CurveError> {
+    ron::Options::default()
+        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+        .from_str(text)
+        .map_err(|e| CurveError::Parse {
+            path: path.to_path_buf(),
+            line: e.span.start.line,
+            col: e.span.start.col,
+            msg: e.code.to_string(),
+        })
+}
+
+/// Reads and parses a RON file.
+pub fn load_ron<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CurveError> {
+    let text = std::fs::read_to_string(path).map_err(|source| CurveError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_ron(&text, path)
+}
+
+/// The ground callback: terrain height at `(x, y)`, `None` outside the terrain.
+pub type Ground<'a> = &'a dyn Fn(Vec2) -> Option<f32>;
+
+struct Resolver<'a> {
+    ground: Ground<'a>,
+}
+
+impl Resolver<'_> {
+    fn point(&self, p: &Point, what: &dyn Fn() -> String) -> Result<Vec3, CurveError> {
+        match *p {
+            Point::Abs(x, y, z) => Ok(Vec3::new(x.0, y.0, z.0)),
+            Point::Ground(x, y, off) => {
+                let xy = Vec2::new(x.0, y.0);
+                match (self.ground)(xy) {
+                    Some(h) if h.is_finite() => Ok(xy.extend(h + off.0)),
+                    _ => Err(CurveError::invalid(
+                        what(),
+                        format!(
+                            "Ground({}, {}, {}) has no ground height there (no terrain given, or outside it)",
+                            x, y, off
+                        ),
+                    )),
+                }
+            }
+        }
+    }
+
+    fn points(&self, ps: &[Point], what: &dyn Fn() -> String) -> Result<Vec<Vec3>, CurveError> {
+        ps.iter()
+            .enumerate()
+            .map(|(i, p)| self.point(p, &|| format!("{} point {i}", what())))
+            .collect()
+    }
+}
+
+fn label(kind: &str, i: usize, name: &Option<String>) -> String {
+    match name {
+        Some(n) => format!("{kind} {i} \"{n}\""),
+        None => format!("{kind} {i}"),
+    }
+}
+
+fn bitangent(
+    b: &Bitangent,
+    tangent: Vec3,
+    left: bool,
+    what: &dyn Fn() -> String,
+) -> Result<Vec3, CurveError> {
+    let v = match *b {
+        Bitangent::Slope(deg) => slope_bitangent(tangent, left, deg.0).ok_or_else(|| {
+            CurveError::invalid(
+                what(),
+                "Slope(..) needs a non-vertical curve here; use Dir(x, y, z)",
+            )
+        })?,
+        Bitangent::Dir(x, y, z) => Vec3::new(x.0, y.0, z.0),
+    };
+    let p = v.reject_from_normalized(tangent);
+    if p.length() < 1e-3 * v.length().max(1e-12) {
+        return Err(CurveError::invalid(
+            what(),
+            "bitangent is zero or parallel to the curve",
+        ));
+    }
+    Ok(reproject(p, tangent))
+}
+
+fn profile(p: &ProfileSpec, what: &dyn Fn() -> String) -> Result<Profile, CurveError> {
+    match p {
+        ProfileSpec::Const(v) => Ok(Profile::constant(v.0)),
+        ProfileSpec::Keys(k) if k.is_empty() => Err(CurveError::invalid(
+            what(),
+            "a profile needs at least one key",
+        )),
+        ProfileSpec::Keys(k) => {
+            if k.windows(2).any(|w| w[1].0.0 < w[0].0.0) {
+                return Err(CurveError::invalid(
+                    what(),
+                    "profile keys must be sorted by t",
+                ));
+            }
+            Ok(Profile(k.iter().map(|(t, v)| (t.0, v.0)).collect()))
+        }
+    }
+}
+
+fn spline(points: Vec<Vec3>, what: &dyn Fn() -> String) -> Result<BSpline, CurveError> {
+    if points.windows(2).all(|w| w[0].distance(w[1]) < 1e-6) {
+        return Err(CurveError::invalid(
+            what(),
+            "needs at least two distinct points",
+        ));
+    }
+    BSpline::new(points).ok_or_else(|| CurveError::invalid(what(), "needs at least two points"))
+}
+
+impl FeatureSet {
+    /// Resolves the file into world-space primitives; `ground` answers `Ground(..)`
+    /// points.
+    pub fn resolve(&self, ground: Ground<'_>) -> Result<Features, CurveError> {
+        let r = Resolver { ground };
+        let mut out = Features::default();
+        for (i, c) in self.curves.iter().enumerate() {
+            let what = || label("curve", i, &c.name);
+            let spline = spline(r.points(&c.points, &what)?, &what)?;
+            if c.constraints.is_empty() {
+                return Err(CurveError::invalid(
+                    what(),
+                    "needs at least one Constraint Point",
+                ));
+            }
+            let mut constraints = Vec::with_capacity(c.constraints.len());
+            for (k, cs) in c.constraints.iter().enumerate() {
+                let cwhat = || format!("{} constraint {k}", what());
+                if k > 0 && cs.t.0 < c.constraints[k - 1].t.0 {
+                    return Err(CurveError::invalid(
+                        cwhat(),
+                        "Constraint Points must be sorted by t",
+                    ));
+                }
+                let v = spline.tangent(cs.t.0);
+                constraints.push(ConstraintPoint {
+                    t: cs.t.0,
+                    left: bitangent(&cs.left, v, true, &|| format!("{} left", cwhat()))?,
+                    right: bitangent(&cs.right, v, false, &|| format!("{} right", cwhat()))?,
+                    amplitude: cs.amplitude.0,
+                    roughness: cs.roughness.0,
+                });
+            }
+            out.curves.push(FeatureCurve {
+                spline,
+                constraints,
+                seed: c.seed,
+                ribbon: c.ribbon.map(|w| w.0),
+            });
+        }
+        for (i, q) in self.quads.iter().enumerate() {
+            let what = || format!("quad {i}");
+            let pts = r.points(&q.corners, &what)?;
+            let quad = Quad {
+                corners: [pts[0], pts[1], pts[2], pts[3]],
+                seed: q.seed,
+                noise: Vec2::new(q.amplitude.0, q.roughness.0),
+            };
+            if quad.normal() == Vec3::ZERO {
+                return Err(CurveError::invalid(
+                    what(),
+                    "the corners are degenerate (no normal)",
+                ));
+            }
+            out.quads.push(quad);
+        }
+        for (i, d) in self.discs.iter().enumerate() {
+            let what = || format!("disc {i}");
+            out.discs.push(Disc {
+                center: r.point(&d.center, &what)?,
+                normal: d.normal.unit(),
+                radius: d.radius.0,
+                seed: d.seed,
+                noise: Vec2::new(d.amplitude.0, d.roughness.0),
+            });
+        }
+        for (i, t) in self.tunnels.iter().enumerate() {
+            let what = || label("tunnel", i, &t.name);
+            out.tunnels.push(Tunnel {
+                path: spline(r.points(&t.path, &what)?, &what)?,
+                width: profile(&t.width, &|| format!("{} width", what()))?,
+                height: profile(&t.height, &|| format!("{} height", what()))?,
+                noise: Vec2::new(t.amplitude.0, t.roughness.0),
+            });
+        }
+        for (i, a) in self.arches.iter().enumerate() {
+            let what = || format!("arch {i}");
+            let (from, to) = (r.point(&a.from, &what)?, r.point(&a.to, &what)?);
+            if Vec2::new(to.x - from.x, to.y - from.y).length() < 1e-3 {
+                return Err(CurveError::invalid(
+                    what(),
+                    "the feet must be apart horizontally",
+                ));
+            }
+            if a.thickness.0 >= a.height.0 {
+                return Err(CurveError::invalid(
+                    what(),
+                    "thickness must be less than height",
+                ));
+            }
+            out.arches.push(Arch {
+                from,
+                to,
+                height: a.height.0,
+                thickness: a.thickness.0,
+                flank: a.flank.map_or(45.0, |f| f.0),
+                ground: a.ground.map(|g| g.0),
+                noise: Vec2::new(a.amplitude.0, a.roughness.0),
+            });
+        }
+        Ok(out)
+    }
+}
+
+impl FeatureVolumeSpec {
+    /// The feature set, read from its file when given by path (relative to `base_dir`).
+    pub fn feature_set(&self, base_dir: &Path) -> Result<FeatureSet, CurveError> {
+        match &self.curves {
+            CurveSource::Inline(set) => Ok(set.clone()),
+            CurveSource::Path(p) => load_ron(&base_dir.join(p)),
+        }
+    }
+
+    /// A label for messages.
+    pub fn label(&self) -> String {
+        match &self.name {
+            Some(n) => format!("feature volume \"{n}\""),
+            None => "feature volume".to_string(),
+        }
+    }
+}
+
+/// Options of [`FeatureVolumeSpec::build_with`].
+#[derive(Clone, Copy)]
+pub struct BuildOptions<'a> {
+    /// Seed of the displacement noise.
+    pub seed: u32,
+    /// Answers `Ground(..)` points (`None`: such points are an error).
+    pub ground: Option<Ground<'a>>,
+    /// Memory budget of the grids (bytes).
+    pub max_memory: u64,
+}
+
+impl Default for BuildOptions<'_> {
+    fn default() -> Self {
+        BuildOptions {
+            seed: 0,
+            ground: None,
+            max_memory: crate::io::DEFAULT_MEMORY_BUDGET,
+        }
+    }
+}
+
+impl FeatureVolumeSpec {
+    /// The pipeline's and the field's parameters.
+    pub fn params(&self, seed: u32, max_memory: u64) -> (Params, FieldParams) {
+        let h = self.voxel.0;
+        let (a, b) = (self.domain.0.0, self.domain.1.0);
+        let domain = Aabb::new(a, b);
+        let p = Params {
+            domain,
+            voxel: h,
+            k: self.solver.k.0,
+            iterations: self.solver.iterations,
+            band: self.solver.band.0,
+            base: self.solver.base,
+            smoothing: self.solver.smoothing,
+            propagation: self.propagation,
+            max_memory,
+            ribbon: self.ribbon_width(),
+        };
+        let f = FieldParams {
+            domain,
+            orientation: self.orientation,
+            transition: self.transition.map_or(2.0 * h, |t| t.0),
+            falloff: self.falloff.map_or(4.0 * h, |t| t.0),
+            fbm: Fbm {
+                seed,
+                octaves: self.noise.octaves,
+                gain: self.noise.gain.0,
+                lacunarity: self.noise.lacunarity.0,
+            },
+        };
+        (p, f)
+    }
+
+    /// Default ribbon width: 2 voxels.
+    pub fn ribbon_width(&self) -> f32 {
+        self.ribbon.map_or(2.0 * self.voxel.0, |r| r.0)
+    }
+
+    /// Runs the pipeline (or takes its cached result) and returns the S-field primitive.
+    /// Curve files are found relative to `base_dir`.
+    pub fn build(&self, base_dir: &Path, seed: u32) -> Result<SField, CurveError> {
+        self.build_with(
+            base_dir,
+            &BuildOptions {
+                seed,
+                ..Default::default()
+            },
+        )
+    }
+
+    /// [`FeatureVolumeSpec::build`] with a ground callback and a memory budget.
+    pub fn build_with(
+        &self,
+        base_dir: &Path,
+        opts: &BuildOptions<'_>,
+    ) -> Result<SField, CurveError> {
+        let no_ground = |_: Vec2| None;
+        let set = self.feature_set(base_dir)?;
+        let features = set
+            .resolve(opts.ground.unwrap_or(&no_ground))
+            .map_err(|e| match e {
+                CurveError::Invalid { what, msg } => CurveError::Invalid {
+                    what: format!("{}: {what}", self.label()),
+                    msg,
+                },
+                e => e,
+            })?;
+        self.build_features(&features, opts.seed, opts.max_memory)
+    }
+
+    /// Runs the pipeline on resolved primitives.
+    pub fn build_features(
+        &self,
+        features: &Features,
+        seed: u32,
+        max_memory: u64,
+    ) -> Result<SField, CurveError> {
+        let (p, f) = self.params(seed, max_memory);
+        let (vol, _) = run_cached(features, &p)?;
+        Ok(SField::new(vol, f))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SPEC: &str = r#"
+        FeatureVolume(
+            name: "cliff",
+            curves: Inline((
+                curves: [(
+                    points: [Abs(0, 32, 40), Ground(64, 40, -2), Abs(127, 32, 40)],
+                    constraints: [
+                        (t: 0, left: Slope(0), right: Slope(90)),
+                        (t: 1, left: Dir(0, 1, 0), right: Slope(100), amplitude: 1.5, roughness: 0.1),
+                    ],
+                )],
+                tunnels: [(path: [Abs(0, 0, 0), Abs(10, 0, 0)], width: Const(4), height: Keys([(0, 3), (1, 5)]))],
+            )),
+            domain: ((0, 0, 0), (127, 63, 63)),
+            voxel: 1.0,
+        )
+    "#;
+
+    #[test]
+    fn parses_resolves_and_anchors_to_the_ground() {
+        let spec: FeatureVolumeSpec = parse_ron(SPEC, Path::new("<test>")).unwrap();
+        assert_eq!(spec.solver, SolverSpec::default());
+        let set = spec.feature_set(Path::new(".")).unwrap();
+        let ground = |xy: Vec2| Some(0.5 * xy.x);
+        let f = set.resolve(&ground).unwrap();
+        assert_eq!(f.curves[0].spline.control()[1], Vec3::new(64.0, 40.0, 30.0));
+        assert_eq!(f.curves[0].constraints[1].amplitude, 1.5);
+        assert_eq!(f.tunnels.len(), 1);
+        let none = |_: Vec2| None;
+        let e = set.resolve(&none).unwrap_err().to_string();
+        assert!(
+            e.contains("curve 0 point 1") && e.contains("Ground(64, 40, -2)"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn bad_values_are_reported_with_position_or_field() {
+        let bad = SPEC.replace("voxel: 1.0", "voxel: -1.0");
+        let e = parse_ron::<FeatureVolumeSpec>(&bad, Path::new("x.ron"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("x.ron:") && e.contains("expected a number > 0"),
+            "{e}"
+        );
+        let bad = SPEC.replace("Dir(0, 1, 0)", "Dir(0, 0, 0)");
+        let spec: FeatureVolumeSpec = parse_ron(&bad, Path::new("x.ron")).unwrap();
+        let e = spec
+            .feature_set(Path::new("."))
+            .unwrap()
+            .resolve(&|_| Some(0.0))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("curve 0 constraint 1 left") && e.contains("zero or parallel"),
+            "{e}"
+        );
+        let missing = CurveSource::Path("does/not/exist.ron".into());
+        let spec = FeatureVolumeSpec {
+            curves: missing,
+            ..spec
+        };
+        assert!(
+            spec.feature_set(Path::new("/tmp"))
+                .unwrap_err()
+                .to_string()
+                .contains("does/not/exist.ron")
+        );
+    }
+}

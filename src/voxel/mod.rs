@@ -1,0 +1,15 @@
+//! The voxel pipeline of seed 000 (ch. 4) on a sparse, multi-level grid, and the S-field
+//! primitive it produces ([`SField`]).
+
+pub mod diffuse;
+pub mod noise;
+pub mod pipeline;
+pub mod propagate;
+pub mod sfield;
+pub mod smooth;
+pub mod sparse;
+pub mod voxelize;
+
+pub use noise::Fbm;
+pub use pipeline::{Params, Stats, Volume, run, run_cached};
+pub use sfield::{FieldParams, SField};

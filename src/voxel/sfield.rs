@@ -1,0 +1,379 @@
+//! The S field as an implicit leaf of the construction tree.
+//!
+//! ```text
+//!   f(p) = min( σ_R(∓S'(p)),  2T·(1 − g(d_in(p) / R_f)) )     inside the domain box
+//!   f(p) = 0                                                    outside it
+//!   S'(p) = S(p) − α(p)·fbm(β(p)·(p − origin))
+//! ```
+//!
+//! `S` is the interpolated surface field (positive on the normals' side, the air; negative
+//! behind, the rock), `−S'` for [`Orientation::Solid`], `+S'` for [`Orientation::Air`]. σ is
+//! the tree's sigmoid ([`crate::field::falloff::sigma`]): the surface `f = T` is exactly
+//! `S' = 0`. `d_in` is the distance to the nearest face of the domain box (0 outside), `g`
+//! Wyvill's falloff: the field fades to 0 within `R_f` of the faces, so its support is
+//! the domain box. Every term is Lipschitz, so are the `min`, and the bounds below are
+//! sound (tests sample them).
+
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use super::noise::Fbm;
+use super::pipeline::{BrickBounds, Stats, Volume};
+use super::sparse::{BRICK, Bricks, locate, trilinear_grad};
+use crate::curves::Orientation;
+use crate::field::falloff::{
+    T, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope, wyvill,
+    wyvill_d, wyvill_interval, wyvill_slope,
+};
+use crate::field::{Aabb, Field, Interval};
+
+/// How S becomes a field.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FieldParams {
+    /// The domain box: the support.
+    pub domain: Aabb,
+    /// Solid side.
+    pub orientation: Orientation,
+    /// Sigmoid width `R` (metres).
+    pub transition: f32,
+    /// Face falloff width `R_f` (metres).
+    pub falloff: f32,
+    /// The displacement noise.
+    pub fbm: Fbm,
+}
+
+/// Bricks visited by a bound query before it falls back to a level's global bounds.
+const MAX_QUERY_BRICKS: i64 = 4096;
+
+/// The S-field primitive: Feature Curves compiled by the voxel pipeline.
+#[derive(Clone, Debug)]
+pub struct SField {
+    vol: Arc<Volume>,
+    params: FieldParams,
+    /// Per level: bounds over all bricks.
+    level_bounds: Vec<BrickBounds>,
+    /// `max |∇S|` over all levels.
+    lip_s: f32,
+    /// Lipschitz bound of the displacement `α·fbm(β·(p − o))`, 0 without noise.
+    lip_noise: f32,
+    /// `max |α·fbm|`.
+    noise_amp: f32,
+}
+
+fn hull(a: &BrickBounds, b: &BrickBounds) -> BrickBounds {
+    let r = |x: [f32; 2], y: [f32; 2]| [x[0].min(y[0]), x[1].max(y[1])];
+    BrickBounds {
+        s: r(a.s, b.s),
+        alpha: r(a.alpha, b.alpha),
+        beta: r(a.beta, b.beta),
+        grad_s: a.grad_s.max(b.grad_s),
+        grad_alpha: a.grad_alpha.max(b.grad_alpha),
+        grad_beta: a.grad_beta.max(b.grad_beta),
+    }
+}
+
+const EMPTY_BOUNDS: BrickBounds = BrickBounds {
+    s: [f32::INFINITY, f32::NEG_INFINITY],
+    alpha: [f32::INFINITY, f32::NEG_INFINITY],
+    beta: [f32::INFINITY, f32::NEG_INFINITY],
+    grad_s: Vec3::ZERO,
+    grad_alpha: 0.0,
+    grad_beta: 0.0,
+};
+
+/// Lipschitz bound of the displacement `α·fbm(β q)`, `q = p − origin`, where α, β and
+/// their slopes are bounded by `b` and `‖q‖ ≤ reach`:
+/// `∇(α n(β q)) = n ∇α + α [β ∇n + (∇n · q) ∇β]`.
+fn noise_lipschitz(params: &FieldParams, b: &BrickBounds, reach: f32) -> f32 {
+    let (a, l) = (params.fbm.amplitude(), params.fbm.lipschitz());
+    b.grad_alpha * a + b.alpha[1].max(0.0) * l * (b.beta[1].max(0.0) + reach * b.grad_beta)
+}
+
+impl SField {
+    /// The field of a pipeline result.
+    pub fn new(vol: Arc<Volume>, params: FieldParams) -> Self {
+        let level_bounds: Vec<BrickBounds> = vol
+            .bounds
+            .iter()
+            .map(|b| b.iter().fold(EMPTY_BOUNDS, |a, x| hull(&a, x)))
+            .collect();
+        let all = level_bounds.iter().fold(EMPTY_BOUNDS, |a, x| hull(&a, x));
+        let lip_s = all.grad_s.length();
+        let (alpha_max, beta_max) = (all.alpha[1].max(0.0), all.beta[1].max(0.0));
+        let noise_amp = if alpha_max > 0.0 && params.fbm.octaves > 0 {
+            alpha_max * params.fbm.amplitude()
+        } else {
+            0.0
+        };
+        let lip_noise = if noise_amp > 0.0 {
+            noise_lipschitz(&params, &all, params.domain.size().length())
+        } else {
+            0.0
+        };
+        let _ = beta_max;
+        SField {
+            vol,
+            params,
+            level_bounds,
+            lip_s,
+            lip_noise,
+            noise_amp,
+        }
+    }
+
+    /// True when there was no seed primitive: the field is 0 everywhere.
+    pub fn is_empty(&self) -> bool {
+        self.vol.levels.is_empty()
+    }
+
+    /// The pipeline's statistics.
+    pub fn stats(&self) -> &Stats {
+        &self.vol.stats
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &FieldParams {
+        &self.params
+    }
+
+    /// The grid levels (dense base first).
+    pub fn levels(&self) -> &[Bricks] {
+        &self.vol.levels
+    }
+
+    /// Bytes held by the field's grids.
+    pub fn memory_bytes(&self) -> u64 {
+        self.vol.stats.field_bytes
+    }
+
+    /// `S'(p)`: the displaced surface field at `p` clamped to the domain (`+∞` when empty).
+    pub fn s_value(&self, p: Vec3) -> f32 {
+        self.s_grad(p).0
+    }
+
+    /// `(S'(p), ∇S'(p))` at `p` clamped to the domain.
+    pub fn s_grad(&self, p: Vec3) -> (f32, Vec3) {
+        let q = self.params.domain.clamp(p);
+        let Some((l, idx, f)) = locate(&self.vol.levels, q) else {
+            return (f32::INFINITY, Vec3::ZERO);
+        };
+        let h = self.vol.levels[l].geom.h;
+        let (s, gs) = trilinear_grad(&self.vol.s[l], &idx, f, h);
+        if self.noise_amp == 0.0 {
+            return (s, gs);
+        }
+        let (a, ga) = trilinear_grad(&self.vol.alpha[l], &idx, f, h);
+        let (b, gb) = trilinear_grad(&self.vol.beta[l], &idx, f, h);
+        let o = q - self.params.domain.min;
+        let (n, gn) = self.params.fbm.value_grad(o * b);
+        let gd = ga * n + (gn * b + gb * gn.dot(o)) * a;
+        (s - a * n, gs - gd)
+    }
+
+    /// `±S'` by orientation.
+    fn signed(&self, s: f32) -> f32 {
+        match self.params.orientation {
+            Orientation::Solid => -s,
+            Orientation::Air => s,
+        }
+    }
+
+    /// Distance to the nearest face of the domain (0 outside) and its gradient.
+    fn d_in(&self, p: Vec3) -> (f32, Vec3) {
+        let d = &self.params.domain;
+        let (lo, hi) = (p - d.min, d.max - p);
+        let mut best = (f32::INFINITY, Vec3::ZERO);
+        for a in 0..3 {
+            let mut e = Vec3::ZERO;
+            e[a] = 1.0;
+            if lo[a] < best.0 {
+                best = (lo[a], e);
+            }
+            if hi[a] < best.0 {
+                best = (hi[a], -e);
+            }
+        }
+        if best.0 <= 0.0 {
+            (0.0, Vec3::ZERO)
+        } else {
+            best
+        }
+    }
+
+    /// Range of `d_in` over `b`.
+    fn d_in_range(&self, b: &Aabb) -> Interval {
+        let d = &self.params.domain;
+        let lo = (b.min - d.min).min(d.max - b.max).min_element().max(0.0);
+        let hi = (b.max - d.min).min(d.max - b.min).min_element().max(0.0);
+        Interval::new(lo, hi)
+    }
+
+    /// Bounds over the bricks whose nodes the field can read inside `b` (clamped to the
+    /// domain), across all levels.
+    fn box_bounds(&self, b: &Aabb) -> BrickBounds {
+        let mut acc = EMPTY_BOUNDS;
+        for (l, bricks) in self.vol.levels.iter().enumerate() {
+            let g = bricks.geom;
+            let lo = ((b.min - g.origin) / g.h - Vec3::ONE)
+                .floor()
+                .as_ivec3()
+                .max(glam::IVec3::ZERO)
+                / BRICK;
+            let hi = ((b.max - g.origin) / g.h + Vec3::ONE)
+                .ceil()
+                .as_ivec3()
+                .min(g.dims - glam::IVec3::ONE)
+                / BRICK;
+            let count = (hi - lo + glam::IVec3::ONE)
+                .max(glam::IVec3::ZERO)
+                .as_i64vec3()
+                .element_product();
+            if count > MAX_QUERY_BRICKS {
+                acc = hull(&acc, &self.level_bounds[l]);
+                continue;
+            }
+            for z in lo.z..=hi.z {
+                for y in lo.y..=hi.y {
+                    for x in lo.x..=hi.x {
+                        let k = bricks.brick(glam::IVec3::new(x, y, z));
+                        if k != super::sparse::NONE {
+                            acc = hull(&acc, &self.vol.bounds[l][k as usize]);
+                        }
+                    }
+                }
+            }
+        }
+        acc
+    }
+
+    fn face_falloff(&self, d: f32) -> f32 {
+        2.0 * T * (1.0 - wyvill(d / self.params.falloff))
+    }
+}
+
+impl Field for SField {
+    fn value(&self, p: Vec3) -> f32 {
+        if self.is_empty() || !self.params.domain.contains(p) {
+            return 0.0;
+        }
+        let v = sigma(self.signed(self.s_value(p)), self.params.transition);
+        v.min(self.face_falloff(self.d_in(p).0))
+    }
+
+    fn value_grad(&self, p: Vec3) -> (f32, Vec3) {
+        if self.is_empty() || !self.params.domain.contains(p) {
+            return (0.0, Vec3::ZERO);
+        }
+        let (s, gs) = self.s_grad(p);
+        let sign = if self.params.orientation == Orientation::Solid {
+            -1.0
+        } else {
+            1.0
+        };
+        let (v, dv) = sigma_d(sign * s, self.params.transition);
+        let (d, gd) = self.d_in(p);
+        let rf = self.params.falloff;
+        let (w, dw) = wyvill_d(d / rf);
+        let face = 2.0 * T * (1.0 - w);
+        if face < v {
+            (face, gd * (-2.0 * T * dw / rf))
+        } else {
+            (v, gs * (sign * dv))
+        }
+    }
+
+    fn support(&self) -> Aabb {
+        if self.is_empty() {
+            Aabb::EMPTY
+        } else {
+            self.params.domain
+        }
+    }
+
+    fn interval(&self, b: &Aabb) -> Interval {
+        if self.is_empty() || !b.overlaps(&self.params.domain) {
+            return Interval::ZERO;
+        }
+        let bc = b.intersection(self.params.domain);
+        let bb = self.box_bounds(&bc);
+        // Brick ranges of S widened by the noise, and the Lipschitz bound around the
+        // centre (tighter on small boxes); both are sound, so is their intersection.
+        let amp = if self.noise_amp > 0.0 {
+            bb.alpha[1].max(0.0) * self.params.fbm.amplitude()
+        } else {
+            0.0
+        };
+        let bricks = Interval::new(bb.s[0], bb.s[1]).dilate(amp);
+        let c = bc.center();
+        let reach = bc
+            .corners()
+            .iter()
+            .map(|c| c.distance(self.params.domain.min))
+            .fold(0.0, f32::max);
+        let lip_noise = if self.noise_amp > 0.0 {
+            noise_lipschitz(&self.params, &bb, reach)
+        } else {
+            0.0
+        };
+        let lip =
+            Interval::point(self.s_value(c)).dilate((bb.grad_s.length() + lip_noise) * bc.radius());
+        let mut s = bricks.intersect(lip);
+        if s.is_empty() {
+            s = bricks;
+        }
+        let s = s.dilate(1e-5 * (1.0 + s.lo.abs().max(s.hi.abs())));
+        let x = if self.params.orientation == Orientation::Solid {
+            s.scale(-1.0)
+        } else {
+            s
+        };
+        let v = sigma_interval(x, self.params.transition);
+        let d = self.d_in_range(&bc);
+        let wi = wyvill_interval(d.scale(1.0 / self.params.falloff));
+        let face = Interval::new(2.0 * T * (1.0 - wi.hi), 2.0 * T * (1.0 - wi.lo));
+        let f = v.min(face);
+        if self.params.domain.contains_box(b) {
+            f
+        } else {
+            f.hull(Interval::ZERO)
+        }
+    }
+
+    fn lipschitz(&self) -> f32 {
+        if self.is_empty() {
+            return 0.0;
+        }
+        let sig = sigma_max_slope(self.params.transition) * (self.lip_s + self.lip_noise);
+        sig.max(2.0 * T * WYVILL_MAX_SLOPE / self.params.falloff)
+    }
+
+    fn lipschitz_box(&self, b: &Aabb) -> f32 {
+        if self.is_empty() || !b.overlaps(&self.params.domain) {
+            return 0.0;
+        }
+        let bc = b.intersection(self.params.domain);
+        let bb = self.box_bounds(&bc);
+        let lip_noise = if self.noise_amp > 0.0 {
+            let reach = bc
+                .corners()
+                .iter()
+                .map(|c| c.distance(self.params.domain.min))
+                .fold(0.0, f32::max);
+            noise_lipschitz(&self.params, &bb, reach)
+        } else {
+            0.0
+        };
+        let ls = bb.grad_s.length() + lip_noise;
+        let s = Interval::new(bb.s[0], bb.s[1]).dilate(self.noise_amp);
+        let x = if self.params.orientation == Orientation::Solid {
+            s.scale(-1.0)
+        } else {
+            s
+        };
+        let sig = sigma_slope(x, self.params.transition) * ls;
+        let d = self.d_in_range(&bc);
+        let face = 2.0 * T * wyvill_slope(d.scale(1.0 / self.params.falloff)) / self.params.falloff;
+        sig.max(face)
+    }
+}

@@ -1,0 +1,289 @@
+//! The thesis's examples (seed 000 §7.2) as scenes in `trees/curves/`: each is built by
+//! the voxel pipeline and its S field is checked against what the curves ask for.
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use karstic::curves::spec::load_ron;
+use karstic::curves::{CurveSample, FeatureVolumeSpec, Features};
+use karstic::field::{Field, T};
+use karstic::voxel::SField;
+
+fn dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/curves")
+}
+
+struct Scene {
+    spec: FeatureVolumeSpec,
+    features: Features,
+    field: SField,
+}
+
+fn scene(name: &str) -> Scene {
+    let spec: FeatureVolumeSpec = load_ron(&dir().join(format!("{name}.ron"))).unwrap();
+    let features = spec
+        .feature_set(&dir())
+        .unwrap()
+        .resolve(&|_| None)
+        .unwrap();
+    let field = spec.build(&dir(), 7).unwrap();
+    Scene {
+        spec,
+        features,
+        field,
+    }
+}
+
+impl Scene {
+    fn h(&self) -> f32 {
+        self.spec.voxel.0
+    }
+
+    /// True when `p` is far enough from the domain's faces for the face falloff not to
+    /// matter.
+    fn inside(&self, p: Vec3) -> bool {
+        let d = self.field.params().domain;
+        let m = self.field.params().falloff + 2.0 * self.h();
+        p.cmpge(d.min + Vec3::splat(m)).all() && p.cmple(d.max - Vec3::splat(m)).all()
+    }
+
+    fn samples(&self) -> Vec<CurveSample> {
+        self.features
+            .seed_samples(0.5 * self.h(), self.spec.ribbon_width())
+            .into_iter()
+            .filter(|s| self.inside(s.pos))
+            .collect()
+    }
+
+    /// Every seed curve sample has the surface within one voxel along its normal, with
+    /// the rock behind and the air in front.
+    fn assert_surface_through_seeds(&self) {
+        let h = self.h();
+        let samples = self.samples();
+        assert!(samples.len() > 20, "too few samples inside the domain");
+        let mut bad = Vec::new();
+        for s in &samples {
+            let n = (s.left_normal() + s.right_normal()).normalize_or_zero();
+            if n == Vec3::ZERO {
+                continue;
+            }
+            let (front, back) = (
+                self.field.value(s.pos + n * h),
+                self.field.value(s.pos - n * h),
+            );
+            if !(front < T && back > T) {
+                bad.push((s.pos, front, back));
+            }
+        }
+        assert!(
+            bad.is_empty(),
+            "{} of {} samples miss the surface: {:?}",
+            bad.len(),
+            samples.len(),
+            &bad[..bad.len().min(8)]
+        );
+    }
+
+    /// At the Constraint Points of the scene's explicit seed curves, and at the points in
+    /// between where their constraints are interpolated, the surface normal one and a
+    /// half voxels out on each ribbon is within `deg` degrees of the constrained one.
+    fn assert_constraint_normals(&self, deg: f32) {
+        let d = 1.5 * self.h();
+        let mut worst = (0.0f32, Vec3::ZERO);
+        let mut n = 0;
+        let seeds: Vec<_> = self.features.curves.iter().filter(|c| c.seed).collect();
+        // Where two curves meet their constraints conflict; those points are skipped.
+        let near_other = |k: usize, p: Vec3| {
+            seeds.iter().enumerate().any(|(j, o)| {
+                j != k
+                    && (0..=200)
+                        .any(|i| o.sample(i as f32 / 200.0).pos.distance(p) < 6.0 * self.h())
+            })
+        };
+        for (k, c) in seeds.iter().enumerate() {
+            let ts = c
+                .constraints
+                .iter()
+                .map(|cp| cp.t)
+                .chain((0..=40).map(|i| i as f32 / 40.0));
+            for t in ts {
+                let s = c.sample(t);
+                for (b, want) in [(s.left, s.left_normal()), (s.right, s.right_normal())] {
+                    let p = s.pos + b * d;
+                    if !self.inside(p) || near_other(k, s.pos) {
+                        continue;
+                    }
+                    let got = -self.field.value_grad(p).1.normalize_or_zero();
+                    let angle = got.dot(want).clamp(-1.0, 1.0).acos().to_degrees();
+                    if angle > worst.0 {
+                        worst = (angle, p);
+                    }
+                    n += 1;
+                }
+            }
+        }
+        assert!(n > 0, "no constraint point inside the domain");
+        eprintln!("worst normal deviation {:.1}° at {}", worst.0, worst.1);
+        assert!(
+            worst.0 <= deg,
+            "worst normal deviation {:.1}° at {} > {deg}°",
+            worst.0,
+            worst.1
+        );
+    }
+
+    /// Number of times the vertical line at `(x, y)` crosses the surface, away from the
+    /// domain's top and bottom faces.
+    fn crossings(&self, x: f32, y: f32) -> usize {
+        let d = self.field.params().domain;
+        let m = self.field.params().falloff + 2.0 * self.h();
+        let (top, bottom) = (d.max.z - m, d.min.z + m);
+        let steps = ((top - bottom) / (0.25 * self.h())) as usize;
+        let mut last = self.field.value(Vec3::new(x, y, top)) > T;
+        let mut n = 0;
+        for i in 0..=steps {
+            let z = top - i as f32 * 0.25 * self.h();
+            let now = self.field.value(Vec3::new(x, y, z)) > T;
+            n += (now != last) as usize;
+            last = now;
+        }
+        n
+    }
+
+    /// True when the segment `a → b` stays in the air.
+    fn clear(&self, a: Vec3, b: Vec3) -> bool {
+        let n = (a.distance(b) / (0.25 * self.h())).ceil() as usize;
+        (0..=n).all(|i| self.field.value(a.lerp(b, i as f32 / n as f32)) < T)
+    }
+}
+
+#[test]
+fn cliff() {
+    let s = scene("cliff");
+    s.assert_surface_through_seeds();
+    s.assert_constraint_normals(20.0);
+    // Plateau behind the edge, air in front of the face all the way down.
+    assert!(s.field.value(Vec3::new(48.0, 50.0, 30.0)) > T);
+    assert!(s.clear(Vec3::new(48.0, 15.0, 8.0), Vec3::new(48.0, 15.0, 56.0)));
+}
+
+#[test]
+fn overhanging_cliff_with_ground() {
+    let s = scene("overhang");
+    s.assert_surface_through_seeds();
+    s.assert_constraint_normals(20.0);
+    // Under the lip: air above, rock of the lip, air under the overhang, the ground.
+    for x in [24.0, 48.0, 72.0] {
+        assert!(
+            s.crossings(x, 33.0) >= 3,
+            "column x = {x} crosses {} times",
+            s.crossings(x, 33.0)
+        );
+    }
+}
+
+#[test]
+fn ridge() {
+    let s = scene("ridge");
+    s.assert_surface_through_seeds();
+    s.assert_constraint_normals(20.0);
+    assert_eq!(s.crossings(64.0, 64.0), 1);
+}
+
+#[test]
+fn converging_ridges() {
+    let s = scene("ridges");
+    s.assert_surface_through_seeds();
+    s.assert_constraint_normals(20.0);
+}
+
+#[test]
+fn riverbed() {
+    let s = scene("riverbed");
+    s.assert_surface_through_seeds();
+    s.assert_constraint_normals(20.0);
+    // The river's bottom lies below the land on both sides.
+    let top = |y: f32| {
+        (0..256)
+            .map(|i| 63.0 - i as f32 * 0.25)
+            .find(|&z| s.field.value(Vec3::new(64.0, y, z)) > T)
+            .unwrap()
+    };
+    assert!(top(64.0) < top(24.0) - 8.0 && top(64.0) < top(104.0) - 8.0);
+}
+
+#[test]
+fn hill() {
+    let s = scene("hill");
+    s.assert_surface_through_seeds();
+    s.assert_constraint_normals(20.0);
+    let top = |x: f32, y: f32| {
+        (0..256)
+            .map(|i| 63.0 - i as f32 * 0.25)
+            .find(|&z| s.field.value(Vec3::new(x, y, z)) > T)
+            .unwrap()
+    };
+    eprintln!("hill top {} ground {}", top(64.0, 64.0), top(10.0, 10.0));
+    assert!(
+        top(64.0, 64.0) > top(10.0, 10.0) + 8.0,
+        "the hill rises above the ground"
+    );
+}
+
+#[test]
+fn arch_from_three_curves() {
+    let s = scene("arch");
+    s.assert_surface_through_seeds();
+    // A ray under the span, across it, halfway between the ground and the underside.
+    assert!(s.clear(Vec3::new(64.0, 30.0, 26.0), Vec3::new(64.0, 98.0, 26.0)));
+    // Over the apex: air, the beam, the hole, the ground.
+    assert!(s.crossings(64.0, 64.0) >= 3);
+}
+
+#[test]
+fn single_tunnel() {
+    let s = scene("tunnel");
+    s.assert_surface_through_seeds();
+    let path = &s.features.tunnels[0].path;
+    // Along the axis from outside the domain to outside the domain: never rock.
+    let pts: Vec<Vec3> = (0..=400).map(|i| path.eval(i as f32 / 400.0)).collect();
+    assert!(pts.windows(2).all(|w| s.clear(w[0], w[1])));
+    // Rock around it.
+    assert!(s.field.value(path.eval(0.5) + Vec3::Z * 12.0) > T);
+    assert!(s.field.value(path.eval(0.5) - Vec3::Z * 12.0) > T);
+}
+
+#[test]
+fn branching_tunnel() {
+    let s = scene("branching_tunnel");
+    s.assert_surface_through_seeds();
+    for t in &s.features.tunnels {
+        let pts: Vec<Vec3> = (0..=400).map(|i| t.path.eval(i as f32 / 400.0)).collect();
+        assert!(
+            pts.windows(2).all(|w| s.clear(w[0], w[1])),
+            "a tunnel's axis hits rock"
+        );
+    }
+}
+
+#[test]
+fn serpentine_road() {
+    let s = scene("serpentine");
+    s.assert_surface_through_seeds();
+    // Sampled along the whole road, hairpins included.
+    s.assert_constraint_normals(20.0);
+}
+
+#[test]
+fn guidance_curves_alone_create_no_surface() {
+    let s = scene("guidance");
+    assert!(s.field.is_empty());
+    for i in 0..1000 {
+        let p = Vec3::new(
+            (i % 10) as f32 * 6.3,
+            ((i / 10) % 10) as f32 * 6.3,
+            (i / 100) as f32 * 6.3,
+        );
+        assert_eq!(s.field.value(p), 0.0);
+    }
+}
