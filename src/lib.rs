@@ -5,8 +5,8 @@
 //! [`field`] tree is the single thing the mesher and the tracers consume.
 
 pub mod cli;
-pub mod dem;
 pub mod curves;
+pub mod dem;
 pub mod field;
 pub mod io;
 pub mod mesh;

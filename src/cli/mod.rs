@@ -1,11 +1,11 @@
 //! The command line: a thin layer over the library. Each subcommand lives in its own file.
 
 pub mod build;
+pub mod curves;
 pub mod dem;
 pub mod eval;
 pub mod sample;
 pub mod tree;
-pub mod curves;
 
 use clap::{Parser, Subcommand};
 

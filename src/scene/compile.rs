@@ -9,7 +9,8 @@ use super::load::{SceneError, SceneFile};
 use super::spec::{NodeSpec, Scene};
 use std::sync::Arc;
 
-use crate::dem::DemCache;
+use crate::curves::spec::BuildOptions;
+use crate::dem::{DemCache, HeightfieldField};
 use crate::field::{Aabb, Fbm, NodeId, Primitive, Tree, TreeBuilder, Warp};
 use crate::io::DEFAULT_MEMORY_BUDGET;
 
@@ -33,9 +34,50 @@ struct Compiler<'s> {
     outline: Vec<(usize, NodeId)>,
     record: bool,
     dems: DemCache,
+    /// The terrain anchors resolve against, loaded on first use.
+    terrain: Option<Arc<HeightfieldField>>,
 }
 
 impl Compiler<'_> {
+    /// The terrain heightfield (the scene's `terrain`, or its only `Heightfield`).
+    fn terrain(&mut self, asking: &NodeSpec) -> Result<Arc<HeightfieldField>, SceneError> {
+        if let Some(t) = &self.terrain {
+            return Ok(t.clone());
+        }
+        let all = self.scene.all_nodes();
+        let candidates: Vec<&NodeSpec> = match &self.scene.terrain {
+            Some(name) => all
+                .into_iter()
+                .filter(|n| n.name() == Some(name.as_str()))
+                .collect(),
+            None => all
+                .into_iter()
+                .filter(|n| matches!(n, NodeSpec::Heightfield(_)))
+                .collect(),
+        };
+        let spec = match candidates.as_slice() {
+            [NodeSpec::Heightfield(h)] => h,
+            [] | [_] if self.scene.terrain.is_some() => {
+                return Err(
+                    self.error(asking, "the scene's `terrain` must name a Heightfield node")
+                );
+            }
+            [] => return Err(self.error(asking, "terrain anchors need a Heightfield in the scene")),
+            _ => {
+                return Err(self.error(
+                    asking,
+                    "the scene has several heightfields: say which one anchors resolve against with `terrain: \"name\"`",
+                ));
+            }
+        };
+        let hf = spec
+            .load_with(self.base_dir, &mut self.dems)
+            .map_err(|e| self.error(asking, e.to_string()))?;
+        let hf = Arc::new(hf);
+        self.terrain = Some(hf.clone());
+        Ok(hf)
+    }
+
     fn error(&self, node: &NodeSpec, message: impl Into<String>) -> SceneError {
         SceneError::Node {
             path: self.path.to_path_buf(),
@@ -84,6 +126,47 @@ impl Compiler<'_> {
                     .load_with(self.base_dir, &mut self.dems)
                     .map_err(|e| self.error(n, e.to_string()))?;
                 self.builder.leaf(Arc::new(leaf), name)
+            }
+            NodeSpec::FeatureVolume(f) => {
+                // `Ground(x, y, offset)` points resolve on the terrain, when the scene has one.
+                let has_terrain = self.scene.terrain.is_some()
+                    || self
+                        .scene
+                        .all_nodes()
+                        .iter()
+                        .any(|m| matches!(m, NodeSpec::Heightfield(_)));
+                let terrain = if has_terrain {
+                    Some(self.terrain(n)?)
+                } else {
+                    None
+                };
+                let ground = |xy: glam::Vec2| {
+                    terrain
+                        .as_ref()
+                        .map(|t| t.height(xy))
+                        .filter(|h| h.is_finite())
+                };
+                let opts = BuildOptions {
+                    seed: self.scene.seed,
+                    ground: Some(&ground),
+                    ..Default::default()
+                };
+                let leaf = f
+                    .build_with(self.base_dir, &opts)
+                    .map_err(|e| self.error(n, e.to_string()))?;
+                self.builder.leaf(Arc::new(leaf), name)
+            }
+            NodeSpec::Anchor(a) => {
+                let terrain = self.terrain(n)?;
+                let h = terrain.height(a.at.0);
+                if !h.is_finite() {
+                    return Err(
+                        self.error(n, format!("anchor point {} is outside the terrain", a.at.0))
+                    );
+                }
+                let child = self.node(&a.child, depth + 1)?;
+                let m = Affine3A::from_translation(a.at.0.extend(h + a.offset.0));
+                self.builder.transform(child, m, name)
             }
             NodeSpec::Blend(x) => {
                 let cs = self.children(&x.children, depth)?;
@@ -161,6 +244,7 @@ pub fn compile_scene(scene: &Scene, path: &Path, base_dir: &Path) -> Result<Comp
         outline: Vec::new(),
         record: true,
         dems: DemCache::new(DEFAULT_MEMORY_BUDGET),
+        terrain: None,
     };
     let root = c.node(&scene.root, 0)?;
     let tree = c.builder.build(root);

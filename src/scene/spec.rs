@@ -3,6 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::value::{Dir3, Finite, P3, Positive, Scale3};
+use crate::curves::FeatureVolumeSpec;
 use crate::dem::HeightfieldSpec;
 use crate::field::{NoiseSpec, PrimitiveSpec};
 
@@ -21,6 +22,10 @@ pub struct Scene {
     /// Global seed: every noise of the scene derives from it.
     #[serde(default)]
     pub seed: u32,
+    /// The `Heightfield` node that terrain anchors (`Anchor` nodes, `Ground(x, y, offset)`
+    /// curve points) resolve against. Default: the scene's only heightfield.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub terrain: Option<String>,
     /// Named subtrees that are not drawn themselves but can be instanced.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub defs: Vec<NodeSpec>,
@@ -35,6 +40,10 @@ pub enum NodeSpec {
     Primitive(PrimitiveSpec),
     /// A DEM as an implicit terrain (seed 002 §5.1): solid below the elevation.
     Heightfield(HeightfieldSpec),
+    /// Feature Curves compiled by the voxel pipeline into an S-field primitive (seed 000).
+    FeatureVolume(FeatureVolumeSpec),
+    /// A subtree placed on the terrain: its origin moved to `(x, y, h(x, y) + offset)`.
+    Anchor(AnchorSpec),
     /// Sum of the children (Wyvill blend).
     Blend(Nary),
     /// Max of the children.
@@ -159,6 +168,22 @@ pub struct WarpSpec {
     pub child: Box<NodeSpec>,
 }
 
+/// A subtree anchored to the terrain.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnchorSpec {
+    /// Unique node name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Where on the terrain, in the terrain's frame (metres).
+    pub at: super::value::P2,
+    /// Height above (positive) or depth below (negative) the terrain surface there.
+    #[serde(default)]
+    pub offset: Finite,
+    /// The anchored subtree, built around its own origin.
+    pub child: Box<NodeSpec>,
+}
+
 /// A reference to another named node.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -176,6 +201,8 @@ impl NodeSpec {
         match self {
             NodeSpec::Primitive(_) => "Primitive",
             NodeSpec::Heightfield(_) => "Heightfield",
+            NodeSpec::FeatureVolume(_) => "FeatureVolume",
+            NodeSpec::Anchor(_) => "Anchor",
             NodeSpec::Blend(_) => "Blend",
             NodeSpec::Union(_) => "Union",
             NodeSpec::Intersection(_) => "Intersection",
@@ -191,6 +218,8 @@ impl NodeSpec {
         match self {
             NodeSpec::Primitive(n) => n.name.as_deref(),
             NodeSpec::Heightfield(n) => n.name.as_deref(),
+            NodeSpec::FeatureVolume(n) => n.name.as_deref(),
+            NodeSpec::Anchor(n) => n.name.as_deref(),
             NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => {
                 n.name.as_deref()
             }
@@ -210,7 +239,11 @@ impl NodeSpec {
             NodeSpec::Difference(d) => std::iter::once(&*d.base).chain(&d.carves).collect(),
             NodeSpec::Transform(t) => vec![&*t.child],
             NodeSpec::Warp(w) => vec![&*w.child],
-            NodeSpec::Instance(_) | NodeSpec::Primitive(_) | NodeSpec::Heightfield(_) => Vec::new(),
+            NodeSpec::Anchor(a) => vec![&*a.child],
+            NodeSpec::Instance(_)
+            | NodeSpec::Primitive(_)
+            | NodeSpec::Heightfield(_)
+            | NodeSpec::FeatureVolume(_) => Vec::new(),
         }
     }
 
@@ -236,7 +269,11 @@ impl NodeSpec {
                 .collect(),
             NodeSpec::Transform(t) => vec![&mut *t.child],
             NodeSpec::Warp(w) => vec![&mut *w.child],
-            NodeSpec::Instance(_) | NodeSpec::Primitive(_) | NodeSpec::Heightfield(_) => Vec::new(),
+            NodeSpec::Anchor(a) => vec![&mut *a.child],
+            NodeSpec::Instance(_)
+            | NodeSpec::Primitive(_)
+            | NodeSpec::Heightfield(_)
+            | NodeSpec::FeatureVolume(_) => Vec::new(),
         }
     }
 
