@@ -19,8 +19,8 @@ fn args(extra: &[&str]) -> RenderArgs {
 #[test]
 fn flags_parse() {
     let a = args(&[
-        "--size", "64", "48", "--method", "sphere", "--camera", "-10", "5", "3.5", "0", "0", "-1", "--fov", "30",
-        "--gpu", "--quiet", "--cost", "c.png",
+        "--size", "64", "48", "--method", "sphere", "--camera", "-10", "5", "3.5", "0", "0", "-1",
+        "--fov", "30", "--gpu", "--quiet", "--cost", "c.png",
     ]);
     assert_eq!(a.size, vec![64, 48]);
     assert_eq!(a.method, karstic::render::Method::Sphere);
@@ -29,8 +29,15 @@ fn flags_parse() {
     let d = args(&[]);
     assert_eq!(d.size, vec![960, 540]);
     assert_eq!(d.method, karstic::render::Method::Segment);
-    assert!(Cli::try_parse_from(["karstic", "render", "x.ron", "-o", "o.png", "--size", "5"]).is_err());
-    assert!(Cli::try_parse_from(["karstic", "render", "x.ron", "-o", "o.png", "--method", "bogus"]).is_err());
+    assert!(
+        Cli::try_parse_from(["karstic", "render", "x.ron", "-o", "o.png", "--size", "5"]).is_err()
+    );
+    assert!(
+        Cli::try_parse_from([
+            "karstic", "render", "x.ron", "-o", "o.png", "--method", "bogus"
+        ])
+        .is_err()
+    );
 }
 
 #[test]
@@ -85,5 +92,8 @@ fn gpu_flag_falls_back_or_renders() {
     let mut a = args(&["--size", "48", "32", "--gpu", "--quiet"]);
     a.output = dir.path().join("g.png");
     render_tree(&a, &tree).unwrap();
-    assert_eq!(image::open(&a.output).unwrap().to_rgba8().dimensions(), (48, 32));
+    assert_eq!(
+        image::open(&a.output).unwrap().to_rgba8().dimensions(),
+        (48, 32)
+    );
 }

@@ -5,7 +5,7 @@ mod common;
 use common::{Blobs, Rng, SigmaSphere, Terrain, check_segment_lipschitz};
 use glam::{Vec2, Vec3};
 use indicatif::ProgressBar;
-use karstic::field::Field;
+use karstic::field::{Aabb, Field};
 use karstic::render::camera::Ray;
 use karstic::render::cpu::{self, RenderSettings};
 use karstic::render::trace::{Method, TraceParams, occluded, trace};
@@ -123,6 +123,10 @@ fn blob_field_bounds_are_sound() {
     let b = small_blobs();
     let region = b.support().dilate(1.0);
     check_segment_lipschitz(&b, &region, 20_000, 1);
+    // Short segments near the blobs, where the directional per-blob bounds are used.
+    for (k, c) in b.centers.iter().take(20).enumerate() {
+        check_segment_lipschitz(&b, &Aabb::around(*c, 1.2 * b.radius), 2_000, 100 + k as u64);
+    }
     let mut rng = Rng(3);
     for _ in 0..2000 {
         let p = region.min + Vec3::new(rng.f32(), rng.f32(), rng.f32()) * region.size();

@@ -48,15 +48,15 @@ impl Shading {
         let height = support.size().z.max(1e-3);
         Shading {
             sun: Vec3::new(-0.55, -0.45, 0.7).normalize(),
-            sun_color: Vec3::new(1.0, 0.95, 0.85) * 1.1,
-            sky_color: Vec3::new(0.45, 0.55, 0.75),
-            ground_color: Vec3::new(0.25, 0.22, 0.18),
-            fog_color: Vec3::new(0.72, 0.78, 0.86),
+            sun_color: Vec3::new(1.0, 0.92, 0.8) * 2.4,
+            sky_color: Vec3::new(0.2, 0.26, 0.38),
+            ground_color: Vec3::new(0.07, 0.06, 0.05),
+            fog_color: Vec3::new(0.6, 0.68, 0.8),
             fog_distance: 12.0 * support.radius().max(1e-3),
             shadows: true,
-            rock: Vec3::new(0.42, 0.38, 0.34),
-            grass: Vec3::new(0.28, 0.42, 0.17),
-            snow: Vec3::new(0.92, 0.93, 0.96),
+            rock: Vec3::new(0.2, 0.17, 0.14),
+            grass: Vec3::new(0.09, 0.2, 0.045),
+            snow: Vec3::new(0.8, 0.82, 0.86),
             rock_slope: (0.6, 0.8),
             snow_line: support.min.z + 0.75 * height,
             snow_blend: 0.05 * height,
@@ -113,7 +113,9 @@ const GAMMA_STEPS: usize = 4096;
 pub fn to_srgb8(c: Vec3) -> [u8; 4] {
     static TABLE: std::sync::OnceLock<[u8; GAMMA_STEPS]> = std::sync::OnceLock::new();
     let table = TABLE.get_or_init(|| {
-        std::array::from_fn(|i| ((i as f32 / (GAMMA_STEPS - 1) as f32).powf(1.0 / 2.2) * 255.0 + 0.5) as u8)
+        std::array::from_fn(|i| {
+            ((i as f32 / (GAMMA_STEPS - 1) as f32).powf(1.0 / 2.2) * 255.0 + 0.5) as u8
+        })
     });
     let e = |v: f32| table[(v.clamp(0.0, 1.0) * (GAMMA_STEPS - 1) as f32 + 0.5) as usize];
     [e(c.x), e(c.y), e(c.z), 255]

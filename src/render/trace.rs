@@ -109,7 +109,7 @@ pub fn trace(field: &dyn Field, ray: &Ray, (t0, t1): (f32, f32), params: &TraceP
         t: f32::INFINITY,
         steps,
     };
-    if !(t0 <= t1) {
+    if t0.is_nan() || t1.is_nan() || t0 > t1 {
         return miss(0);
     }
     let global = match params.method {
@@ -180,14 +180,24 @@ fn safe_step(e: f32, lambda: f32) -> f32 {
 /// Locates the crossing of `T` between `a` and `b` (field offsets `e = f − T` of opposite
 /// signs) by false position with the Illinois modification, until the bracket or the
 /// last move is below `width`; returns `t` and the evaluations spent.
-fn refine(field: &dyn Field, ray: &Ray, (mut a, mut ea): (f32, f32), (mut b, mut eb): (f32, f32), width: f32) -> (f32, u32) {
+fn refine(
+    field: &dyn Field,
+    ray: &Ray,
+    (mut a, mut ea): (f32, f32),
+    (mut b, mut eb): (f32, f32),
+    width: f32,
+) -> (f32, u32) {
     let mut n = 0;
     let mut last = f32::NAN;
     let mut m = 0.5 * (a + b);
     let mut kept = 0i8; // which end was kept last: -1 a, 1 b
 
     while n < MAX_REFINE && b - a > width {
-        m = if ea != eb { a + (b - a) * ea / (ea - eb) } else { 0.5 * (a + b) };
+        m = if ea != eb {
+            a + (b - a) * ea / (ea - eb)
+        } else {
+            0.5 * (a + b)
+        };
         m = m.clamp(a, b);
         let e = field.value(ray.at(m)) - T;
         n += 1;
