@@ -1,29 +1,40 @@
 //! Rendering benchmarks (BENCHMARKS.md "## Rendering (issue 6)").
 //!
-//! The 1,000-point blob scene of the segment-tracing paper: points scattered in a ball of
-//! radius 10, Wyvill blobs of radius 2 (about 8 overlap at a point), rendered at
-//! 500 × 500 with the default framing. The blob field answers local Lipschitz bounds from
-//! a uniform grid (tests/common). Plain sphere tracing with the global bound is measured
-//! on a 100 × 100 image: at 500 × 500 it takes too long for criterion.
+//! * The 1,000-point blob scene of the segment-tracing paper: points scattered in a ball
+//!   of radius 10, Wyvill blobs of radius 2 (about 8 overlap at a point), 500 × 500, the
+//!   default framing. The blob field (tests/common) answers local Lipschitz bounds from a
+//!   uniform grid; the same scene as a GPU tape (BVH of guards) is measured too.
+//! * Plain sphere tracing with the global bound, on smaller images.
+//! * The Jacksboro DEM (90 m cells) with a tunnel carved through it, as a tape, at
+//!   1280 × 720, and a synthetic terrain chunk at 500 × 500.
+//!
+//! Besides criterion's wall-clock medians, each scene prints its steps per ray and the
+//! CPU seconds one frame takes (user + system): on a machine shared with other jobs the
+//! latter tracks the work better.
 
 #[path = "../tests/common/mod.rs"]
 mod common;
 
-use common::{Blobs, Terrain, tapes};
+use common::{Blobs, Terrain, dem, tapes};
 use criterion::{Criterion, criterion_group, criterion_main};
 use indicatif::ProgressBar;
 use karstic::field::Field;
+use karstic::render::gpu::{GpuContext, Tape};
 use karstic::render::{Camera, Method, RenderSettings, render};
 
-fn scene(f: &dyn Field, size: u32, method: Method, shadows: bool) -> (Camera, RenderSettings) {
-    let cam = Camera::frame(&f.support(), 40.0, size, size).unwrap();
+fn scene(
+    f: &dyn Field,
+    (w, h): (u32, u32),
+    method: Method,
+    shadows: bool,
+) -> (Camera, RenderSettings) {
+    let cam = Camera::frame(&f.support(), 40.0, w, h).unwrap();
     let mut s = RenderSettings::for_scene(&f.support(), &cam, method);
     s.shading.shadows = shadows;
     (cam, s)
 }
 
-/// CPU seconds used by this process so far (user + system), from /proc: on a machine
-/// shared with other jobs this tracks the work done better than the wall clock.
+/// CPU seconds used by this process so far (user + system), from /proc.
 fn cpu_seconds() -> f64 {
     let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
     let fields: Vec<&str> = stat
@@ -41,8 +52,11 @@ fn cpu_seconds() -> f64 {
     (ticks(11) + ticks(12)) / 100.0
 }
 
-fn report(name: &str, f: &dyn Field, size: u32, method: Method, shadows: bool) {
-    let (cam, s) = scene(f, size, method, shadows);
+fn report(name: &str, f: &dyn Field, size: (u32, u32), method: Method, shadows: bool, cone: bool) {
+    let (cam, mut s) = scene(f, size, method, shadows);
+    if !cone {
+        s.trace.cone = 0.0;
+    }
     let (cpu0, wall0) = (cpu_seconds(), std::time::Instant::now());
     let mut frame = render(f, &cam, &s, &ProgressBar::hidden());
     let mut runs = 1;
@@ -52,16 +66,42 @@ fn report(name: &str, f: &dyn Field, size: u32, method: Method, shadows: bool) {
     }
     let cpu = (cpu_seconds() - cpu0) / runs as f64;
     let wall = wall0.elapsed().as_secs_f64() / runs as f64;
-    let hit_steps: Vec<u32> = (0..frame.steps.len())
+    let hit_steps: Vec<f64> = (0..frame.steps.len())
         .filter(|&k| frame.depth[k].is_finite())
-        .map(|k| frame.steps[k])
+        .map(|k| frame.steps[k] as f64)
         .collect();
     eprintln!(
-        "{name}: {size}² {method:?}{}: {:.1} steps per ray, {:.1} per hit ray, {} hits; {cpu:.3} CPU-s per frame ({wall:.3} s wall)",
+        "{name}: {}x{} {method:?}{}{}: {:.1} steps per ray, {:.1} per hit ray, {} hits; {cpu:.3} CPU-s per frame ({wall:.3} s wall)",
+        size.0,
+        size.1,
         if shadows { " shadows" } else { "" },
+        if cone { "" } else { " (no pixel cone)" },
         frame.mean_steps(),
-        hit_steps.iter().map(|&s| s as f64).sum::<f64>() / hit_steps.len().max(1) as f64,
+        hit_steps.iter().sum::<f64>() / hit_steps.len().max(1) as f64,
         frame.hits()
+    );
+}
+
+/// Milliseconds per frame on the GPU adapter, if there is one (after a warm-up frame).
+fn report_gpu(name: &str, tape: &Tape, size: (u32, u32)) {
+    let ctx = match GpuContext::new() {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("{name}: no GPU timing ({e})");
+            return;
+        }
+    };
+    let (cam, s) = scene(tape, size, Method::Segment, true);
+    ctx.render(tape, &cam, &s).unwrap();
+    let start = std::time::Instant::now();
+    let frame = ctx.render(tape, &cam, &s).unwrap();
+    eprintln!(
+        "{name}: {}x{} on {}: {:.0} ms per frame, {:.1} steps per ray",
+        size.0,
+        size.1,
+        ctx.adapter,
+        start.elapsed().as_secs_f64() * 1e3,
+        frame.mean_steps()
     );
 }
 
@@ -69,18 +109,38 @@ fn bench(c: &mut Criterion) {
     let blobs = Blobs::in_ball(1000, 10.0, 2.0, 1.0, 2020);
     let blob_tape = tapes::blobs(&blobs);
     let terrain = Terrain::new(1000.0, 120.0, 30.0);
+    let dem_tape = tapes::dem_with_cave(&dem::jacksboro());
+    report("blobs", &blobs, (32, 32), Method::Sphere, false, false);
+    report("blobs", &blobs, (100, 100), Method::Segment, false, false);
+    report_gpu("dem with cave", &dem_tape, (480, 270));
     for (name, f, size, method, shadows) in [
-        ("blobs", &blobs as &dyn Field, 500, Method::Segment, true),
-        ("blobs", &blobs, 500, Method::Segment, false),
-        ("blobs", &blobs, 100, Method::Segment, false),
-        ("blobs", &blobs, 100, Method::Sphere, false),
-        ("blob tape", &blob_tape, 500, Method::Segment, false),
-        ("terrain", &terrain, 500, Method::Segment, true),
+        (
+            "blobs",
+            &blobs as &dyn Field,
+            (500, 500),
+            Method::Segment,
+            true,
+        ),
+        ("blobs", &blobs, (500, 500), Method::Segment, false),
+        ("blobs", &blobs, (100, 100), Method::Segment, false),
+        ("blobs", &blobs, (100, 100), Method::Sphere, false),
+        ("blobs", &blobs, (500, 500), Method::Sphere, false),
+        ("blob tape", &blob_tape, (500, 500), Method::Segment, false),
+        (
+            "dem with cave",
+            &dem_tape,
+            (1280, 720),
+            Method::Segment,
+            true,
+        ),
+        ("terrain", &terrain, (500, 500), Method::Segment, true),
     ] {
-        report(name, f, size, method, shadows);
+        report(name, f, size, method, shadows, true);
         let (cam, s) = scene(f, size, method, shadows);
         let id = format!(
-            "{name} {size}x{size} {method:?}{}",
+            "{name} {}x{} {method:?}{}",
+            size.0,
+            size.1,
             if shadows { " shadows" } else { "" }
         )
         .to_lowercase();

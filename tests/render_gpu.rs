@@ -5,7 +5,7 @@ mod common;
 
 use std::sync::OnceLock;
 
-use common::{Blobs, Rng, SigmaSphere, Terrain, check_segment_lipschitz, tapes};
+use common::{Blobs, Rng, SigmaSphere, Terrain, check_segment_lipschitz, dem, tapes};
 use glam::{Affine3A, Quat, Vec3};
 use indicatif::ProgressBar;
 use karstic::field::falloff::{sigma, wyvill};
@@ -194,6 +194,8 @@ fn tape_bounds_are_sound() {
     check_segment_lipschitz(&bt, &bt.support().dilate(1.0), 20_000, 22);
     let tt = tapes::terrain(&Terrain::new(60.0, 8.0, 3.0), 64);
     check_segment_lipschitz(&tt, &tt.support().dilate(2.0), 20_000, 23);
+    let dt = tapes::dem_with_cave(&dem::jacksboro());
+    check_segment_lipschitz(&dt, &dt.support(), 20_000, 25);
     // Outside the support every tape is 0.
     let mut rng = Rng(24);
     for t in [&tape, &bt, &tt] {
@@ -347,6 +349,14 @@ fn gpu_renders_match_the_cpu() {
         1400,
     );
     compare("mixed", &mixed().0, ctx, (80, 60), Method::Segment, 180);
+    compare(
+        "jacksboro DEM with a tunnel",
+        &tapes::dem_with_cave(&dem::jacksboro()),
+        ctx,
+        (96, 54),
+        Method::Segment,
+        2000,
+    );
     compare(
         "sphere tracing",
         &tapes::sigma_sphere(&SigmaSphere {

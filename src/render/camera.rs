@@ -103,30 +103,48 @@ impl Camera {
     }
 
     /// The default framing of a field's support box: a three-quarter view from the
-    /// south-east (+X, −Y) and above, looking at the box's centre from just far enough
-    /// that all eight corners are in view.
+    /// south-east (+X, −Y) and above, from the closest point that keeps all eight corners
+    /// in view (the view is shifted sideways and vertically so that the box is centred in
+    /// the image, not the box's centre).
     pub fn frame(support: &Aabb, fov_y: f32, width: u32, height: u32) -> Result<Self, RenderError> {
         if support.is_empty() || !(support.min.is_finite() && support.max.is_finite()) {
             return Err(RenderError::EmptySupport(format!("{support:?}")));
         }
-        let target = support.center();
+        let centre = support.center();
         let dir = Vec3::new(1.0, -1.0, 0.9).normalize();
-        // Orientation only: the basis does not depend on the distance.
-        let probe = Camera::look_at(target + dir, target, fov_y, width, height)?;
+        // Orientation only: the basis does not depend on the eye's position.
+        let probe = Camera::look_at(centre + dir, centre, fov_y, width, height)?;
         let (right, up, forward, tan_v) = probe.basis();
         let tan_h = tan_v * width as f32 / height as f32;
-        // A corner c (relative to the target) is in view from distance D when
-        // |c·up| ≤ tan_v (D + c·forward) and |c·right| ≤ tan_h (D + c·forward).
-        let dist = support
-            .corners()
-            .iter()
-            .map(|&c| {
-                let c = c - target;
-                let depth = c.dot(forward);
-                (c.dot(up).abs() / tan_v - depth).max(c.dot(right).abs() / tan_h - depth)
-            })
-            .fold(1e-3f32, f32::max);
-        Camera::look_at(target + dir * dist * 1.05, target, fov_y, width, height)
+        // With the eye at centre + dir·D + right·a + up·b, corner c (relative to the centre)
+        // is in view when |c·up − b| ≤ tan_v (c·forward + D), and likewise sideways. The
+        // smallest D admitting some b is half the spread of c·up ∓ tan_v c·forward over
+        // tan_v; b is then the middle of what remains.
+        let corners = support.corners().map(|c| c - centre);
+        let fit = |axis: Vec3, tan: f32| {
+            let lo = corners
+                .iter()
+                .map(|c| c.dot(axis) - tan * c.dot(forward))
+                .fold(f32::MIN, f32::max);
+            let hi = corners
+                .iter()
+                .map(|c| c.dot(axis) + tan * c.dot(forward))
+                .fold(f32::MAX, f32::min);
+            ((lo - hi) / (2.0 * tan), lo, hi)
+        };
+        let (dv, lo_v, hi_v) = fit(up, tan_v);
+        let (dh, lo_h, hi_h) = fit(right, tan_h);
+        let dist = dv.max(dh).max(1e-3) * 1.05;
+        let b = 0.5 * (lo_v + hi_v);
+        let a = 0.5 * (lo_h + hi_h);
+        let shift = right * a + up * b;
+        Camera::look_at(
+            centre + dir * dist + shift,
+            centre + shift,
+            fov_y,
+            width,
+            height,
+        )
     }
 
     /// The ray through the image point `(x, y)` in pixels (`(0, 0)` the top-left corner,

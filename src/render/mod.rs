@@ -6,12 +6,14 @@
 //! * [`shade`]: terrain shading — sun, sky ambient, shadow rays, fog, slope/altitude tint.
 //! * [`cpu`]: the image renderer, tiles over rayon.
 //! * [`image`]: the rendered [`Frame`] and its PNG outputs (colour and step cost).
+//! * [`raycast`]: triangle-mesh ray casting (obvhs), the ground truth for the tracer.
 //! * [`gpu`]: the same tracer as a wgpu compute shader over a flattened node tape.
 
 pub mod camera;
 pub mod cpu;
 pub mod gpu;
 pub mod image;
+pub mod raycast;
 pub mod shade;
 pub mod trace;
 

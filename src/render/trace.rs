@@ -109,7 +109,7 @@ pub fn trace(field: &dyn Field, ray: &Ray, (t0, t1): (f32, f32), params: &TraceP
         t: f32::INFINITY,
         steps,
     };
-    if !(t0 <= t1) {
+    if t0.is_nan() || t1.is_nan() || t0 > t1 {
         return miss(0);
     }
     let global = match params.method {

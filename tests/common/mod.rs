@@ -301,7 +301,7 @@ impl Field for Blobs {
         m
     }
     /// Short segments (up to `2R`): the sum over the blobs within reach of each blob's
-    /// slope bound on the segment's distance range. Longer ones: the largest cell bound
+    /// directional slope bound along the segment. Longer ones: the largest cell bound
     /// along the segment (pieces no longer than a cell, each covered by the cells its box
     /// overlaps).
     fn lipschitz_segment(&self, a: Vec3, b: Vec3) -> f32 {
@@ -309,19 +309,23 @@ impl Field for Blobs {
         let ab = b - a;
         let len2 = ab.length_squared();
         let (r2, inv_r) = (r * r, 1.0 / r);
+        // Along the segment a blob is φ(s) = g(√((s − s₀)² + h²) / R) (h: distance from
+        // the blob's centre to the line), so |φ'| = |g'(x)|·√(1 − k²/x²)/R with k = h/R:
+        // 6(1 − y)²√(y − k²)/R in y = x², unimodal with its peak at y* = (1 + 4k²)/5. Its
+        // maximum over the segment's range of y is a directional Lipschitz bound, which is
+        // all the contract asks for pairs of points on the segment.
         let slope_on_segment = |c: Vec3| {
             let ac = c - a;
-            let h = if len2 > 0.0 {
-                (ac.dot(ab) / len2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let near2 = (ac - ab * h).length_squared();
+            let t = if len2 > 0.0 { ac.dot(ab) / len2 } else { 0.0 };
+            let near2 = (ac - ab * t.clamp(0.0, 1.0)).length_squared();
             if near2 >= r2 {
                 return 0.0;
             }
-            let far = ac.length_squared().max((c - b).length_squared()).sqrt();
-            wyvill_slope(Interval::new(near2.sqrt() * inv_r, far * inv_r))
+            let k2 = (ac - ab * t).length_squared() * inv_r * inv_r;
+            let far2 = ac.length_squared().max((c - b).length_squared());
+            let y = ((1.0 + 4.0 * k2) * 0.2)
+                .clamp(near2 * inv_r * inv_r, (far2 * inv_r * inv_r).min(1.0));
+            6.0 * (1.0 - y) * (1.0 - y) * (y - k2).max(0.0).sqrt()
         };
         let (ca, cb) = (self.cell_of(a), self.cell_of(b));
         if ca.is_some() && ca == cb {
@@ -518,6 +522,50 @@ pub mod tapes {
         t.finish().unwrap()
     }
 
+    /// A DEM as `σ(h − z)` inside a σ box prism (seed 002 §5.1) with a tunnel carved by
+    /// a σ capsule through the middle at the median elevation.
+    pub fn dem_with_cave(d: &super::dem::Dem) -> Tape {
+        let falloff = 2.0 * d.cell;
+        let size = Vec3::new((d.nx - 1) as f32 * d.cell, (d.ny - 1) as f32 * d.cell, 0.0);
+        let (lo, hi) =
+            d.z.iter()
+                .fold((f32::MAX, f32::MIN), |(a, b), &z| (a.min(z), b.max(z)));
+        let mut sorted = d.z.clone();
+        sorted.sort_by(f32::total_cmp);
+        let median = sorted[sorted.len() / 2];
+        let mut t = TapeBuilder::new();
+        t.heightfield(
+            &HeightGrid {
+                origin: Vec2::ZERO,
+                cell: d.cell,
+                nx: d.nx,
+                ny: d.ny,
+                z: &d.z,
+            },
+            falloff,
+        )
+        .unwrap();
+        let floor = lo - 200.0;
+        t.primitive(
+            Shape::Box {
+                center: Vec3::new(0.5 * size.x, 0.5 * size.y, 0.5 * (floor + hi)),
+                half: Vec3::new(0.5 * size.x, 0.5 * size.y, 0.5 * (hi - floor)),
+            },
+            Profile::Sigma { radius: falloff },
+        );
+        t.combine(Combine::Intersection).unwrap();
+        t.primitive(
+            Shape::Capsule {
+                a: Vec3::new(0.1 * size.x, 0.3 * size.y, median),
+                b: Vec3::new(0.9 * size.x, 0.6 * size.y, median + 100.0),
+                radius: 250.0,
+            },
+            Profile::Sigma { radius: falloff },
+        );
+        t.combine(Combine::Difference).unwrap();
+        t.finish().unwrap()
+    }
+
     /// The terrain sampled on an `n × n` grid, intersected with a σ box prism.
     pub fn terrain(tr: &Terrain, n: usize) -> Tape {
         let lo = tr.bounds.min.truncate();
@@ -547,4 +595,86 @@ pub mod tapes {
         t.combine(Combine::Intersection).unwrap();
         t.finish().unwrap()
     }
+}
+
+pub mod dem {
+    //! The Jacksboro DEM (UTM 16N, 90 m cells) from `../shared/data/dem`, read with a
+    //! minimal ESRI ASCII parser and cropped to the largest centred window without
+    //! no-data cells; elevations in metres, x east and y north from the window's
+    //! south-west sample.
+    use std::path::Path;
+
+    pub struct Dem {
+        pub nx: usize,
+        pub ny: usize,
+        pub cell: f32,
+        /// `z[i + nx·j]`, `j = 0` the southern row.
+        pub z: Vec<f32>,
+    }
+
+    pub fn jacksboro() -> Dem {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../shared/data/dem/jacksboro_utm16n_90m.asc");
+        let text =
+            std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let mut head = std::collections::HashMap::new();
+        let mut values = Vec::new();
+        for line in text.lines() {
+            let mut it = line.split_whitespace();
+            match it.next() {
+                Some(k) if k.chars().next().is_some_and(|c| c.is_ascii_alphabetic()) => {
+                    head.insert(
+                        k.to_ascii_lowercase(),
+                        it.next().unwrap().parse::<f64>().unwrap(),
+                    );
+                }
+                Some(first) => {
+                    values.push(first.parse::<f32>().unwrap());
+                    values.extend(it.map(|v| v.parse::<f32>().unwrap()));
+                }
+                None => {}
+            }
+        }
+        let (cols, rows) = (head["ncols"] as usize, head["nrows"] as usize);
+        let nodata = head["nodata_value"] as f32;
+        assert_eq!(values.len(), cols * rows);
+        let at = |c: usize, r: usize| values[c + cols * r];
+        let clean = |m: usize| (m..rows - m).all(|r| (m..cols - m).all(|c| at(c, r) != nodata));
+        let m = (0..rows.min(cols) / 2)
+            .find(|&m| clean(m))
+            .expect("some clean window");
+        let (nx, ny) = (cols - 2 * m, rows - 2 * m);
+        let z = (0..nx * ny)
+            .map(|k| at(m + k % nx, rows - 1 - m - k / nx))
+            .collect();
+        Dem {
+            nx,
+            ny,
+            cell: head["cellsize"] as f32,
+            z,
+        }
+    }
+}
+
+/// A UV sphere of radius `r` with `n` segments around and `n / 2` rings: its chords lie
+/// within `r(1 − cos(π/n))` of the sphere.
+pub fn uv_sphere(c: Vec3, r: f32, n: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let rings = n / 2;
+    let mut pos = Vec::new();
+    for i in 0..=rings {
+        let th = std::f32::consts::PI * i as f32 / rings as f32;
+        for j in 0..n {
+            let ph = std::f32::consts::TAU * j as f32 / n as f32;
+            pos.push(c + r * Vec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()));
+        }
+    }
+    let mut faces = Vec::new();
+    for i in 0..rings {
+        for j in 0..n {
+            let (a, b) = (i * n + j, i * n + (j + 1) % n);
+            faces.push([a, a + n, b]);
+            faces.push([b, a + n, b + n]);
+        }
+    }
+    (pos, faces)
 }

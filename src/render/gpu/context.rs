@@ -140,7 +140,7 @@ impl GpuContext {
     }
 
     fn check_size(&self, what: &str, bytes: u64) -> Result<(), GpuError> {
-        let max = self.device.limits().max_storage_buffer_binding_size as u64;
+        let max = self.device.limits().max_storage_buffer_binding_size;
         if bytes > max {
             return Err(GpuError::Limits(format!(
                 "{what} needs a {bytes}-byte buffer; this GPU binds at most {max} bytes"

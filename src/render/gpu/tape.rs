@@ -316,7 +316,8 @@ impl TapeBuilder {
         if nx < 2
             || ny < 2
             || z.len() != nx * ny
-            || !(cell > 0.0)
+            || cell.is_nan()
+            || cell <= 0.0
             || z.iter().any(|v| !v.is_finite())
         {
             return Err(GpuError::Tape(format!(
@@ -589,6 +590,16 @@ impl Tape {
     /// `(f(p), λ)` with `λ` a Lipschitz bound of `f` over the ball `B(c, r)`: the CPU twin
     /// of `eval_tape` in `shaders/field.wgsl`.
     pub fn eval(&self, p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
+        if p == c {
+            self.run::<true, true>(p, c, r)
+        } else {
+            self.run::<false, true>(p, c, r)
+        }
+    }
+
+    /// The tape run; `SAME`: `p = c` (distances shared); `BOUND`: compute the bound (else
+    /// the second component is meaningless).
+    fn run<const SAME: bool, const BOUND: bool>(&self, p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
         let mut stack = [(0.0f32, 0.0f32); MAX_STACK];
         let mut sp = 0usize;
         let mut frames = [(Vec3::ZERO, Vec3::ZERO, 0.0f32); MAX_WARPS];
@@ -605,11 +616,11 @@ impl Tape {
                     sp += 1;
                 }
                 op::PRIM => {
-                    stack[sp] = primitive(ins.flags, &prm[o..], p, c, r);
+                    stack[sp] = primitive::<SAME, BOUND>(ins.flags, &prm[o..], p, c, r);
                     sp += 1;
                 }
                 op::HEIGHT => {
-                    stack[sp] = self.height(&prm[o..], p, c, r);
+                    stack[sp] = self.height::<SAME, BOUND>(&prm[o..], p, c, r);
                     sp += 1;
                 }
                 op::BLEND | op::UNION | op::INTER | op::DIFF => {
@@ -652,11 +663,21 @@ impl Tape {
         stack[0]
     }
 
-    fn height(&self, q: &[f32], p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
+    fn height<const SAME: bool, const BOUND: bool>(
+        &self,
+        q: &[f32],
+        p: Vec3,
+        c: Vec3,
+        r: f32,
+    ) -> (f32, f32) {
         let (fall, slope) = (q[0], q[1]);
         let h = |x: f32, y: f32| bilinear(&self.heights, q, x, y);
-        let value = sigma(h(p.x, p.y) - p.z, fall);
-        let hc = h(c.x, c.y);
+        let hp = h(p.x, p.y);
+        let value = sigma(hp - p.z, fall);
+        if !BOUND {
+            return (value, 0.0);
+        }
+        let hc = if SAME { hp } else { h(c.x, c.y) };
         let v = Interval::new(hc - slope * r - c.z - r, hc + slope * r - c.z + r);
         (value, sigma_slope(v, fall) * (1.0 + slope * slope).sqrt())
     }
@@ -705,11 +726,29 @@ fn signed_distance(kind: u32, q: &[f32], p: Vec3) -> f32 {
 }
 
 /// `(value at p, Lipschitz bound over B(c, r))` of a primitive with params `q`.
-fn primitive(flags: u32, q: &[f32], p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
+fn primitive<const SAME: bool, const BOUND: bool>(
+    flags: u32,
+    q: &[f32],
+    p: Vec3,
+    c: Vec3,
+    r: f32,
+) -> (f32, f32) {
     let (rad, energy) = (q[0], q[1]);
     let kind = flags & 0xff;
     let sd_p = signed_distance(kind, &q[2..], p);
-    let sd_c = signed_distance(kind, &q[2..], c);
+    if !BOUND {
+        let v = if flags & shape::SIGMA != 0 {
+            sigma(-sd_p, rad)
+        } else {
+            energy * wyvill(sd_p.max(0.0) / rad)
+        };
+        return (v, 0.0);
+    }
+    let sd_c = if SAME {
+        sd_p
+    } else {
+        signed_distance(kind, &q[2..], c)
+    };
     if flags & shape::SIGMA != 0 {
         let v = sigma(-sd_p, rad);
         (v, sigma_slope(Interval::new(-sd_c - r, -sd_c + r), rad))
@@ -722,7 +761,7 @@ fn primitive(flags: u32, q: &[f32], p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
 
 impl Field for Tape {
     fn value(&self, p: Vec3) -> f32 {
-        self.eval(p, p, 0.0).0
+        self.run::<true, false>(p, p, 0.0).0
     }
 
     /// Tetrahedral finite differences with step [`Tape::grad_step`], as on the GPU.

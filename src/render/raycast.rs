@@ -1,0 +1,67 @@
+//! Ray casting triangle meshes through an obvhs BVH: the independent ground truth the
+//! tracer is checked against (the traced depth of a tree against its Marching Cubes
+//! mesh).
+
+use std::time::Duration;
+
+use glam::{Vec3, Vec3A};
+use obvhs::bvh2::Bvh2;
+use obvhs::ray::RayHit;
+use obvhs::triangle::Triangle;
+use rayon::prelude::*;
+
+use super::camera::{Camera, Ray};
+
+/// A triangle mesh with a BVH over its faces.
+pub struct MeshRaycaster {
+    triangles: Vec<Triangle>,
+    bvh: Bvh2,
+}
+
+impl MeshRaycaster {
+    /// Builds the BVH over `faces` (indices into `positions`). Panics on an index out of
+    /// range: meshes come from the mesher, not from users.
+    pub fn new(positions: &[Vec3], faces: &[[u32; 3]]) -> Self {
+        let triangles: Vec<Triangle> = faces
+            .iter()
+            .map(|f| Triangle {
+                v0: positions[f[0] as usize].into(),
+                v1: positions[f[1] as usize].into(),
+                v2: positions[f[2] as usize].into(),
+            })
+            .collect();
+        let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(
+            &triangles,
+            obvhs::BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
+        MeshRaycaster { triangles, bvh }
+    }
+
+    /// Distance along `ray` to the nearest face, if any.
+    pub fn first_hit(&self, ray: &Ray) -> Option<f32> {
+        if self.triangles.is_empty() {
+            return None;
+        }
+        let r = obvhs::ray::Ray::new_inf(Vec3A::from(ray.origin), Vec3A::from(ray.dir));
+        let mut hit = RayHit::none();
+        self.bvh
+            .ray_traverse(r, &mut hit, |r, id| {
+                self.triangles[self.bvh.primitive_indices[id] as usize].intersect(r)
+            })
+            .then_some(hit.t)
+    }
+
+    /// The depth image through `camera`: distance to the nearest face per pixel, `∞` on a
+    /// miss (the same layout as [`crate::render::Frame::depth`]).
+    pub fn depth(&self, camera: &Camera) -> Vec<f32> {
+        let w = camera.width;
+        (0..w * camera.height)
+            .into_par_iter()
+            .map(|k| {
+                self.first_hit(&camera.pixel_ray(k % w, k / w))
+                    .unwrap_or(f32::INFINITY)
+            })
+            .collect()
+    }
+}
