@@ -176,7 +176,9 @@ pub fn streamlines(
     let step = 0.5 * g.h;
     let mut added = 0;
     for pass in 0..2 {
-        let starts: Vec<usize> = (0..wave.len()).filter(|&i| wave[i] == 1 || wave[i] == 2).collect();
+        let starts: Vec<usize> = (0..wave.len())
+            .filter(|&i| wave[i] == 1 || wave[i] == 2)
+            .collect();
         let marks: Vec<Vec<(usize, f32)>> = starts
             .par_iter()
             .map(|&i0| {
