@@ -30,7 +30,7 @@ fn ridge(c: &mut Criterion) {
             ..spec.clone()
         };
         let (p, _) = spec.params(0, 8 << 30);
-        g.bench_function(format!("{label}"), |b| b.iter(|| run(&plain, &p).unwrap()));
+        g.bench_function(label, |b| b.iter(|| run(&plain, &p).unwrap()));
         g.bench_function(format!("{label}_noise"), |b| {
             b.iter(|| run(&noisy, &p).unwrap())
         });

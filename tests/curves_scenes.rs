@@ -287,3 +287,15 @@ fn guidance_curves_alone_create_no_surface() {
         assert_eq!(s.field.value(p), 0.0);
     }
 }
+
+#[test]
+fn ridge_with_streamline_propagation() {
+    let mut s = scene("ridge");
+    s.spec.propagation = karstic::curves::Propagation::Streamline;
+    s.field = s.spec.build_features(&s.features, 7, 1 << 32).unwrap();
+    let fine = s.field.stats().levels.last().unwrap().clone();
+    assert!(fine.streamline_nodes > 0, "streamlines added surface nodes");
+    assert!(fine.bitangent_sweeps > 0);
+    s.assert_surface_through_seeds();
+    assert_eq!(s.crossings(64.0, 64.0), 1);
+}

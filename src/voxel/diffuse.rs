@@ -268,10 +268,10 @@ mod tests {
             },
         );
         assert!(n < 5000);
-        for i in 0..r.len() {
+        for (i, v) in r.iter().enumerate() {
             let g = b.node_coord(i);
             if g.cmplt(IVec3::splat(16)).all() {
-                assert!((r[i].x - g.x as f32 / 15.0).abs() < 2e-3, "{g}: {}", r[i].x);
+                assert!((v.x - g.x as f32 / 15.0).abs() < 2e-3, "{g}: {}", v.x);
             }
         }
     }

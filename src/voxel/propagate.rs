@@ -161,7 +161,8 @@ pub fn relax(
 /// traced along `B` (first pass) and along `B × N` (second pass, from all surface nodes
 /// found so far), in steps of `h/2`, up to `max_steps`, inside complete cells of the
 /// level. Every node passed becomes a surface node whose S is its distance to the
-/// traced point along N. Marks are applied in seed order, so the result is deterministic.
+/// traced point along N (stamped as set by the first wave: a source, not a fixed seed).
+/// Marks are applied in seed order, so the result is deterministic.
 pub fn streamlines(
     bricks: &Bricks,
     s: &mut [f32],
@@ -175,7 +176,9 @@ pub fn streamlines(
     let step = 0.5 * g.h;
     let mut added = 0;
     for pass in 0..2 {
-        let starts: Vec<usize> = (0..wave.len()).filter(|&i| wave[i] == 1).collect();
+        let starts: Vec<usize> = (0..wave.len())
+            .filter(|&i| wave[i] == 1 || wave[i] == 2)
+            .collect();
         let marks: Vec<Vec<(usize, f32)>> = starts
             .par_iter()
             .map(|&i0| {
@@ -212,7 +215,9 @@ pub fn streamlines(
             .collect();
         for (i, v) in marks.into_iter().flatten() {
             if wave[i] == 0 && !bricks.rim()[i] {
-                wave[i] = 1;
+                // Set like a first wave: a source for the waves, but not a fixed seed,
+                // so the relaxation can reconcile it with the seeds.
+                wave[i] = 2;
                 s[i] = v;
                 added += 1;
             }

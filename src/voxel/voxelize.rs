@@ -101,11 +101,8 @@ pub fn tri_box(c: Vec3, e: f32, tri: [Vec3; 3]) -> bool {
         }
     }
     // The box's face normals.
-    for a in 0..3 {
-        let (lo, hi) = (
-            v[0][a].min(v[1][a]).min(v[2][a]),
-            v[0][a].max(v[1][a]).max(v[2][a]),
-        );
+    let (lo3, hi3) = (v[0].min(v[1]).min(v[2]), v[0].max(v[1]).max(v[2]));
+    for (lo, hi) in lo3.to_array().into_iter().zip(hi3.to_array()) {
         if lo > e || hi < -e {
             return false;
         }

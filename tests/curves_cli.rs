@@ -1,0 +1,84 @@
+//! `karstic curves build`: outputs, statistics and error messages.
+
+use std::path::Path;
+use std::process::Command;
+
+fn karstic() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_karstic"))
+}
+
+#[test]
+fn builds_a_field_and_prints_stats() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/curves/cliff.ron");
+    let (npy, obj) = (dir.path().join("cliff.npy"), dir.path().join("ribbons.obj"));
+    let out = karstic()
+        .args(["curves", "build"])
+        .arg(&scene)
+        .arg("-o")
+        .arg(&npy)
+        .arg("--ribbons")
+        .arg(&obj)
+        .arg("--stats")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    for row in [
+        "voxelization",
+        "guidance diffusion",
+        "surface propagation",
+        "smoothing",
+        "peak grid memory",
+    ] {
+        assert!(text.contains(row), "missing {row} in\n{text}");
+    }
+    let bytes = std::fs::read(&npy).unwrap();
+    assert_eq!(&bytes[..6], b"\x93NUMPY");
+    let hlen = u16::from_le_bytes([bytes[8], bytes[9]]) as usize;
+    let header = std::str::from_utf8(&bytes[10..10 + hlen]).unwrap();
+    assert!(header.contains("'shape': (64, 64, 96)"), "{header}");
+    assert_eq!((10 + hlen) % 64, 0);
+    let data: &[u8] = &bytes[10 + hlen..];
+    assert_eq!(data.len(), 64 * 64 * 96 * 4);
+    let v: Vec<f32> = data
+        .chunks(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect();
+    // Rock behind the cliff's edge, air in front of its face.
+    assert!(v[30 * 64 * 96 + 50 * 96 + 48] > 0.5 && v[30 * 64 * 96 + 10 * 96 + 48] < 0.5);
+    assert!(
+        std::fs::read_to_string(&obj)
+            .unwrap()
+            .lines()
+            .any(|l| l.starts_with("f "))
+    );
+}
+
+#[test]
+fn reports_bad_files_with_position() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("bad.ron");
+    std::fs::write(&bad, "FeatureVolume(\n  curves: Inline(()),\n  domain: ((0, 0, 0), (10, 10, 10)),\n  voxel: 0,\n)").unwrap();
+    let out = karstic()
+        .args(["curves", "build"])
+        .arg(&bad)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("bad.ron:4:") && err.contains("expected a number > 0"),
+        "{err}"
+    );
+    let out = karstic()
+        .args(["curves", "build"])
+        .arg(dir.path().join("missing.ron"))
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.ron"));
+}
