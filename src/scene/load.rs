@@ -271,7 +271,7 @@ mod tests {
         assert_eq!(line_col("ab\ncd", 4), (2, 2));
         assert_eq!(
             find_field("x\n  name: \"a\", of: \"a\"", "of", "a", 0),
-            Some((2, 20))
+            Some((2, 18))
         );
     }
 }
