@@ -9,6 +9,7 @@ pub mod curves;
 pub mod dem;
 pub mod field;
 pub mod io;
+pub mod job;
 pub mod mesh;
 pub mod render;
 pub mod scene;

@@ -10,6 +10,7 @@ pub mod tree;
 use clap::{Parser, Subcommand};
 
 pub mod render;
+pub mod run;
 
 /// karstic: implicit terrain modelling — DEMs amplified with caves, arches and overhangs.
 #[derive(Parser, Debug)]
@@ -23,6 +24,8 @@ pub struct Cli {
 /// All subcommands.
 #[derive(Subcommand, Debug)]
 pub enum Command {
+    /// The main job: mesh a tree's region and render a preview, timing every stage.
+    Run(run::RunArgs),
     /// Build a mesh (.glb, .gltf, .obj, .ply) from a tree with bound-pruned Marching Cubes.
     Build(build::BuildArgs),
     /// Inspect and convert DEMs.
@@ -51,6 +54,7 @@ pub fn load_tree(path: &std::path::Path) -> anyhow::Result<crate::field::Tree> {
 /// Runs a parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
+        Command::Run(a) => run::run(a),
         Command::Build(a) => build::run(a),
         Command::Dem(a) => dem::run(a),
         Command::Tree(a) => tree::run(a),

@@ -26,6 +26,9 @@ pub struct Scene {
     /// curve points) resolve against. Default: the scene's only heightfield.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub terrain: Option<String>,
+    /// What `karstic run` makes of the scene: mesh region, cell size, preview camera.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub job: Option<JobSpec>,
     /// Named subtrees that are not drawn themselves but can be instanced.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub defs: Vec<NodeSpec>,
@@ -113,6 +116,58 @@ pub struct TransformSpec {
     pub scale: Scale3,
     /// The placed subtree.
     pub child: Box<NodeSpec>,
+}
+
+/// An axis-aligned box `(min: (x, y, z), max: (x, y, z))`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxSpec {
+    /// Lower corner.
+    pub min: P3,
+    /// Upper corner.
+    pub max: P3,
+}
+
+/// A look-at camera.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    /// Eye position.
+    pub eye: P3,
+    /// Point looked at.
+    pub target: P3,
+}
+
+/// The default job of a scene (`karstic run`): a fine mesh and a preview of a region, and
+/// a coarse mesh of the whole scene with `--full`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JobSpec {
+    /// Region meshed and framed (default: the scene's support box).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub region: Option<BoxSpec>,
+    /// Marching Cubes cell size in metres for the region.
+    pub cell: Positive,
+    /// Preview size in pixels `(width, height)`.
+    #[serde(default = "default_image")]
+    pub image: (u32, u32),
+    /// Preview camera (default: framed from the region).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera: Option<CameraSpec>,
+    /// Vertical field of view in degrees.
+    #[serde(default = "default_fov")]
+    pub fov: Positive,
+    /// Cell size of the whole-scene mesh made with `--full` (default: 4 × `cell`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub full_cell: Option<Positive>,
+}
+
+fn default_image() -> (u32, u32) {
+    (1280, 720)
+}
+
+fn default_fov() -> Positive {
+    Positive(40.0)
 }
 
 /// A box region with a falloff around it.

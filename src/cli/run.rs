@@ -1,0 +1,70 @@
+//! `karstic run TREE`: the main job — a mesh of the tree's region and a preview image.
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::job::{self, JobOptions};
+
+/// Arguments of `karstic run`.
+#[derive(Args, Debug)]
+pub struct RunArgs {
+    /// Tree file; its `job` section says what region, cell size and camera to use.
+    pub tree: PathBuf,
+    /// Output folder.
+    #[arg(short, long, default_value = "out")]
+    pub out: PathBuf,
+    /// Mesh the whole scene at the job's coarse cell size (`full_cell`).
+    #[arg(long)]
+    pub full: bool,
+    /// Skip the preview image.
+    #[arg(long)]
+    pub no_render: bool,
+    /// Also print the mesher's statistics.
+    #[arg(long)]
+    pub stats: bool,
+    /// No progress bars.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// Runs `karstic run`.
+pub fn run(args: RunArgs) -> anyhow::Result<()> {
+    let opts = JobOptions {
+        out_dir: args.out.clone(),
+        full: args.full,
+        no_render: args.no_render,
+        quiet: args.quiet,
+    };
+    let report = job::run(&args.tree, &opts)?;
+    for n in &report.notices {
+        eprintln!("notice: {n}");
+    }
+    let r = &report.region;
+    println!(
+        "region [{:.0}, {:.0}, {:.0}]..[{:.0}, {:.0}, {:.0}] at {} m cells: {} vertices, {} triangles",
+        r.min.x,
+        r.min.y,
+        r.min.z,
+        r.max.x,
+        r.max.y,
+        r.max.z,
+        report.cell,
+        report.mesh_stats.vertices,
+        report.mesh_stats.triangles
+    );
+    println!("wrote {}", report.mesh_path.display());
+    if let Some(p) = &report.image_path {
+        println!("wrote {}", p.display());
+    }
+    let mut total = 0.0;
+    for (stage, d) in &report.stages {
+        total += d.as_secs_f64();
+        println!("  {stage:<16} {:>8.2} s", d.as_secs_f64());
+    }
+    println!("  {:<16} {:>8.2} s", "total", total);
+    if args.stats {
+        println!("{}", report.mesh_stats);
+    }
+    Ok(())
+}

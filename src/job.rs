@@ -1,0 +1,134 @@
+//! The main job (`karstic run`): a tree file in, a mesh of its region and a preview image
+//! out, with the time of every stage.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use indicatif::ProgressBar;
+
+use crate::field::{Aabb, Field, Tree};
+use crate::io::progress;
+use crate::mesh::export::{self, ExportOptions};
+use crate::mesh::{GridSpec, MeshOptions, MeshStats, polygonize};
+use crate::render::{Camera, Frame, Method, RenderSettings, cpu};
+use crate::scene::{self, SceneFile};
+
+/// What to run.
+#[derive(Clone, Debug)]
+pub struct JobOptions {
+    /// Folder the outputs go to (created if needed).
+    pub out_dir: PathBuf,
+    /// Mesh the whole scene at the job's coarse cell size instead of its region.
+    pub full: bool,
+    /// Skip the preview image.
+    pub no_render: bool,
+    /// No progress bars.
+    pub quiet: bool,
+}
+
+/// What a job made, and how long each stage took.
+pub struct JobReport {
+    /// The compiled tree.
+    pub tree: Tree,
+    /// The box that was meshed.
+    pub region: Aabb,
+    /// The cell size used.
+    pub cell: f32,
+    /// The mesh file.
+    pub mesh_path: PathBuf,
+    /// The preview image, if rendered.
+    pub image_path: Option<PathBuf>,
+    /// Mesher statistics.
+    pub mesh_stats: MeshStats,
+    /// `(stage, duration)` in order.
+    pub stages: Vec<(&'static str, Duration)>,
+    /// Notices from loading (e.g. DEM units).
+    pub notices: Vec<String>,
+}
+
+fn bar(quiet: bool) -> Option<ProgressBar> {
+    (!quiet).then(|| progress(0, "", false))
+}
+
+/// Runs the job of the tree file `path`.
+pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
+    let mut stages = Vec::new();
+    let t = Instant::now();
+    let file: SceneFile = scene::load(path)?;
+    let compiled = file.compile()?;
+    stages.push(("load + compile", t.elapsed()));
+    let tree = compiled.tree;
+    let job = file.scene.job.clone();
+    let support = tree.support();
+    anyhow::ensure!(!support.is_empty(), "{}: the tree is empty everywhere", path.display());
+    let region_of_job = job.as_ref().and_then(|j| j.region).map(|r| Aabb::new(r.min.0, r.max.0));
+    let region = match (opts.full, region_of_job) {
+        (false, Some(r)) => r,
+        _ => support,
+    };
+    let fine = job.as_ref().map_or(support.size().max_element() / 256.0, |j| j.cell.0);
+    let cell = if opts.full {
+        job.as_ref()
+            .and_then(|j| j.full_cell.map(|c| c.0))
+            .unwrap_or(4.0 * fine)
+    } else {
+        fine
+    };
+
+    let t = Instant::now();
+    let grid = GridSpec::with_cell(&region, cell)?;
+    let mesh_opts = MeshOptions {
+        progress: bar(opts.quiet),
+        ..MeshOptions::default()
+    };
+    if let Some(b) = &mesh_opts.progress {
+        b.set_length(crate::mesh::polygonize::progress_steps(&grid));
+        b.set_message("meshing");
+    }
+    let (mesh, mesh_stats) = polygonize(&tree, &grid, &mesh_opts)?;
+    if let Some(b) = &mesh_opts.progress {
+        b.finish_and_clear();
+    }
+    stages.push(("polygonize", t.elapsed()));
+
+    std::fs::create_dir_all(&opts.out_dir)?;
+    let stem = file.scene.name.clone().unwrap_or_else(|| {
+        path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned())
+    });
+    let suffix = if opts.full { "_full" } else { "" };
+    let mesh_path = opts.out_dir.join(format!("{stem}{suffix}.glb"));
+    let t = Instant::now();
+    export::write(&mesh, &mesh_path, &ExportOptions { color: true })?;
+    stages.push(("write mesh", t.elapsed()));
+
+    let image_path = if opts.no_render {
+        None
+    } else {
+        let t = Instant::now();
+        let (w, h) = job.as_ref().map_or((1280, 720), |j| j.image);
+        let fov = job.as_ref().map_or(40.0, |j| j.fov.0);
+        let camera = match job.as_ref().and_then(|j| j.camera) {
+            Some(c) if !opts.full => Camera::look_at(c.eye.0, c.target.0, fov, w, h)?,
+            _ => Camera::frame(&region, fov, w, h)?,
+        };
+        let settings = RenderSettings::for_scene(&region, &camera, Method::Segment);
+        let tiles = w.div_ceil(cpu::TILE) * h.div_ceil(cpu::TILE);
+        let bar = progress(tiles as u64, "rendering", opts.quiet);
+        let frame: Frame = cpu::render(&tree, &camera, &settings, &bar);
+        bar.finish_and_clear();
+        let image_path = opts.out_dir.join(format!("{stem}{suffix}.png"));
+        frame.write_png(&image_path)?;
+        stages.push(("render", t.elapsed()));
+        Some(image_path)
+    };
+    Ok(JobReport {
+        tree,
+        region,
+        cell,
+        mesh_path,
+        image_path,
+        mesh_stats,
+        stages,
+        notices: compiled.notices,
+    })
+}
