@@ -60,13 +60,22 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
     let tree = compiled.tree;
     let job = file.scene.job.clone();
     let support = tree.support();
-    anyhow::ensure!(!support.is_empty(), "{}: the tree is empty everywhere", path.display());
-    let region_of_job = job.as_ref().and_then(|j| j.region).map(|r| Aabb::new(r.min.0, r.max.0));
+    anyhow::ensure!(
+        !support.is_empty(),
+        "{}: the tree is empty everywhere",
+        path.display()
+    );
+    let region_of_job = job
+        .as_ref()
+        .and_then(|j| j.region)
+        .map(|r| Aabb::new(r.min.0, r.max.0));
     let region = match (opts.full, region_of_job) {
         (false, Some(r)) => r,
         _ => support,
     };
-    let fine = job.as_ref().map_or(support.size().max_element() / 256.0, |j| j.cell.0);
+    let fine = job
+        .as_ref()
+        .map_or(support.size().max_element() / 256.0, |j| j.cell.0);
     let cell = if opts.full {
         job.as_ref()
             .and_then(|j| j.full_cell.map(|c| c.0))
@@ -93,7 +102,8 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
 
     std::fs::create_dir_all(&opts.out_dir)?;
     let stem = file.scene.name.clone().unwrap_or_else(|| {
-        path.file_stem().map_or("scene".into(), |s| s.to_string_lossy().into_owned())
+        path.file_stem()
+            .map_or("scene".into(), |s| s.to_string_lossy().into_owned())
     });
     let suffix = if opts.full { "_full" } else { "" };
     let mesh_path = opts.out_dir.join(format!("{stem}{suffix}.glb"));
