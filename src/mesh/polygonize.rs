@@ -36,8 +36,11 @@ use super::{MeshError, split_parts};
 use crate::field::{Aabb, Elevation, Field, Interval, T};
 use crate::io::{DEFAULT_MEMORY_BUDGET, check_budget};
 
-/// Regula-falsi iterations per vertex with [`MeshOptions::refine`].
-const REFINE_ITERATIONS: usize = 6;
+/// Most field evaluations per vertex with [`MeshOptions::refine`].
+const REFINE_ITERATIONS: usize = 24;
+
+/// Refinement stops once the root is bracketed this tightly (fraction of the edge).
+const REFINE_TOLERANCE: f32 = 1e-4;
 
 /// Bytes per stored sample: its value and three vertex slots.
 const SAMPLE_BYTES: u64 = 16;
@@ -577,6 +580,11 @@ impl<'f> Ctx<'_, 'f> {
 
 /// Illinois regula falsi for the root of `g` on `[0, 1]` starting from `t`, with
 /// `g(0) = g0` and `g(1) = g1` of opposite signs; counts evaluations in `evals`.
+///
+/// Safeguarded by bisection: when two steps have not halved the bracket (a field with a
+/// kink, such as a heightfield's `min(σ, f_P)` at its walls, can stall regula falsi on
+/// one side), the next point is the bracket's midpoint. Stops once the bracket is
+/// narrower than [`REFINE_TOLERANCE`] or after [`REFINE_ITERATIONS`] evaluations.
 fn regula_falsi(g: impl Fn(f32) -> f32, t: f32, g0: f32, g1: f32, evals: &mut u64) -> f32 {
     let p = g0 * g1;
     if p.is_nan() || p >= 0.0 {
@@ -585,11 +593,13 @@ fn regula_falsi(g: impl Fn(f32) -> f32, t: f32, g0: f32, g1: f32, evals: &mut u6
     let (mut a, mut fa, mut b, mut fb) = (0.0f32, g0, 1.0f32, g1);
     let mut t = t;
     let mut side = 0i8;
+    // Bracket widths two steps and one step ago (none before the start).
+    let mut widths = [f32::INFINITY, 1.0];
     for _ in 0..REFINE_ITERATIONS {
         let ft = g(t);
         *evals += 1;
         if ft == 0.0 || !ft.is_finite() {
-            break;
+            return edge_t_clamp(t);
         }
         if (ft > 0.0) == (fa > 0.0) {
             a = t;
@@ -607,10 +617,21 @@ fn regula_falsi(g: impl Fn(f32) -> f32, t: f32, g0: f32, g1: f32, evals: &mut u6
             side = 1;
         }
         let next = (a * fb - b * fa) / (fb - fa);
-        if !next.is_finite() {
+        if b - a <= REFINE_TOLERANCE {
+            t = if next.is_finite() {
+                next
+            } else {
+                0.5 * (a + b)
+            };
             break;
         }
-        t = next;
+        let stalled = b - a > 0.5 * widths[0];
+        widths = [widths[1], b - a];
+        t = if next.is_finite() && !stalled {
+            next
+        } else {
+            0.5 * (a + b)
+        };
     }
     edge_t_clamp(t)
 }
