@@ -536,7 +536,11 @@ mod tests {
             .collect();
         let fine_g = geom(24);
         let fine = Bricks::new(fine_g, vec![IVec3::new(1, 1, 1), IVec3::new(1, 2, 1)]);
-        let fdata = prolong(std::slice::from_ref(&coarse), std::slice::from_ref(&cdata), &fine);
+        let fdata = prolong(
+            std::slice::from_ref(&coarse),
+            std::slice::from_ref(&cdata),
+            &fine,
+        );
         for (i, v) in fdata.iter().enumerate() {
             let c = fine.node_coord(i);
             if fine_g.contains(c) {
