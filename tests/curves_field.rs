@@ -161,6 +161,31 @@ fn bounds_are_sound_with_noise() {
     let f = noisy_ridge();
     assert!(f.stats().levels.len() >= 3);
     check_soundness(&f, 1, 100.0);
+    // The displaced S' itself (not only σ(S'), which saturates away from the surface)
+    // obeys the widened bound on close and far pairs inside the domain.
+    let (mut rng, dom, ls) = (Rng(5), f.support().dilate(-0.5), f.s_lipschitz());
+    let mut seen = 0.0f32;
+    for i in 0..20_000 {
+        let a = rng.point(&dom);
+        let off = Vec3::new(rng.f(), rng.f(), rng.f()) - 0.5;
+        let b = if i % 2 == 0 {
+            a + off * 0.2
+        } else {
+            rng.point(&dom)
+        };
+        let d = a.distance(b).max(1e-6);
+        let q = (f.s_value(a) - f.s_value(b)).abs() / d;
+        seen = seen.max(q);
+        assert!(
+            q <= ls * (1.0 + 1e-4) + 1e-4,
+            "S' slope {q} above its bound {ls}"
+        );
+    }
+    eprintln!("S' slope seen {seen:.2}, bound {ls:.2}");
+    assert!(
+        seen > 1.0,
+        "the noise steepens S' beyond its unit distance slope"
+    );
     // The noise moves the surface: a crest sample with α = 2.5 is displaced.
     let plain = {
         let (spec, f) = load("ridge");

@@ -28,8 +28,10 @@ use super::constraint::{ConstraintPoint, FeatureCurve, reproject, slope_bitangen
 use super::shapes::{Disc, Quad};
 use super::{BSpline, CurveError, Features};
 use crate::field::Aabb;
+use crate::field::Fbm;
+use crate::field::noise::{Octaves, mix32};
 use crate::scene::{Dir3, Finite, NonNegative, P3, Positive, Unit};
-use crate::voxel::{Fbm, FieldParams, Params, SField, run_cached};
+use crate::voxel::{FieldParams, Params, SField, run_cached};
 
 /// A point: absolute, or anchored to the ground.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -260,25 +262,24 @@ impl Default for SolverSpec {
     }
 }
 
-/// fBm settings of the surface noise.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct NoiseSpec {
-    /// Octaves.
-    pub octaves: u32,
-    /// Amplitude ratio between octaves.
-    pub gain: Unit,
-    /// Frequency ratio between octaves.
-    pub lacunarity: Positive,
+/// Settings of the surface noise `S − α·fbm(β·q)`: the shared simplex fBm
+/// ([`crate::field::Fbm`], gain ½, lacunarity 2, `|fbm| ≤ 1`); α and β come from the
+/// Constraint Points. Written `noise: (octaves: 4, seed_offset: 0)`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SurfaceNoiseSpec {
+    /// Octaves, `1..=12` (default 4).
+    pub octaves: Octaves,
+    /// Added to the scene's seed, as for every other noise of a tree (default 0).
+    pub seed_offset: u32,
 }
 
-impl Default for NoiseSpec {
-    fn default() -> Self {
-        NoiseSpec {
-            octaves: 4,
-            gain: Unit(0.5),
-            lacunarity: Positive(2.0),
-        }
+impl SurfaceNoiseSpec {
+    /// The fBm of this volume for the scene seed `scene_seed`, in units where β is the
+    /// first octave's frequency (wavelength 1 in `β·q`).
+    pub fn fbm(&self, scene_seed: u32) -> Fbm {
+        let seed = mix32(scene_seed ^ mix32(self.seed_offset.wrapping_add(0x9e37_79b9)));
+        Fbm::with(seed, 1.0, self.octaves.get())
     }
 }
 
@@ -316,7 +317,7 @@ pub struct FeatureVolumeSpec {
     pub solver: SolverSpec,
     /// Noise settings.
     #[serde(default)]
-    pub noise: NoiseSpec,
+    pub noise: SurfaceNoiseSpec,
 }
 
 /// Reads a RON file, reporting parse errors with the path, line and column.
@@ -603,12 +604,7 @@ impl FeatureVolumeSpec {
             orientation: self.orientation,
             transition: self.transition.map_or(2.0 * h, |t| t.0),
             falloff: self.falloff.map_or(4.0 * h, |t| t.0),
-            fbm: Fbm {
-                seed,
-                octaves: self.noise.octaves,
-                gain: self.noise.gain.0,
-                lacunarity: self.noise.lacunarity.0,
-            },
+            fbm: self.noise.fbm(seed),
         };
         (p, f)
     }

@@ -2,7 +2,6 @@
 //! primitive it produces ([`SField`]).
 
 pub mod diffuse;
-pub mod noise;
 pub mod pipeline;
 pub mod propagate;
 pub mod sfield;
@@ -10,6 +9,5 @@ pub mod smooth;
 pub mod sparse;
 pub mod voxelize;
 
-pub use noise::Fbm;
 pub use pipeline::{Params, Stats, Volume, run, run_cached};
 pub use sfield::{FieldParams, SField};

@@ -18,7 +18,6 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::noise::Fbm;
 use super::pipeline::{BrickBounds, Stats, Volume};
 use super::sparse::{BRICK, Bricks, locate, trilinear_grad};
 use crate::curves::Orientation;
@@ -26,7 +25,7 @@ use crate::field::falloff::{
     T, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope, wyvill,
     wyvill_d, wyvill_interval, wyvill_slope,
 };
-use crate::field::{Aabb, Field, Interval};
+use crate::field::{Aabb, Fbm, Field, Interval};
 
 /// How S becomes a field.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -39,9 +38,13 @@ pub struct FieldParams {
     pub transition: f32,
     /// Face falloff width `R_f` (metres).
     pub falloff: f32,
-    /// The displacement noise.
+    /// The displacement noise, evaluated at `β·(p − domain.min)`: wavelength 1 there, so
+    /// β is the first octave's frequency (1/m).
     pub fbm: Fbm,
 }
+
+/// `max |fbm|`: the shared fBm is normalised to `[−1, 1]` (proven in `field::noise`).
+const FBM_AMPLITUDE: f32 = 1.0;
 
 /// Bricks visited by a bound query before it falls back to a level's global bounds.
 const MAX_QUERY_BRICKS: i64 = 4096;
@@ -84,9 +87,10 @@ const EMPTY_BOUNDS: BrickBounds = BrickBounds {
 
 /// Lipschitz bound of the displacement `α·fbm(β q)`, `q = p − origin`, where α, β and
 /// their slopes are bounded by `b` and `‖q‖ ≤ reach`:
-/// `∇(α n(β q)) = n ∇α + α [β ∇n + (∇n · q) ∇β]`.
+/// `∇(α n(β q)) = n ∇α + α [β ∇n + (∇n · q) ∇β]`, with `|n| ≤ 1` and `|∇n| ≤` the fBm's
+/// proven Lipschitz constant (in its argument `β q`).
 fn noise_lipschitz(params: &FieldParams, b: &BrickBounds, reach: f32) -> f32 {
-    let (a, l) = (params.fbm.amplitude(), params.fbm.lipschitz());
+    let (a, l) = (FBM_AMPLITUDE, params.fbm.lipschitz());
     b.grad_alpha * a + b.alpha[1].max(0.0) * l * (b.beta[1].max(0.0) + reach * b.grad_beta)
 }
 
@@ -100,18 +104,12 @@ impl SField {
             .collect();
         let all = level_bounds.iter().fold(EMPTY_BOUNDS, |a, x| hull(&a, x));
         let lip_s = all.grad_s.length();
-        let (alpha_max, beta_max) = (all.alpha[1].max(0.0), all.beta[1].max(0.0));
-        let noise_amp = if alpha_max > 0.0 && params.fbm.octaves > 0 {
-            alpha_max * params.fbm.amplitude()
-        } else {
-            0.0
-        };
+        let noise_amp = all.alpha[1].max(0.0) * FBM_AMPLITUDE;
         let lip_noise = if noise_amp > 0.0 {
             noise_lipschitz(&params, &all, params.domain.size().length())
         } else {
             0.0
         };
-        let _ = beta_max;
         SField {
             vol,
             params,
@@ -145,6 +143,12 @@ impl SField {
     /// Bytes held by the field's grids.
     pub fn memory_bytes(&self) -> u64 {
         self.vol.stats.field_bytes
+    }
+
+    /// A global Lipschitz bound of `S'` (the S slopes of every brick plus the widening by
+    /// the noise displacement); `f`'s bound is this times `σ`'s slope.
+    pub fn s_lipschitz(&self) -> f32 {
+        self.lip_s + self.lip_noise
     }
 
     /// `S'(p)`: the displaced surface field at `p` clamped to the domain (`+∞` when empty).
@@ -300,7 +304,7 @@ impl Field for SField {
         // Brick ranges of S widened by the noise, and the Lipschitz bound around the
         // centre (tighter on small boxes); both are sound, so is their intersection.
         let amp = if self.noise_amp > 0.0 {
-            bb.alpha[1].max(0.0) * self.params.fbm.amplitude()
+            bb.alpha[1].max(0.0) * FBM_AMPLITUDE
         } else {
             0.0
         };
