@@ -3,6 +3,7 @@
 use glam::Affine3A;
 
 use super::bounds::{Aabb, Interval};
+use super::contract::Field;
 use super::falloff::T;
 use super::node::{Node, NodeId};
 use super::tree::Tree;
@@ -22,22 +23,23 @@ impl Tree {
         mut visit: impl FnMut(NodeId),
     ) {
         match bvh {
-            Some(bvh) => bvh.overlapping(b, |i| visit(children[i])),
+            Some(bvh) => bvh.overlapping(b, visit),
             None => children
                 .iter()
-                .filter(|&&c| self.info[c as usize].support.overlaps(b))
+                .filter(|&&c| self.supports[c as usize].overlaps(b))
                 .for_each(|&c| visit(c)),
         }
     }
 
     /// A range containing every value of node `id` over `b`.
     pub fn interval_at(&self, id: NodeId, b: &Aabb) -> Interval {
-        let info = &self.info[id as usize];
-        if !info.support.overlaps(b) {
+        let support = &self.supports[id as usize];
+        if !support.overlaps(b) {
             return Interval::ZERO;
         }
         let r = match &self.nodes[id as usize] {
             Node::Constant(v) => Interval::point(*v),
+            Node::Primitive(f) => f.interval(b),
             Node::Leaf(f) => f.interval(b),
             Node::Blend { children, bvh } => {
                 let mut sum = Interval::ZERO;
@@ -65,7 +67,7 @@ impl Tree {
             } => self.interval_at(*child, &map_box(to_child, b)),
             Node::Warp { child, warp } => self.interval_at(*child, &b.dilate(warp.reach())),
         };
-        if info.support.contains_box(b) {
+        if support.contains_box(b) {
             r
         } else {
             r.hull(Interval::ZERO)
@@ -74,7 +76,7 @@ impl Tree {
 
     /// A Lipschitz bound of node `id` valid inside `b`.
     pub fn lipschitz_box_at(&self, id: NodeId, b: &Aabb) -> f32 {
-        if !self.info[id as usize].support.overlaps(b) {
+        if !self.supports[id as usize].overlaps(b) {
             return 0.0;
         }
         let max_of = |children: &[NodeId]| {
@@ -85,6 +87,7 @@ impl Tree {
         };
         match &self.nodes[id as usize] {
             Node::Constant(_) => 0.0,
+            Node::Primitive(f) => f.lipschitz_box(b),
             Node::Leaf(f) => f.lipschitz_box(b),
             Node::Blend { children, bvh } => {
                 let mut sum = 0.0;

@@ -2,24 +2,34 @@
 
 use glam::Vec3;
 
+use super::contract::Field;
+
 use super::falloff::T;
 use super::node::{Node, NodeId};
 use super::tree::Tree;
 
 impl Tree {
     /// `f(p)` of node `id`.
+    #[inline]
     pub fn value_at(&self, id: NodeId, p: Vec3) -> f32 {
-        let info = &self.info[id as usize];
-        if !info.support.contains(p) {
-            return 0.0;
+        if self.supports[id as usize].contains(p) {
+            self.value_inside(id, p)
+        } else {
+            0.0
         }
+    }
+
+    /// `f(p)` of node `id`, for `p` known to lie in its support.
+    fn value_inside(&self, id: NodeId, p: Vec3) -> f32 {
         match &self.nodes[id as usize] {
             Node::Constant(v) => *v,
+            Node::Primitive(f) => f.value(p),
             Node::Leaf(f) => f.value(p),
             Node::Blend { children, bvh } => match bvh {
+                // The BVH tests each child's support itself.
                 Some(bvh) => {
                     let mut sum = 0.0;
-                    bvh.at_point(p, |i| sum += self.value_at(children[i], p));
+                    bvh.at_point(p, |c| sum += self.value_inside(c, p));
                     sum
                 }
                 None => children.iter().map(|&c| self.value_at(c, p)).sum(),
@@ -47,8 +57,7 @@ impl Tree {
     /// `(f(p), ∇f(p))` of node `id`. At the kinks of min/max the gradient of the selected
     /// child is returned.
     pub fn value_grad_at(&self, id: NodeId, p: Vec3) -> (f32, Vec3) {
-        let info = &self.info[id as usize];
-        if !info.support.contains(p) {
+        if !self.supports[id as usize].contains(p) {
             return (0.0, Vec3::ZERO);
         }
         let pick = |children: &[NodeId], better: fn(f32, f32) -> bool| {
@@ -63,6 +72,7 @@ impl Tree {
         };
         match &self.nodes[id as usize] {
             Node::Constant(v) => (*v, Vec3::ZERO),
+            Node::Primitive(f) => f.value_grad(p),
             Node::Leaf(f) => f.value_grad(p),
             Node::Blend { children, bvh } => {
                 let mut acc = (0.0, Vec3::ZERO);
@@ -72,7 +82,7 @@ impl Tree {
                     acc.1 += g;
                 };
                 match bvh {
-                    Some(bvh) => bvh.at_point(p, |i| add(children[i])),
+                    Some(bvh) => bvh.at_point(p, add),
                     None => children.iter().for_each(|&c| add(c)),
                 }
                 acc

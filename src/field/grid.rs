@@ -3,8 +3,8 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::block::BRICK;
 use super::contract::Field;
-use super::prune::BRICK;
 
 /// A regular grid of sample points: `origin + (i, j, k)·step`, `dims = [nx, ny, nz]`.
 #[derive(Clone, Copy, Debug, PartialEq)]

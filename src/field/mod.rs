@@ -4,6 +4,7 @@
 //! arena ([`Tree`], [`node`]), and the evaluators (point values and gradients in `eval`,
 //! box bounds in `box_bounds`, z-bands in `zband`, pruning in `prune`, grids in [`grid`]).
 
+mod block;
 pub mod bounds;
 mod box_bounds;
 pub mod bvh;
@@ -16,10 +17,12 @@ pub mod noise;
 pub mod primitive;
 mod prune;
 pub mod skeleton;
+mod slope_grid;
 mod tree;
 pub mod warp;
 mod zband;
 
+pub use block::BRICK;
 pub use bounds::{Aabb, Interval, Rect, ZBands};
 pub use box_bounds::map_box;
 pub use contract::{Elevation, ElevationSource, Field};
@@ -28,7 +31,6 @@ pub use grid::{Grid, eval_grid, eval_grid_naive, slab_count};
 pub use node::{Node, NodeId};
 pub use noise::{Fbm, NoiseSpec};
 pub use primitive::{Noise, Primitive, PrimitiveError, PrimitiveSpec};
-pub use prune::BRICK;
 pub use skeleton::{Skeleton, SkeletonSpec};
 pub use tree::{NodeInfo, SubTree, Tree, TreeBuilder};
 pub use warp::Warp;

@@ -6,6 +6,7 @@ use glam::{Affine3A, Mat3A};
 
 use super::bvh::ChildBvh;
 use super::contract::Field;
+use super::primitive::Primitive;
 use super::warp::Warp;
 
 /// Index of a node in a [`super::Tree`] arena. Children always have smaller ids than their
@@ -16,7 +17,9 @@ pub type NodeId = u32;
 pub enum Node {
     /// A constant field (appears when pruning folds a subtree).
     Constant(f32),
-    /// A leaf: skeletal primitive, heightfield, S-field volume, …
+    /// A skeletal primitive, stored inline so evaluating it chases no pointer.
+    Primitive(Primitive),
+    /// Any other leaf: heightfield, S-field volume, …
     Leaf(Arc<dyn Field>),
     /// n-ary blend: `Σ fᵢ` (Wyvill). Many children get a BVH over their supports.
     Blend {
@@ -55,10 +58,20 @@ pub enum Node {
 }
 
 impl Node {
+    /// The field of a leaf (primitive or other), `None` for constants and operators.
+    #[inline]
+    pub fn leaf(&self) -> Option<&dyn Field> {
+        match self {
+            Node::Primitive(p) => Some(p),
+            Node::Leaf(f) => Some(&**f),
+            _ => None,
+        }
+    }
+
     /// The children, in order.
     pub fn children(&self) -> Vec<NodeId> {
         match self {
-            Node::Constant(_) | Node::Leaf(_) => Vec::new(),
+            Node::Constant(_) | Node::Primitive(_) | Node::Leaf(_) => Vec::new(),
             Node::Blend { children, .. } | Node::Union(children) | Node::Intersection(children) => {
                 children.to_vec()
             }
@@ -73,6 +86,7 @@ impl Node {
     pub fn kind(&self) -> &'static str {
         match self {
             Node::Constant(_) => "constant",
+            Node::Primitive(_) => "primitive",
             Node::Leaf(_) => "leaf",
             Node::Blend { .. } => "blend",
             Node::Union(_) => "union",

@@ -3,16 +3,11 @@
 
 use std::collections::HashMap;
 
-use glam::Vec3;
-
 use super::bounds::{Aabb, Interval};
 use super::box_bounds::map_box;
 use super::falloff::T;
 use super::node::{Node, NodeId};
 use super::tree::{Tree, TreeBuilder};
-
-/// Side of the cubic bricks the grid evaluator prunes for.
-pub const BRICK: usize = 8;
 
 struct Pruner<'t> {
     tree: &'t Tree,
@@ -45,6 +40,7 @@ impl Pruner<'_> {
         let name = info.name.clone();
         match &tree.nodes[id as usize] {
             Node::Constant(v) => (*v != 0.0).then(|| self.out.constant(*v, name)),
+            Node::Primitive(f) => Some(self.out.primitive(f.clone(), name)),
             Node::Leaf(f) => Some(self.out.leaf(f.clone(), name)),
             Node::Blend { children, bvh } => {
                 let mut kept = Vec::new();
@@ -164,51 +160,6 @@ impl Tree {
         match self.nodes[self.root as usize] {
             Node::Constant(v) => Some(v),
             _ => None,
-        }
-    }
-
-    /// Values of node `id` on a block of grid points, pruned per [`BRICK`]³ brick.
-    pub fn eval_block_at(
-        &self,
-        id: NodeId,
-        origin: Vec3,
-        step: Vec3,
-        dims: [usize; 3],
-        out: &mut [f32],
-    ) {
-        let [nx, ny, nz] = dims;
-        assert!(out.len() >= nx * ny * nz, "eval_block: output too small");
-        for k0 in (0..nz).step_by(BRICK) {
-            for j0 in (0..ny).step_by(BRICK) {
-                for i0 in (0..nx).step_by(BRICK) {
-                    let hi = [
-                        (i0 + BRICK).min(nx),
-                        (j0 + BRICK).min(ny),
-                        (k0 + BRICK).min(nz),
-                    ];
-                    let lo_p = origin + Vec3::new(i0 as f32, j0 as f32, k0 as f32) * step;
-                    let hi_p = origin
-                        + Vec3::new((hi[0] - 1) as f32, (hi[1] - 1) as f32, (hi[2] - 1) as f32)
-                            * step;
-                    let brick = Aabb::new(lo_p, hi_p);
-                    let pruned = self.pruned(id, &brick);
-                    let constant = pruned.as_constant();
-                    for k in k0..hi[2] {
-                        for j in j0..hi[1] {
-                            let row = nx * (j + ny * k);
-                            for i in i0..hi[0] {
-                                out[row + i] = match constant {
-                                    Some(v) => v,
-                                    None => pruned.value_at(
-                                        pruned.root,
-                                        origin + Vec3::new(i as f32, j as f32, k as f32) * step,
-                                    ),
-                                };
-                            }
-                        }
-                    }
-                }
-            }
         }
     }
 }

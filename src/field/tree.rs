@@ -9,6 +9,8 @@ use super::bvh::{BVH_MIN_CHILDREN, ChildBvh};
 use super::contract::{Elevation, Field};
 use super::falloff::T;
 use super::node::{Node, NodeId, spectral_norm};
+use super::primitive::Primitive;
+use super::slope_grid::blend_lipschitz;
 use super::warp::Warp;
 
 /// What the compiler caches for every node.
@@ -26,8 +28,12 @@ pub struct NodeInfo {
 
 /// A compiled implicit construction tree: the single thing the mesher, the tracers and the
 /// editor consume. It answers the whole [`Field`] contract.
+///
+/// The arena is split hot and cold: evaluation reads `nodes` (primitives inline) and
+/// `supports`; the other cached bounds and the names live in `info`.
 pub struct Tree {
     pub(super) nodes: Vec<Node>,
+    pub(super) supports: Vec<Aabb>,
     pub(super) info: Vec<NodeInfo>,
     pub(super) root: NodeId,
 }
@@ -52,7 +58,12 @@ impl TreeBuilder {
         (self.nodes.len() - 1) as NodeId
     }
 
-    /// A leaf field.
+    /// A skeletal primitive, stored inline in the arena.
+    pub fn primitive(&mut self, p: Primitive, name: Option<String>) -> NodeId {
+        self.push(Node::Primitive(p), name)
+    }
+
+    /// A leaf field (use [`TreeBuilder::primitive`] for a [`Primitive`]).
     pub fn leaf(&mut self, field: Arc<dyn Field>, name: Option<String>) -> NodeId {
         self.push(Node::Leaf(field), name)
     }
@@ -69,7 +80,7 @@ impl TreeBuilder {
                 .iter()
                 .map(|&c| self.info[c as usize].support)
                 .collect();
-            ChildBvh::new(&supports)
+            ChildBvh::new(&supports, &children)
         });
         self.push(
             Node::Blend {
@@ -140,6 +151,7 @@ impl TreeBuilder {
     pub fn build(self, root: NodeId) -> Tree {
         Tree {
             nodes: self.nodes,
+            supports: self.info.iter().map(|i| i.support).collect(),
             info: self.info,
             root,
         }
@@ -154,32 +166,24 @@ impl TreeBuilder {
                 Interval::point(*v),
                 0.0,
             ),
-            Node::Leaf(f) => {
+            Node::Primitive(_) | Node::Leaf(_) => {
+                let f = node.leaf().expect("a leaf");
                 let s = f.support();
                 (s, f.interval(&s).hull(Interval::ZERO), f.lipschitz())
             }
-            Node::Blend { children, bvh } => {
+            Node::Blend { children, .. } => {
                 let support = children
                     .iter()
                     .fold(Aabb::EMPTY, |b, c| b.union(info(c).support));
                 let range = children
                     .iter()
                     .fold(Interval::ZERO, |r, c| r.add(info(c).range));
-                // ∇ of a sum is the sum of the gradients of the children non-zero at a point:
-                // bound it by the heaviest group of mutually overlapping supports.
-                let lipschitz = match bvh {
-                    Some(bvh) => children
-                        .iter()
-                        .map(|c| {
-                            let mut sum = 0.0;
-                            bvh.overlapping(&info(c).support, |j| {
-                                sum += info(&children[j]).lipschitz
-                            });
-                            sum
-                        })
-                        .fold(0.0, f32::max),
-                    None => children.iter().map(|c| info(c).lipschitz).sum(),
-                };
+                // ∇ of a sum is the sum of the gradients of the children non-zero at a point.
+                let slopes: Vec<(Aabb, f32)> = children
+                    .iter()
+                    .map(|c| (info(c).support, info(c).lipschitz))
+                    .collect();
+                let lipschitz = blend_lipschitz(&slopes);
                 (support, range, lipschitz)
             }
             Node::Union(children) | Node::Intersection(children) => {

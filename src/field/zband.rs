@@ -2,7 +2,7 @@
 //! pruning, and the heightfield shortcut for direct elevation extraction.
 
 use super::bounds::{Interval, Rect, ZBands};
-use super::contract::{Elevation, z_bands_by_interval};
+use super::contract::{Elevation, Field, z_bands_by_interval};
 use super::falloff::T;
 use super::node::{Node, NodeId};
 use super::tree::Tree;
@@ -53,6 +53,7 @@ impl Tree {
                     out.push(z);
                 }
             }
+            Node::Primitive(f) => f.z_bands(fp, z, out),
             Node::Leaf(f) => f.z_bands(fp, z, out),
             Node::Blend { .. } => {
                 let children = self.children_in_column(id, fp, z);
@@ -122,6 +123,7 @@ impl Tree {
     pub fn elevation_at(&self, id: NodeId, fp: &Rect) -> Option<Elevation<'_>> {
         let support = &self.info[id as usize].support;
         match &self.nodes[id as usize] {
+            Node::Primitive(f) => f.elevation(fp),
             Node::Leaf(f) => f.elevation(fp),
             Node::Blend { .. } | Node::Union(_) | Node::Difference { .. } => {
                 let children = self.children_in_column(id, fp, support.z());

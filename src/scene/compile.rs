@@ -119,7 +119,7 @@ impl Compiler<'_> {
         Ok(match n {
             NodeSpec::Primitive(p) => {
                 let leaf = Primitive::from_spec(p, self.scene.seed);
-                self.builder.leaf(Arc::new(leaf), name)
+                self.builder.primitive(leaf, name)
             }
             NodeSpec::Heightfield(h) => {
                 let leaf = h
