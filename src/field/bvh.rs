@@ -1,12 +1,15 @@
 //! A BVH over the support boxes of a blend's children, so a query touches only the
 //! children that can be non-zero there.
 //!
-//! obvhs builds a binary SAH tree (one child per leaf); we collapse it into a flat array
-//! of 4-wide nodes that hold their four slot boxes inline, structure-of-arrays, so one
-//! node test is a handful of SIMD compares on two cache lines. A slot is either an inner
-//! node or one item, whose box is the item's exact support: a query tests the item's box
-//! before the caller ever touches the item. Nodes are laid out depth first, so the top of
-//! the tree stays in cache and a subtree is contiguous.
+//! obvhs builds a binary SAH tree with up to [`WIDTH`] items per leaf; we flatten it into
+//! two arrays of [`WIDTH`]-wide nodes that hold their slot boxes inline,
+//! structure-of-arrays, so a node test is a few SIMD compares on its own cache lines:
+//!
+//! * inner nodes, each slot an inner node or a leaf, laid out depth first; they are few
+//!   (about one per five leaves), so the descent mostly runs in cache;
+//! * leaves, each obvhs leaf's items with their exact boxes (the children's supports), so
+//!   a query tests an item's box before the caller ever touches the item, and the items of
+//!   a leaf are contiguous.
 
 use std::time::Duration;
 
@@ -23,66 +26,77 @@ pub const BVH_MIN_CHILDREN: usize = 16;
 /// would overflow) and tested one by one.
 const HUGE: f32 = 1e15;
 
-/// Width of the collapsed nodes.
-const WIDTH: usize = 4;
+/// Slots per node, and most items per leaf.
+const WIDTH: usize = 8;
+
+/// SIMD groups of four slots per node.
+const GROUPS: usize = WIDTH / 4;
 
 /// Depth of the traversal stack kept on the machine stack; deeper trees use the heap.
 const STACK: usize = 64;
 
-/// One 4-wide node: the boxes of its slots (x, y, z of the lower then upper corners, one
-/// lane per slot) and what each slot holds. Unused slots have empty boxes.
+/// One node: the boxes of its slots (x, y, z of the lower then upper corners, one lane per
+/// slot) and what each slot holds. Unused slots have empty boxes.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 struct Wide {
-    lo: [Vec4; 3],
-    hi: [Vec4; 3],
-    /// Index of the inner node, or the item's payload.
+    lo: [[Vec4; GROUPS]; 3],
+    hi: [[Vec4; GROUPS]; 3],
+    /// In an inner node, the index of the inner node or leaf; in a leaf, the payload.
     slot: [u32; WIDTH],
-    /// Bit `i` set when slot `i` holds an item.
-    items: u32,
+    /// In an inner node, bit `i` set when slot `i` is a leaf.
+    leaves: u32,
 }
 
 impl Wide {
     const EMPTY: Wide = Wide {
-        lo: [Vec4::INFINITY; 3],
-        hi: [Vec4::NEG_INFINITY; 3],
+        lo: [[Vec4::INFINITY; GROUPS]; 3],
+        hi: [[Vec4::NEG_INFINITY; GROUPS]; 3],
         slot: [0; WIDTH],
-        items: 0,
+        leaves: 0,
     };
 
-    fn set(&mut self, i: usize, b: &Aabb, slot: u32, item: bool) {
+    fn set(&mut self, i: usize, b: &Aabb, slot: u32, leaf: bool) {
         for a in 0..3 {
-            self.lo[a][i] = b.min[a];
-            self.hi[a][i] = b.max[a];
+            self.lo[a][i / 4][i % 4] = b.min[a];
+            self.hi[a][i / 4][i % 4] = b.max[a];
         }
         self.slot[i] = slot;
-        if item {
-            self.items |= 1 << i;
+        if leaf {
+            self.leaves |= 1 << i;
         }
     }
 
     /// Bit mask of the slots whose box contains `p`.
     #[inline(always)]
     fn containing(&self, p: &[Vec4; 3]) -> u32 {
-        let m = self.lo[0].cmple(p[0])
-            & p[0].cmple(self.hi[0])
-            & self.lo[1].cmple(p[1])
-            & p[1].cmple(self.hi[1])
-            & self.lo[2].cmple(p[2])
-            & p[2].cmple(self.hi[2]);
-        m.bitmask()
+        let mut mask = 0;
+        for g in 0..GROUPS {
+            let m = self.lo[0][g].cmple(p[0])
+                & p[0].cmple(self.hi[0][g])
+                & self.lo[1][g].cmple(p[1])
+                & p[1].cmple(self.hi[1][g])
+                & self.lo[2][g].cmple(p[2])
+                & p[2].cmple(self.hi[2][g]);
+            mask |= m.bitmask() << (4 * g);
+        }
+        mask
     }
 
     /// Bit mask of the slots whose box overlaps the box `lo..hi`.
     #[inline(always)]
     fn overlapping(&self, lo: &[Vec4; 3], hi: &[Vec4; 3]) -> u32 {
-        let m = self.lo[0].cmple(hi[0])
-            & lo[0].cmple(self.hi[0])
-            & self.lo[1].cmple(hi[1])
-            & lo[1].cmple(self.hi[1])
-            & self.lo[2].cmple(hi[2])
-            & lo[2].cmple(self.hi[2]);
-        m.bitmask()
+        let mut mask = 0;
+        for g in 0..GROUPS {
+            let m = self.lo[0][g].cmple(hi[0])
+                & lo[0].cmple(self.hi[0][g])
+                & self.lo[1][g].cmple(hi[1])
+                & lo[1].cmple(self.hi[1][g])
+                & self.lo[2][g].cmple(hi[2])
+                & lo[2].cmple(self.hi[2][g]);
+            mask |= m.bitmask() << (4 * g);
+        }
+        mask
     }
 }
 
@@ -90,7 +104,10 @@ impl Wide {
 /// Queries call back with the payloads of the boxes that contain a point or overlap a box,
 /// exactly those a linear scan with [`Aabb::contains`] / [`Aabb::overlaps`] finds.
 pub struct ChildBvh {
+    /// Inner nodes; the root is the first.
     nodes: Vec<Wide>,
+    /// Leaves: items' boxes and payloads.
+    leaves: Vec<Wide>,
     /// Items with boxes too large for the tree, tested one by one.
     huge: Vec<(Aabb, u32)>,
     /// Whether a traversal can need more than [`STACK`] entries.
@@ -105,68 +122,72 @@ impl obvhs::Boundable for Boxed {
     }
 }
 
-/// A slot of a wide node before it is emitted.
-#[derive(Clone, Copy)]
-enum Slot {
-    /// Item `i` of the input.
-    Item(usize),
-    /// obvhs inner node `n`.
-    Inner(u32),
-}
-
-/// The flattening of an obvhs [`Bvh2`] with one item per leaf into [`Wide`] nodes.
+/// The flattening of an obvhs [`Bvh2`] into inner nodes and leaves.
 struct Collapse<'a> {
     bvh: &'a Bvh2,
     boxes: &'a [Aabb],
     payloads: &'a [u32],
     nodes: Vec<Wide>,
+    leaves: Vec<Wide>,
     depth: usize,
 }
 
 impl Collapse<'_> {
-    fn slot(&self, n: u32) -> Slot {
+    fn is_leaf(&self, n: u32) -> bool {
+        self.bvh.nodes[n as usize].prim_count > 0
+    }
+
+    fn aabb(&self, n: u32) -> Aabb {
+        let b = self.bvh.nodes[n as usize].aabb();
+        Aabb::new(Vec3::from(b.min), Vec3::from(b.max))
+    }
+
+    /// Emits obvhs leaf `n` as a leaf; returns its index.
+    fn leaf(&mut self, n: u32) -> u32 {
         let node = &self.bvh.nodes[n as usize];
-        if node.prim_count == 0 {
-            Slot::Inner(n)
-        } else {
-            assert_eq!(node.prim_count, 1, "obvhs was asked for one item per leaf");
-            Slot::Item(self.bvh.primitive_indices[node.first_index as usize] as usize)
+        let first = node.first_index as usize;
+        let items = &self.bvh.primitive_indices[first..first + node.prim_count as usize];
+        assert!(
+            items.len() <= WIDTH,
+            "obvhs was asked for at most {WIDTH} items per leaf"
+        );
+        let mut leaf = Wide::EMPTY;
+        for (i, &k) in items.iter().enumerate() {
+            leaf.set(i, &self.boxes[k as usize], self.payloads[k as usize], false);
         }
+        self.leaves.push(leaf);
+        (self.leaves.len() - 1) as u32
     }
 
-    fn half_area(&self, s: Slot) -> f32 {
-        match s {
-            Slot::Inner(n) => self.bvh.nodes[n as usize].aabb().half_area(),
-            Slot::Item(_) => f32::NEG_INFINITY,
-        }
-    }
-
-    /// Emits the wide node holding `open` (opening its largest inner nodes until the
-    /// slots are used) and the subtrees below; returns its index.
-    fn node(&mut self, mut open: Vec<Slot>, depth: usize) -> u32 {
+    /// Emits the inner node holding the obvhs nodes `open` (opening its largest inner
+    /// nodes until the slots are used) and the subtrees below; returns its index.
+    fn node(&mut self, mut open: Vec<u32>, depth: usize) -> u32 {
         self.depth = self.depth.max(depth);
         while open.len() < WIDTH {
-            let (i, widest) = open
+            let widest = open
                 .iter()
                 .enumerate()
-                .max_by(|a, b| self.half_area(*a.1).total_cmp(&self.half_area(*b.1)))
-                .expect("a node has a slot");
-            let Slot::Inner(n) = *widest else { break };
-            let first = self.bvh.nodes[n as usize].first_index;
-            open.splice(i..=i, [self.slot(first), self.slot(first + 1)]);
+                .filter(|&(_, &m)| !self.is_leaf(m))
+                .max_by(|a, b| {
+                    let area = |m: u32| self.bvh.nodes[m as usize].aabb().half_area();
+                    area(*a.1).total_cmp(&area(*b.1))
+                })
+                .map(|(i, &m)| (i, m));
+            let Some((i, m)) = widest else { break };
+            let first = self.bvh.nodes[m as usize].first_index;
+            open.splice(i..=i, [first, first + 1]);
         }
         let at = self.nodes.len();
         self.nodes.push(Wide::EMPTY);
-        for (i, s) in open.into_iter().enumerate() {
-            match s {
-                Slot::Item(k) => self.nodes[at].set(i, &self.boxes[k], self.payloads[k], true),
-                Slot::Inner(n) => {
-                    let b = self.bvh.nodes[n as usize].aabb();
-                    let b = Aabb::new(Vec3::from(b.min), Vec3::from(b.max));
-                    let first = self.bvh.nodes[n as usize].first_index;
-                    let child = self.node(vec![self.slot(first), self.slot(first + 1)], depth + 1);
-                    self.nodes[at].set(i, &b, child, false);
-                }
+        for (i, m) in open.into_iter().enumerate() {
+            let b = self.aabb(m);
+            if self.is_leaf(m) {
+                let leaf = self.leaf(m);
+                self.nodes[at].set(i, &b, leaf, true);
+            } else {
+                let first = self.bvh.nodes[m as usize].first_index;
+                let child = self.node(vec![first, first + 1], depth + 1);
+                self.nodes[at].set(i, &b, child, false);
             }
         }
         at as u32
@@ -195,6 +216,7 @@ impl ChildBvh {
         }
         let mut bvh = ChildBvh {
             nodes: Vec::new(),
+            leaves: Vec::new(),
             huge: huge_items,
             deep: false,
         };
@@ -205,20 +227,89 @@ impl ChildBvh {
             .iter()
             .map(|b| Boxed(BvhAabb::new(Vec3A::from(b.min), Vec3A::from(b.max))))
             .collect();
+        // Full leaves (a high traversal cost in the collapse) keep the inner nodes few, and
+        // a full reinsertion pass cuts the overlap a point query wades through by half.
         let mut params = BvhBuildParams::medium_build();
-        params.max_prims_per_leaf = 1;
+        params.max_prims_per_leaf = WIDTH as u32;
+        params.collapse_traversal_cost = 10.0;
+        params.reinsertion_batch_ratio = 1.0;
         let bvh2 = build_bvh2(&prims, params, &mut Duration::default());
         let mut c = Collapse {
             bvh: &bvh2,
             boxes: &kept_boxes,
             payloads: &kept_payloads,
-            nodes: Vec::with_capacity(kept_boxes.len() / (WIDTH - 1) + 1),
+            nodes: Vec::new(),
+            leaves: Vec::new(),
             depth: 0,
         };
-        c.node(vec![c.slot(0)], 1);
+        c.node(vec![0], 1);
         bvh.deep = c.depth * (WIDTH - 1) + 1 > STACK;
         bvh.nodes = c.nodes;
+        bvh.leaves = c.leaves;
         bvh
+    }
+
+    /// Number of inner nodes and of leaves.
+    pub fn node_count(&self) -> (usize, usize) {
+        (self.nodes.len(), self.leaves.len())
+    }
+
+    /// Depth-first traversal: `hit(node)` gives the mask of slots to follow.
+    #[inline(always)]
+    fn traverse(&self, hit: impl Fn(&Wide) -> u32, mut visit: impl FnMut(u32)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let deep = self.deep;
+        let mut stack = Stack::new();
+        let mut at = 0u32;
+        loop {
+            let node = &self.nodes[at as usize];
+            let mask = hit(node);
+            let mut leaves = mask & node.leaves;
+            while leaves != 0 {
+                let leaf = &self.leaves[node.slot[leaves.trailing_zeros() as usize] as usize];
+                let mut items = hit(leaf);
+                while items != 0 {
+                    visit(leaf.slot[items.trailing_zeros() as usize]);
+                    items &= items - 1;
+                }
+                leaves &= leaves - 1;
+            }
+            let mut inner = mask & !node.leaves;
+            while inner != 0 {
+                stack.push(node.slot[inner.trailing_zeros() as usize], deep);
+                inner &= inner - 1;
+            }
+            match stack.pop(deep) {
+                Some(n) => at = n,
+                None => break,
+            }
+        }
+    }
+
+    /// Calls `visit(payload)` for every item whose box contains `p`.
+    #[inline]
+    pub fn at_point(&self, p: Vec3, mut visit: impl FnMut(u32)) {
+        let q = [Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)];
+        self.traverse(|n| n.containing(&q), &mut visit);
+        for (b, payload) in &self.huge {
+            if b.contains(p) {
+                visit(*payload);
+            }
+        }
+    }
+
+    /// Calls `visit(payload)` for every item whose box overlaps `b`.
+    pub fn overlapping(&self, b: &Aabb, mut visit: impl FnMut(u32)) {
+        let lo = [b.min.x, b.min.y, b.min.z].map(Vec4::splat);
+        let hi = [b.max.x, b.max.y, b.max.z].map(Vec4::splat);
+        self.traverse(|n| n.overlapping(&lo, &hi), &mut visit);
+        for (h, payload) in &self.huge {
+            if h.overlaps(b) {
+                visit(*payload);
+            }
+        }
     }
 }
 
@@ -259,65 +350,6 @@ impl Stack {
         }
         self.len -= 1;
         Some(self.local[self.len])
-    }
-}
-
-impl ChildBvh {
-    /// Number of wide nodes (for tests and statistics).
-    pub fn node_count(&self) -> usize {
-        self.nodes.len()
-    }
-
-    /// Depth-first traversal: `hit(node)` gives the mask of slots to follow.
-    #[inline(always)]
-    fn traverse(&self, hit: impl Fn(&Wide) -> u32, mut visit: impl FnMut(u32)) {
-        if !self.nodes.is_empty() {
-            let deep = self.deep;
-            let mut stack = Stack::new();
-            let mut at = 0u32;
-            loop {
-                let node = &self.nodes[at as usize];
-                let mask = hit(node);
-                let mut items = mask & node.items;
-                while items != 0 {
-                    visit(node.slot[items.trailing_zeros() as usize]);
-                    items &= items - 1;
-                }
-                let mut inner = mask & !node.items;
-                while inner != 0 {
-                    stack.push(node.slot[inner.trailing_zeros() as usize], deep);
-                    inner &= inner - 1;
-                }
-                match stack.pop(deep) {
-                    Some(n) => at = n,
-                    None => break,
-                }
-            }
-        }
-    }
-
-    /// Calls `visit(payload)` for every item whose box contains `p`.
-    #[inline]
-    pub fn at_point(&self, p: Vec3, mut visit: impl FnMut(u32)) {
-        let q = [Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)];
-        self.traverse(|n| n.containing(&q), &mut visit);
-        for (b, payload) in &self.huge {
-            if b.contains(p) {
-                visit(*payload);
-            }
-        }
-    }
-
-    /// Calls `visit(payload)` for every item whose box overlaps `b`.
-    pub fn overlapping(&self, b: &Aabb, mut visit: impl FnMut(u32)) {
-        let lo = [b.min.x, b.min.y, b.min.z].map(Vec4::splat);
-        let hi = [b.max.x, b.max.y, b.max.z].map(Vec4::splat);
-        self.traverse(|n| n.overlapping(&lo, &hi), &mut visit);
-        for (h, payload) in &self.huge {
-            if h.overlaps(b) {
-                visit(*payload);
-            }
-        }
     }
 }
 
@@ -403,8 +435,8 @@ mod tests {
         }
     }
 
-    /// Opening the widest inner nodes fills the slots: at most one wide node for two
-    /// items (a binary tree has one per item).
+    /// Leaves hold several items and inner nodes several leaves, so the inner nodes the
+    /// descent reads are few.
     #[test]
     fn nodes_are_filled() {
         let mut rng = Rng(5);
@@ -413,7 +445,11 @@ mod tests {
             .collect();
         let payloads: Vec<u32> = (0..4000).collect();
         let bvh = ChildBvh::new(&boxes, &payloads);
-        assert!(bvh.node_count() <= 4000 / 2, "{} nodes", bvh.node_count());
+        let (inner, leaves) = bvh.node_count();
+        assert!(
+            leaves <= 4000 / 4 && inner <= leaves / 2,
+            "{inner} inner nodes, {leaves} leaves"
+        );
         assert!(bvh.huge.is_empty() && !bvh.deep);
     }
 }

@@ -66,7 +66,7 @@ pub fn blend_lipschitz(children: &[(Aabb, f32)]) -> f32 {
 }
 
 /// Cells along each axis: about `cells` in all, as cubic as the box allows.
-fn grid_dims(size: Vec3, cells: usize) -> [usize; 3] {
+pub(super) fn grid_dims(size: Vec3, cells: usize) -> [usize; 3] {
     let longest = size.max_element().max(f32::MIN_POSITIVE);
     // Flat axes get one cell; the others share the budget in proportion to their length.
     let s = size.max(Vec3::splat(longest * 1e-3));
