@@ -198,9 +198,26 @@ pub fn cells_of_band(band: Interval, z0: f32, dz: f32, n: usize) -> Option<[u32;
     if lo.is_nan() || hi.is_nan() {
         return Some([0, n as u32]);
     }
-    let a = (lo - 1.0 - BAND_SLACK).ceil().max(0.0);
-    let b = ((hi + BAND_SLACK).floor() + 1.0).min(n as f32);
+    let a = ceil(lo - 1.0 - BAND_SLACK).max(0.0);
+    let b = (floor(hi + BAND_SLACK) + 1.0).min(n as f32);
     (a < b).then(|| [a as u32, b as u32])
+}
+
+/// `x.floor()` without a libm call on targets without SSE4.1 (NaN stays NaN).
+#[inline]
+fn floor(x: f32) -> f32 {
+    // Beyond 2^23 every f32 is an integer.
+    if !(x.abs() < 8_388_608.0) {
+        return x;
+    }
+    let t = x as i32 as f32;
+    if t > x { t - 1.0 } else { t }
+}
+
+/// `x.ceil()`, like [`floor`].
+#[inline]
+fn ceil(x: f32) -> f32 {
+    -floor(-x)
 }
 
 /// Adds `[a, b)` to a sorted list of disjoint ranges, merging overlapping or touching ones.
@@ -444,10 +461,8 @@ pub fn tile_samples(
             }
         }
         let split = elevation.get(tiles.id(i, j)).map(|e| {
-            let a = ((e.z.lo - z0) / dz + BAND_SLACK)
-                .ceil()
-                .clamp(0.0, nk as f32) as u32;
-            let b = ((e.z.hi - z0) / dz - BAND_SLACK).floor() + 1.0;
+            let a = ceil((e.z.lo - z0) / dz + BAND_SLACK).clamp(0.0, nk as f32) as u32;
+            let b = floor((e.z.hi - z0) / dz - BAND_SLACK) + 1.0;
             [a, b.clamp(0.0, nk as f32) as u32]
         });
         let before = spans.len();

@@ -434,11 +434,7 @@ impl<'f> Ctx<'_, 'f> {
             for (si, s) in spans.iter().enumerate() {
                 for k in s.k0..s.k1 {
                     let p = s.offset + (k - s.k0) as usize;
-                    let a = End {
-                        p: self.grid.point(i, j, k as usize),
-                        v: values[p] - T,
-                        elevation: s.elevation,
-                    };
+                    let solid = values[p] > T;
                     let z_next = if k + 1 < s.k1 {
                         Some((p + 1, s))
                     } else {
@@ -460,9 +456,14 @@ impl<'f> Ctx<'_, 'f> {
                         let Some((q, qs, [qi, qj])) = nb else {
                             continue;
                         };
-                        if (values[p] > T) == (values[q] > T) {
+                        if solid == (values[q] > T) {
                             continue;
                         }
+                        let a = End {
+                            p: self.grid.point(i, j, k as usize),
+                            v: values[p] - T,
+                            elevation: s.elevation,
+                        };
                         let kq = if axis == 2 { k + 1 } else { k };
                         let b = End {
                             p: self.grid.point(qi, qj, kq as usize),
@@ -557,21 +558,28 @@ impl<'f> Ctx<'_, 'f> {
                 cols.map(|(ci, cj)| Cursor::new(self.samples.of(self.tiles.id(ci, cj))));
             let vbase = cols.map(|(ci, cj)| vertex_base[tile_of(ci, cj)]);
             for &[ka, kb] in self.cells.of(self.tiles.id(i, j)) {
+                // Each corner column stores layers ka..=kb at consecutive indices: they lie
+                // in one range of its sample union, whose spans are laid out in order.
+                let mut q0 = [0usize; 4];
+                let mut complete = true;
+                for (c, cur) in cursors.iter_mut().enumerate() {
+                    match cur.find(ka) {
+                        Some((q, _)) => q0[c] = q,
+                        None => complete = false,
+                    }
+                }
+                debug_assert!(complete, "cells ({i}, {j}, {ka}..) lack a corner sample");
+                if !complete {
+                    continue;
+                }
                 for k in ka..kb {
-                    let mut p = [0usize; 8];
-                    let mut complete = true;
-                    for (c, cur) in cursors.iter_mut().enumerate() {
-                        for dz in 0..2 {
-                            match cur.find(k + dz) {
-                                Some((q, _)) => p[c | (dz as usize) << 2] = q,
-                                None => complete = false,
-                            }
-                        }
-                    }
-                    debug_assert!(complete, "cell ({i}, {j}, {k}) lacks a corner sample");
-                    if !complete {
-                        continue;
-                    }
+                    let d = (k - ka) as usize;
+                    let p: [usize; 8] = std::array::from_fn(|c| q0[c & 3] + d + (c >> 2));
+                    debug_assert!(
+                        (0..8).all(|c| cursors[c & 3].find(k + (c >> 2) as u32).map(|x| x.0)
+                            == Some(p[c])),
+                        "cell ({i}, {j}, {k}): corner samples not consecutive"
+                    );
                     let v: [f32; 8] = p.map(|q| values[q] - T);
                     let mut case = 0usize;
                     for (c, &x) in v.iter().enumerate() {
