@@ -159,12 +159,13 @@ impl Heightfield {
         if !(b.x >= 0.0 && b.y >= 0.0 && a.x <= cx && a.y <= cy) {
             return None;
         }
+        // Truncation is the floor here: negative values clamp to 0 either way.
         let clampi = |v: f32, n: usize| (v.max(0.0) as usize).min(n - 2);
         Some((
-            clampi(a.x.floor(), self.nx),
-            clampi(b.x.floor(), self.nx),
-            clampi(a.y.floor(), self.ny),
-            clampi(b.y.floor(), self.ny),
+            clampi(a.x, self.nx),
+            clampi(b.x, self.nx),
+            clampi(a.y, self.ny),
+            clampi(b.y, self.ny),
         ))
     }
 

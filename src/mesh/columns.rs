@@ -18,14 +18,20 @@
 
 use glam::Vec2;
 
+use rayon::prelude::*;
+
 use super::grid::GridSpec;
+use super::{par_concat, split_parts};
 use crate::field::{Elevation, Field, Interval, Rect, T, ZBands};
 
 /// Grid columns per tile side.
-pub const TILE: usize = 16;
+pub const TILE: usize = 32;
 
 /// Cell layers per brick for interval culling.
 pub const BRICK_LAYERS: usize = 8;
+
+/// Cell columns per side of a brick for interval culling (divides [`TILE`]).
+pub const BRICK_COLUMNS: usize = 16;
 
 /// Slack, in cells, when turning a z-band into cell indices (guards rounding).
 const BAND_SLACK: f32 = 1e-3;
@@ -110,17 +116,29 @@ pub struct Spans<S> {
     items: Vec<S>,
 }
 
-impl<S: Copy> Spans<S> {
+impl<S: Copy + Default + Send + Sync> Spans<S> {
     /// Builds from per-tile parts, each `(items per column, items)` in column id order.
     pub fn concat(parts: Vec<(Vec<u32>, Vec<S>)>) -> Self {
-        let mut start = vec![0u32];
-        let mut items = Vec::new();
-        for (counts, part) in parts {
-            for c in counts {
-                start.push(start.last().unwrap() + c);
-            }
-            items.extend(part);
+        let mut item_base = Vec::with_capacity(parts.len());
+        let mut next = 0u32;
+        for (_, items) in &parts {
+            item_base.push(next);
+            next += items.len() as u32;
         }
+        let col_lens: Vec<usize> = parts.iter().map(|p| p.0.len()).collect();
+        let mut start = vec![0u32; col_lens.iter().sum::<usize>() + 1];
+        split_parts(&mut start[1..], &col_lens)
+            .into_par_iter()
+            .zip(&parts)
+            .zip(item_base)
+            .for_each(|((dst, (counts, _)), base)| {
+                let mut at = base;
+                for (d, &c) in dst.iter_mut().zip(counts) {
+                    at += c;
+                    *d = at;
+                }
+            });
+        let items = par_concat(parts.iter().map(|p| &p.1[..]));
         Spans { start, items }
     }
 
@@ -137,7 +155,7 @@ impl<S: Copy> Spans<S> {
 }
 
 /// A run of samples `k0..k1` of one grid column, stored from `offset` in the sample arrays.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SampleSpan {
     /// First sample layer.
     pub k0: u32,
@@ -180,13 +198,40 @@ pub fn cells_of_band(band: Interval, z0: f32, dz: f32, n: usize) -> Option<[u32;
     if lo.is_nan() || hi.is_nan() {
         return Some([0, n as u32]);
     }
-    let a = (lo - 1.0 - BAND_SLACK).ceil().max(0.0);
-    let b = ((hi + BAND_SLACK).floor() + 1.0).min(n as f32);
+    let a = ceil(lo - 1.0 - BAND_SLACK).max(0.0);
+    let b = (floor(hi + BAND_SLACK) + 1.0).min(n as f32);
     (a < b).then_some([a as u32, b as u32])
+}
+
+/// `x.floor()` without a libm call on targets without SSE4.1 (NaN stays NaN).
+#[inline]
+fn floor(x: f32) -> f32 {
+    // Beyond 2^23 every f32 is an integer.
+    if !(x.abs() < 8_388_608.0) {
+        return x;
+    }
+    let t = x as i32 as f32;
+    if t > x { t - 1.0 } else { t }
+}
+
+/// `x.ceil()`, like [`floor`].
+#[inline]
+fn ceil(x: f32) -> f32 {
+    -floor(-x)
 }
 
 /// Adds `[a, b)` to a sorted list of disjoint ranges, merging overlapping or touching ones.
 pub fn push_range(list: &mut Vec<[u32; 2]>, r: [u32; 2]) {
+    // Most ranges come in order: after the last one, or merging into it.
+    match list.last_mut() {
+        None => return list.push(r),
+        Some(last) if last[1] < r[0] => return list.push(r),
+        Some(last) if last[0] <= r[0] => {
+            last[1] = last[1].max(r[1]);
+            return;
+        }
+        Some(_) => {}
+    }
     let at = list.partition_point(|x| x[1] < r[0]);
     let mut merged = r;
     let mut end = at;
@@ -197,13 +242,52 @@ pub fn push_range(list: &mut Vec<[u32; 2]>, r: [u32; 2]) {
     list.splice(at..end, [merged]);
 }
 
+/// The elevation answering for each grid column, if any, as an index per column into a
+/// short list (one entry per tile that is a heightfield throughout).
+pub struct Elevations<'f> {
+    index: Vec<u32>,
+    list: Vec<Elevation<'f>>,
+}
+
+/// The index of a column without elevation.
+pub const NO_ELEVATION: u32 = u32::MAX;
+
+impl<'f> Elevations<'f> {
+    /// Builds from per-tile parts `(index per column, elevations)` in column id order,
+    /// each index relative to its part's list.
+    pub fn concat(parts: Vec<(Vec<u32>, Vec<Elevation<'f>>)>) -> Self {
+        let mut index = Vec::with_capacity(parts.iter().map(|p| p.0.len()).sum());
+        let mut list = Vec::new();
+        for (idx, part) in parts {
+            let base = list.len() as u32;
+            index.extend(idx.iter().map(|&i| {
+                if i == NO_ELEVATION {
+                    NO_ELEVATION
+                } else {
+                    base + i
+                }
+            }));
+            list.extend(part);
+        }
+        Elevations { index, list }
+    }
+
+    /// The elevation of column `id`.
+    #[inline]
+    pub fn get(&self, id: usize) -> Option<Elevation<'f>> {
+        let i = self.index[id];
+        (i != NO_ELEVATION).then(|| self.list[i as usize])
+    }
+}
+
 /// What the bands stage found for one tile.
 pub struct TileBands<'f> {
     /// Cell ranges per grid column of the tile (none for the last row/column, which has
     /// no cells).
     pub cells: (Vec<u32>, Vec<[u32; 2]>),
-    /// The elevation answering for each grid column of the tile, if any.
-    pub elevation: Vec<Option<Elevation<'f>>>,
+    /// The elevation answering for each grid column of the tile, if any: an index per
+    /// column into the list (see [`Elevations::concat`]).
+    pub elevation: (Vec<u32>, Vec<Elevation<'f>>),
 }
 
 /// Footprint of grid columns `lo..=hi` (inclusive indices), clamped to the grid.
@@ -239,7 +323,29 @@ pub fn tile_bands<'f>(
         let tile_box = fp.extrude(Interval::new(z_of(0), z_of(ncz)));
         let pruned = field.prune(&tile_box);
         let f: &dyn Field = pruned.as_deref().unwrap_or(field);
-        let runs = brick_runs(f, &fp, grid);
+        // Bricks are culled over footprints of BRICK_COLUMNS² cell columns.
+        let blocks = TILE / BRICK_COLUMNS;
+        let block_runs: Vec<Vec<[usize; 2]>> = (0..blocks * blocks)
+            .map(|b| {
+                let a = [
+                    lo[0] + (b % blocks) * BRICK_COLUMNS,
+                    lo[1] + (b / blocks) * BRICK_COLUMNS,
+                ];
+                let e = [
+                    (a[0] + BRICK_COLUMNS).min(cell_hi[0]),
+                    (a[1] + BRICK_COLUMNS).min(cell_hi[1]),
+                ];
+                if e[0] <= a[0] || e[1] <= a[1] {
+                    return Vec::new();
+                }
+                let fp = footprint(
+                    grid,
+                    [a[0] as isize, a[1] as isize],
+                    [e[0] as isize, e[1] as isize],
+                );
+                brick_runs(f, &fp, grid)
+            })
+            .collect();
         let mut bands = ZBands::new();
         let mut list = Vec::new();
         for (i, j) in tiles.columns(t) {
@@ -247,6 +353,8 @@ pub fn tile_bands<'f>(
                 counts.push(0);
                 continue;
             }
+            let runs =
+                &block_runs[(i - lo[0]) / BRICK_COLUMNS + blocks * ((j - lo[1]) / BRICK_COLUMNS)];
             let cfp = footprint(
                 grid,
                 [i as isize, j as isize],
@@ -254,7 +362,7 @@ pub fn tile_bands<'f>(
             );
             bands.clear();
             list.clear();
-            for &[a, b] in &runs {
+            for &[a, b] in runs {
                 let run_z = Interval::new(z_of(a), z_of(b));
                 f.z_bands(&cfp, run_z, &mut bands);
                 for band in bands.as_slice() {
@@ -273,24 +381,32 @@ pub fn tile_bands<'f>(
     } else {
         counts.resize(tiles.columns(t).count(), 0);
     }
-    let elevation = if use_elevation {
+    let n = counts.len();
+    let elevation = if !use_elevation {
+        (vec![NO_ELEVATION; n], Vec::new())
+    } else {
         let whole = footprint(
             grid,
             [lo[0] as isize - 1, lo[1] as isize - 1],
             [hi[0] as isize, hi[1] as isize],
         );
         match field.elevation(&whole) {
-            Some(e) => vec![Some(e); counts.len()],
-            None => tiles
-                .columns(t)
-                .map(|(i, j)| {
+            Some(e) => (vec![0; n], vec![e]),
+            None => {
+                let (mut index, mut list) = (Vec::with_capacity(n), Vec::new());
+                for (i, j) in tiles.columns(t) {
                     let (i, j) = (i as isize, j as isize);
-                    field.elevation(&footprint(grid, [i - 1, j - 1], [i + 1, j + 1]))
-                })
-                .collect(),
+                    match field.elevation(&footprint(grid, [i - 1, j - 1], [i + 1, j + 1])) {
+                        Some(e) => {
+                            index.push(list.len() as u32);
+                            list.push(e);
+                        }
+                        None => index.push(NO_ELEVATION),
+                    }
+                }
+                (index, list)
+            }
         }
-    } else {
-        vec![None; counts.len()]
     };
     TileBands {
         cells: (counts, items),
@@ -326,7 +442,7 @@ pub fn tile_samples(
     grid: &GridSpec,
     tiles: &Tiles,
     cells: &Spans<[u32; 2]>,
-    elevation: &[Option<Elevation<'_>>],
+    elevation: &Elevations<'_>,
     t: usize,
 ) -> (Vec<u32>, Vec<SampleSpan>) {
     let (z0, dz) = (grid.origin.z, grid.spacing.z);
@@ -344,11 +460,9 @@ pub fn tile_samples(
                 }
             }
         }
-        let split = elevation[tiles.id(i, j)].map(|e| {
-            let a = ((e.z.lo - z0) / dz + BAND_SLACK)
-                .ceil()
-                .clamp(0.0, nk as f32) as u32;
-            let b = ((e.z.hi - z0) / dz - BAND_SLACK).floor() + 1.0;
+        let split = elevation.get(tiles.id(i, j)).map(|e| {
+            let a = ceil((e.z.lo - z0) / dz + BAND_SLACK).clamp(0.0, nk as f32) as u32;
+            let b = floor((e.z.hi - z0) / dz - BAND_SLACK) + 1.0;
             [a, b.clamp(0.0, nk as f32) as u32]
         });
         let before = spans.len();

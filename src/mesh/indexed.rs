@@ -1,6 +1,7 @@
 //! The indexed triangle mesh the extractors produce, its measures and topology checks.
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use crate::field::Aabb;
 
@@ -111,17 +112,14 @@ impl Mesh {
     /// Replaces every normal that is not a finite unit vector by the area-weighted
     /// average of its triangles' normals (or +Z if that is zero too).
     pub fn repair_normals(&mut self) {
-        let bad: Vec<bool> = self
-            .normals
-            .iter()
-            .map(|n| {
-                let l = Vec3::from(*n).length();
-                !(l.is_finite() && (l - 1.0).abs() < 1e-3)
-            })
-            .collect();
-        if !bad.contains(&true) {
+        let is_bad = |n: &[f32; 3]| {
+            let l = Vec3::from(*n).length();
+            !(l.is_finite() && (l - 1.0).abs() < 1e-3)
+        };
+        if !self.normals.par_iter().any(is_bad) {
             return;
         }
+        let bad: Vec<bool> = self.normals.iter().map(is_bad).collect();
         let mut acc = vec![Vec3::ZERO; self.positions.len()];
         for t in &self.triangles {
             let n = self.triangle_normal(t);

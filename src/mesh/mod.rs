@@ -48,3 +48,18 @@ pub(crate) fn split_parts<'v, T>(mut v: &'v mut [T], lens: &[usize]) -> Vec<&'v 
     }
     parts
 }
+
+/// The parts one after the other, copied in parallel into one allocation.
+pub(crate) fn par_concat<'p, T: Copy + Default + Send + Sync + 'p>(
+    parts: impl Iterator<Item = &'p [T]>,
+) -> Vec<T> {
+    use rayon::prelude::*;
+    let parts: Vec<&[T]> = parts.collect();
+    let lens: Vec<usize> = parts.iter().map(|p| p.len()).collect();
+    let mut out = vec![T::default(); lens.iter().sum()];
+    split_parts(&mut out, &lens)
+        .into_par_iter()
+        .zip(parts)
+        .for_each(|(dst, src)| dst.copy_from_slice(src));
+    out
+}

@@ -20,6 +20,7 @@
 //! samples, so tiles agree on shared edges and faces: the mesh is welded and crack-free,
 //! and its bytes do not depend on the number of threads.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 use glam::{Vec2, Vec3};
@@ -27,12 +28,12 @@ use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 use super::cell::{ambiguity_mask, edge_t};
-use super::columns::{self, Cursor, SampleSpan, Spans, TILE, Tiles};
+use super::columns::{self, Cursor, Elevations, SampleSpan, Spans, TILE, Tiles};
 use super::grid::GridSpec;
 use super::indexed::Mesh;
 use super::stats::MeshStats;
 use super::tables::{EDGE_AXIS, EDGE_CORNERS, TABLES};
-use super::{MeshError, split_parts};
+use super::{MeshError, par_concat, split_parts};
 use crate::field::{Aabb, Elevation, Field, Interval, T};
 use crate::io::{DEFAULT_MEMORY_BUDGET, check_budget};
 
@@ -41,6 +42,11 @@ const REFINE_ITERATIONS: usize = 24;
 
 /// Refinement stops once the root is bracketed this tightly (fraction of the edge).
 const REFINE_TOLERANCE: f32 = 1e-4;
+
+/// Spans shorter than this are evaluated point by point: a block evaluation prunes the
+/// field for its block first, which only pays off over many samples (a heightfield's
+/// floor costs two samples per column).
+const SHORT_SPAN: usize = crate::field::BRICK;
 
 /// Bytes per stored sample: its value and three vertex slots.
 const SAMPLE_BYTES: u64 = 16;
@@ -121,12 +127,13 @@ pub fn polygonize(
             b
         })
         .collect();
-    let mut elevation: Vec<Option<Elevation<'_>>> = Vec::with_capacity(columns as usize);
+    let mut elevation_parts = Vec::with_capacity(tiles.len());
     let mut cell_parts = Vec::with_capacity(tiles.len());
     for b in bands {
-        elevation.extend(b.elevation);
+        elevation_parts.push(b.elevation);
         cell_parts.push(b.cells);
     }
+    let elevation = Elevations::concat(elevation_parts);
     let cells = Spans::concat(cell_parts);
     let cells_visited: u64 = cells.items().iter().map(|r| (r[1] - r[0]) as u64).sum();
     stages.push(("bands", clock.elapsed()));
@@ -138,16 +145,20 @@ pub fn polygonize(
         .map(|t| columns::tile_samples(grid, &tiles, &cells, &elevation, t))
         .collect();
     let mut tile_samples = vec![0usize; tiles.len() + 1];
-    for (t, (_, spans)) in sample_parts.iter_mut().enumerate() {
-        let base = tile_samples[t];
+    for (t, (_, spans)) in sample_parts.iter().enumerate() {
         let n = spans
             .last()
             .map_or(0, |s| s.offset + (s.k1 - s.k0) as usize);
-        for s in spans.iter_mut() {
-            s.offset += base;
-        }
-        tile_samples[t + 1] = base + n;
+        tile_samples[t + 1] = tile_samples[t] + n;
     }
+    sample_parts
+        .par_iter_mut()
+        .zip(&tile_samples[..tiles.len()])
+        .for_each(|((_, spans), &base)| {
+            for s in spans.iter_mut() {
+                s.offset += base;
+            }
+        });
     let total = tile_samples[tiles.len()];
     check_budget(
         format!(
@@ -218,19 +229,16 @@ pub fn polygonize(
             v
         })
         .collect();
-    let mut mesh = Mesh::default();
-    let (mut vertex_evaluations, mut gradient_evaluations, mut vertex_height_evaluations) =
-        (0, 0, 0);
-    for v in verts {
-        mesh.positions.extend_from_slice(&v.positions);
-        mesh.normals.extend_from_slice(&v.normals);
-        vertex_evaluations += v.evaluations;
-        gradient_evaluations += v.gradients;
-        vertex_height_evaluations += v.heights;
-    }
-    for t in tris {
-        mesh.triangles.extend_from_slice(&t);
-    }
+    let mut mesh = Mesh {
+        positions: par_concat(verts.iter().map(|v| &v.positions[..])),
+        normals: par_concat(verts.iter().map(|v| &v.normals[..])),
+        triangles: par_concat(tris.iter().map(|t| &t[..])),
+        attributes: Vec::new(),
+    };
+    let vertex_evaluations = verts.iter().map(|v| v.evaluations).sum();
+    let gradient_evaluations = verts.iter().map(|v| v.gradients).sum();
+    let vertex_height_evaluations = verts.iter().map(|v| v.heights).sum();
+    drop((verts, tris));
     drop_unused_vertices(&mut mesh);
     mesh.repair_normals();
     stages.push(("triangles", clock.elapsed()));
@@ -266,20 +274,23 @@ fn full_bands<'f>(grid: &GridSpec, tiles: &Tiles, t: usize) -> columns::TileBand
     let n = counts.len();
     columns::TileBands {
         cells: (counts, items),
-        elevation: vec![None; n],
+        elevation: (vec![columns::NO_ELEVATION; n], Vec::new()),
     }
 }
 
 /// Removes vertices no triangle uses (an edge crossed between two stored samples whose
 /// cells all fell outside the bands through rounding), keeping the order of the rest.
 fn drop_unused_vertices(mesh: &mut Mesh) {
-    let mut used = vec![false; mesh.positions.len()];
-    for t in &mesh.triangles {
+    let used: Vec<AtomicBool> = (0..mesh.positions.len())
+        .map(|_| AtomicBool::new(false))
+        .collect();
+    mesh.triangles.par_iter().for_each(|t| {
         for &v in t {
-            used[v as usize] = true;
+            used[v as usize].store(true, Ordering::Relaxed);
         }
-    }
-    if used.iter().all(|&u| u) {
+    });
+    let used: Vec<bool> = used.into_iter().map(AtomicBool::into_inner).collect();
+    if used.par_iter().all(|&u| u) {
         return;
     }
     let mut remap = vec![u32::MAX; used.len()];
@@ -294,9 +305,9 @@ fn drop_unused_vertices(mesh: &mut Mesh) {
     }
     mesh.positions.truncate(next);
     mesh.normals.truncate(next);
-    for t in &mut mesh.triangles {
-        *t = t.map(|v| remap[v as usize]);
-    }
+    mesh.triangles
+        .par_iter_mut()
+        .for_each(|t| *t = t.map(|v| remap[v as usize]));
 }
 
 /// The vertices one tile creates, with tile-local indices.
@@ -324,7 +335,7 @@ struct Ctx<'a, 'f> {
     tiles: &'a Tiles,
     cells: &'a Spans<[u32; 2]>,
     samples: &'a Spans<SampleSpan>,
-    elevation: &'a [Option<Elevation<'f>>],
+    elevation: &'a Elevations<'f>,
     refine: bool,
 }
 
@@ -369,13 +380,21 @@ impl<'f> Ctx<'_, 'f> {
                     let h = *h.get_or_insert_with(|| {
                         heights += 1;
                         elev_columns += 1;
-                        let e = self.elevation[id].expect("elevation span without elevation");
+                        let e = self
+                            .elevation
+                            .get(id)
+                            .expect("elevation span without elevation");
                         e.source.height(Vec2::new(p0.x, p0.y))
                     });
                     for (k, d) in dst.iter_mut().enumerate() {
                         let z = self.grid.point(i, j, s.k0 as usize + k).z;
                         *d = T + (h - z) / dz;
                     }
+                } else if n < SHORT_SPAN {
+                    for (k, d) in dst.iter_mut().enumerate() {
+                        *d = f.value(self.grid.point(i, j, s.k0 as usize + k));
+                    }
+                    evals += n as u64;
                 } else {
                     f.eval_block(p0, self.grid.spacing, [1, 1, n], dst);
                     evals += n as u64;
@@ -415,11 +434,7 @@ impl<'f> Ctx<'_, 'f> {
             for (si, s) in spans.iter().enumerate() {
                 for k in s.k0..s.k1 {
                     let p = s.offset + (k - s.k0) as usize;
-                    let a = End {
-                        p: self.grid.point(i, j, k as usize),
-                        v: values[p] - T,
-                        elevation: s.elevation,
-                    };
+                    let solid = values[p] > T;
                     let z_next = if k + 1 < s.k1 {
                         Some((p + 1, s))
                     } else {
@@ -441,9 +456,14 @@ impl<'f> Ctx<'_, 'f> {
                         let Some((q, qs, [qi, qj])) = nb else {
                             continue;
                         };
-                        if (values[p] > T) == (values[q] > T) {
+                        if solid == (values[q] > T) {
                             continue;
                         }
+                        let a = End {
+                            p: self.grid.point(i, j, k as usize),
+                            v: values[p] - T,
+                            elevation: s.elevation,
+                        };
                         let kq = if axis == 2 { k + 1 } else { k };
                         let b = End {
                             p: self.grid.point(qi, qj, kq as usize),
@@ -470,7 +490,10 @@ impl<'f> Ctx<'_, 'f> {
         out: &mut TileVertices,
     ) {
         let (pos, normal) = if a.elevation && b.elevation {
-            let e = self.elevation[owner].expect("elevation sample without elevation");
+            let e = self
+                .elevation
+                .get(owner)
+                .expect("elevation sample without elevation");
             let mut t = edge_t(a.v, b.v);
             if self.refine && axis != 2 {
                 let g = |s: f32| {
@@ -535,21 +558,28 @@ impl<'f> Ctx<'_, 'f> {
                 cols.map(|(ci, cj)| Cursor::new(self.samples.of(self.tiles.id(ci, cj))));
             let vbase = cols.map(|(ci, cj)| vertex_base[tile_of(ci, cj)]);
             for &[ka, kb] in self.cells.of(self.tiles.id(i, j)) {
+                // Each corner column stores layers ka..=kb at consecutive indices: they lie
+                // in one range of its sample union, whose spans are laid out in order.
+                let mut q0 = [0usize; 4];
+                let mut complete = true;
+                for (c, cur) in cursors.iter_mut().enumerate() {
+                    match cur.find(ka) {
+                        Some((q, _)) => q0[c] = q,
+                        None => complete = false,
+                    }
+                }
+                debug_assert!(complete, "cells ({i}, {j}, {ka}..) lack a corner sample");
+                if !complete {
+                    continue;
+                }
                 for k in ka..kb {
-                    let mut p = [0usize; 8];
-                    let mut complete = true;
-                    for (c, cur) in cursors.iter_mut().enumerate() {
-                        for dz in 0..2 {
-                            match cur.find(k + dz) {
-                                Some((q, _)) => p[c | (dz as usize) << 2] = q,
-                                None => complete = false,
-                            }
-                        }
-                    }
-                    debug_assert!(complete, "cell ({i}, {j}, {k}) lacks a corner sample");
-                    if !complete {
-                        continue;
-                    }
+                    let d = (k - ka) as usize;
+                    let p: [usize; 8] = std::array::from_fn(|c| q0[c & 3] + d + (c >> 2));
+                    debug_assert!(
+                        (0..8).all(|c| cursors[c & 3].find(k + (c >> 2) as u32).map(|x| x.0)
+                            == Some(p[c])),
+                        "cell ({i}, {j}, {k}): corner samples not consecutive"
+                    );
                     let v: [f32; 8] = p.map(|q| values[q] - T);
                     let mut case = 0usize;
                     for (c, &x) in v.iter().enumerate() {
