@@ -1,36 +1,29 @@
 //! The thesis's examples (seed 000 §7.2) as scenes in `trees/curves/`: each is built by
 //! the voxel pipeline and its S field is checked against what the curves ask for.
 
-use std::path::{Path, PathBuf};
+mod curves_util;
 
 use glam::Vec3;
-use karstic::curves::spec::load_ron;
 use karstic::curves::{CurveSample, FeatureVolumeSpec, Features};
 use karstic::field::{Field, T};
 use karstic::voxel::SField;
 
-fn dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/curves")
-}
-
+/// A scene of `trees/curves/`: values come from the compiled tree, parameters and
+/// statistics from its S-field leaf.
 struct Scene {
     spec: FeatureVolumeSpec,
     features: Features,
-    field: SField,
+    leaf: SField,
+    field: Box<dyn Field>,
 }
 
 fn scene(name: &str) -> Scene {
-    let spec: FeatureVolumeSpec = load_ron(&dir().join(format!("{name}.ron"))).unwrap();
-    let features = spec
-        .feature_set(&dir())
-        .unwrap()
-        .resolve(&|_| None)
-        .unwrap();
-    let field = spec.build(&dir(), 7).unwrap();
+    let l = curves_util::load(name);
     Scene {
-        spec,
-        features,
-        field,
+        spec: l.spec,
+        features: l.features,
+        leaf: l.leaf,
+        field: Box::new(l.tree),
     }
 }
 
@@ -42,8 +35,8 @@ impl Scene {
     /// True when `p` is far enough from the domain's faces for the face falloff not to
     /// matter.
     fn inside(&self, p: Vec3) -> bool {
-        let d = self.field.params().domain;
-        let m = self.field.params().falloff + 2.0 * self.h();
+        let d = self.leaf.params().domain;
+        let m = self.leaf.params().falloff + 2.0 * self.h();
         p.cmpge(d.min + Vec3::splat(m)).all() && p.cmple(d.max - Vec3::splat(m)).all()
     }
 
@@ -135,8 +128,8 @@ impl Scene {
     /// Number of times the vertical line at `(x, y)` crosses the surface, away from the
     /// domain's top and bottom faces.
     fn crossings(&self, x: f32, y: f32) -> usize {
-        let d = self.field.params().domain;
-        let m = self.field.params().falloff + 2.0 * self.h();
+        let d = self.leaf.params().domain;
+        let m = self.leaf.params().falloff + 2.0 * self.h();
         let (top, bottom) = (d.max.z - m, d.min.z + m);
         let steps = ((top - bottom) / (0.25 * self.h())) as usize;
         let mut last = self.field.value(Vec3::new(x, y, top)) > T;
@@ -277,7 +270,7 @@ fn serpentine_road() {
 #[test]
 fn guidance_curves_alone_create_no_surface() {
     let s = scene("guidance");
-    assert!(s.field.is_empty());
+    assert!(s.leaf.is_empty());
     for i in 0..1000 {
         let p = Vec3::new(
             (i % 10) as f32 * 6.3,
@@ -292,8 +285,9 @@ fn guidance_curves_alone_create_no_surface() {
 fn ridge_with_streamline_propagation() {
     let mut s = scene("ridge");
     s.spec.propagation = karstic::curves::Propagation::Streamline;
-    s.field = s.spec.build_features(&s.features, 7, 1 << 32).unwrap();
-    let fine = s.field.stats().levels.last().unwrap().clone();
+    s.leaf = s.spec.build_features(&s.features, 7, 1 << 32).unwrap();
+    s.field = Box::new(s.leaf.clone());
+    let fine = s.leaf.stats().levels.last().unwrap().clone();
     assert!(fine.streamline_nodes > 0, "streamlines added surface nodes");
     assert!(fine.bitangent_sweeps > 0);
     s.assert_surface_through_seeds();
