@@ -233,6 +233,72 @@ fn arch_from_three_curves() {
     assert!(s.crossings(64.0, 64.0) >= 3);
 }
 
+/// The artefact of the first version: rock in the domain's top corners, beyond the feet,
+/// far from every curve (the beam's top and underside mixed on coarse levels). Above the
+/// ground, every solid point is in the beam: within its thickness of the beam's curves.
+#[test]
+fn arch_has_no_rock_far_from_its_curves() {
+    let s = scene("arch");
+    let arch = &s.features.arches[0];
+    let beam: Vec<Vec3> = arch.curves()[..2]
+        .iter()
+        .flat_map(|c| (0..=400).map(move |i| c.sample(i as f32 / 400.0).pos))
+        .collect();
+    let d = s.leaf.params().domain;
+    let ground = arch.from.z;
+    let mut far = Vec::new();
+    for k in 0..=((d.max.z - ground - 6.0) / 2.0) as i32 {
+        for j in 0..=(d.size().y / 2.0) as i32 {
+            for i in 0..=(d.size().x / 2.0) as i32 {
+                let p = Vec3::new(
+                    2.0 * i as f32,
+                    2.0 * j as f32,
+                    ground + 6.0 + 2.0 * k as f32,
+                );
+                if s.field.value(p) > T {
+                    let near = beam.iter().map(|q| q.distance(p)).fold(f32::MAX, f32::min);
+                    if near > arch.thickness + 2.0 * s.h() {
+                        far.push((p, near));
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        far.is_empty(),
+        "{} solid points far from the arch, e.g. {:?}",
+        far.len(),
+        &far[..far.len().min(6)]
+    );
+    // In particular the top corners of the domain are air.
+    for x in [d.min.x + 6.0, d.max.x - 6.0] {
+        for y in [d.min.y + 6.0, 64.0, d.max.y - 6.0] {
+            assert!(s.field.value(Vec3::new(x, y, d.max.z - 6.0)) < T);
+        }
+    }
+}
+
+/// Without its ground curve the arch appears only on the levels fine enough for its
+/// beam; the levels before hold air (not rock, as around a tunnel): a lone beam in air.
+#[test]
+fn arch_without_ground_stands_in_air() {
+    let s = scene("arch");
+    let mut f = s.features.clone();
+    f.arches[0].ground = None;
+    let leaf = s.spec.build_features(&f, 7, 1 << 32).unwrap();
+    let levels = &leaf.stats().levels;
+    assert!(levels[0].seeds == 0 && levels.last().unwrap().seeds > 0);
+    let apex = f.arches[0].curves()[0].sample(0.5).pos;
+    assert!(leaf.value(apex - Vec3::Z * 4.5) > T, "rock in the beam");
+    assert!(leaf.value(apex + Vec3::Z * 6.0) < T, "air above it");
+    assert!(leaf.value(apex - Vec3::Z * 20.0) < T, "air under it");
+    let d = leaf.params().domain;
+    for p in [d.min, d.max, Vec3::new(d.min.x, d.max.y, d.max.z)] {
+        let q = p + (d.center() - p).signum() * 8.0;
+        assert!(leaf.value(q) < T, "air at {q}");
+    }
+}
+
 #[test]
 fn single_tunnel() {
     let s = scene("tunnel");
