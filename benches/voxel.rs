@@ -7,13 +7,13 @@ use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use karstic::curves::FeatureVolumeSpec;
-use karstic::curves::spec::load_ron;
 use karstic::scene::Positive;
 use karstic::voxel::run;
 
 fn ridge(c: &mut Criterion) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/curves");
-    let spec: FeatureVolumeSpec = load_ron(&dir.join("ridge.ron")).unwrap();
+    let file = karstic::scene::load(dir.join("ridge.ron")).unwrap();
+    let spec = file.feature_volumes()[0].clone();
     let plain = spec.feature_set(&dir).unwrap().resolve(&|_| None).unwrap();
     let mut noisy = plain.clone();
     for curve in &mut noisy.curves {

@@ -63,7 +63,11 @@ fn builds_a_field_and_prints_stats() {
 fn reports_bad_files_with_position() {
     let dir = tempfile::tempdir().unwrap();
     let bad = dir.path().join("bad.ron");
-    std::fs::write(&bad, "FeatureVolume(\n  curves: Inline(()),\n  domain: ((0, 0, 0), (10, 10, 10)),\n  voxel: 0,\n)").unwrap();
+    std::fs::write(
+        &bad,
+        "FeatureVolume(\n  curves: Inline(),\n  domain: ((0, 0, 0), (10, 10, 10)),\n  voxel: 0,\n)",
+    )
+    .unwrap();
     let out = karstic()
         .args(["curves", "build"])
         .arg(&bad)
@@ -81,4 +85,92 @@ fn reports_bad_files_with_position() {
         .output()
         .unwrap();
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.ron"));
+}
+
+#[test]
+fn meshes_tree_files_and_bare_volumes() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/curves/tunnel.ron");
+    let glb = dir.path().join("tunnel.glb");
+    let out = karstic()
+        .args(["curves", "build"])
+        .arg(&scene)
+        .arg("-o")
+        .arg(&glb)
+        .arg("--stats")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("surface propagation") && text.contains("cells visited"));
+    let bytes = std::fs::read(&glb).unwrap();
+    assert_eq!(&bytes[..4], b"glTF");
+    assert!(bytes.len() > 100_000, "a real mesh, {} bytes", bytes.len());
+
+    // A bare FeatureVolume file and a tree holding two volumes (pick one with --node).
+    let bare = dir.path().join("bare.ron");
+    let volume = |name: &str, x: i32| {
+        format!(
+            "FeatureVolume(name: \"{name}\", curves: Inline(curves: [(points: [Abs(-4, 16, 20), Abs({x}, 16, 20)], \
+             constraints: [(t: 0, left: Slope(0), right: Slope(90))])]), domain: ((0, 0, 0), (31, 31, 31)), voxel: 1)"
+        )
+    };
+    std::fs::write(&bare, volume("edge", 36)).unwrap();
+    let obj = dir.path().join("bare.obj");
+    let out = karstic()
+        .args(["curves", "build"])
+        .arg(&bare)
+        .arg("-o")
+        .arg(&obj)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        std::fs::read_to_string(&obj)
+            .unwrap()
+            .lines()
+            .any(|l| l.starts_with("f "))
+    );
+    let two = dir.path().join("two.ron");
+    std::fs::write(
+        &two,
+        format!(
+            "// two volumes\n(version: 1, root: Union(children: [{}, {}]))",
+            volume("a", 36),
+            volume("b", 30)
+        ),
+    )
+    .unwrap();
+    let run = |extra: &[&str]| {
+        karstic()
+            .args(["curves", "build"])
+            .arg(&two)
+            .args(extra)
+            .arg("-o")
+            .arg(dir.path().join("two.ply"))
+            .output()
+            .unwrap()
+    };
+    let out = run(&[]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--node") && err.contains("a, b"), "{err}");
+    assert!(run(&["--node", "b"]).status.success());
+    let err = String::from_utf8_lossy(&run(&["--node", "c"]).stderr).to_string();
+    assert!(err.contains("no FeatureVolume named \"c\""), "{err}");
+    let out = karstic()
+        .args(["curves", "build"])
+        .arg(&scene)
+        .args(["-o", "x.stl"])
+        .output()
+        .unwrap();
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unknown output type"));
 }

@@ -2,26 +2,18 @@
 //! displacement on), gradients against finite differences, determinism, the cache, and
 //! the memory of the sparse grid on a large domain.
 
-use std::path::{Path, PathBuf};
+mod curves_util;
+
+use std::path::Path;
 
 use glam::Vec3;
-use karstic::curves::spec::load_ron;
 use karstic::curves::{FeatureVolumeSpec, Features, Orientation};
 use karstic::field::{Aabb, Field, Interval, Rect, T, ZBands};
 use karstic::voxel::{SField, run};
 
-fn dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/curves")
-}
-
 fn load(name: &str) -> (FeatureVolumeSpec, Features) {
-    let spec: FeatureVolumeSpec = load_ron(&dir().join(format!("{name}.ron"))).unwrap();
-    let f = spec
-        .feature_set(&dir())
-        .unwrap()
-        .resolve(&|_| None)
-        .unwrap();
-    (spec, f)
+    let l = curves_util::load(name);
+    (l.spec, l.features)
 }
 
 /// The ridge with noise that varies along the crest (amplitude 0 → 2.5 m, roughness
@@ -288,10 +280,10 @@ fn tunnel_in_a_1024_cube_stays_under_a_gigabyte() {
     // A 24 m wide tunnel winding through a 1024 m cube at 1 m voxels (1024³ nodes dense
     // would be 4 GiB for S alone, ~40 GiB with the pipeline's fields).
     let text = r#"FeatureVolume(
-        curves: Inline((tunnels: [(
+        curves: Inline(tunnels: [(
             path: [Abs(-20, 300, 500), Abs(300, 200, 480), Abs(700, 800, 540), Abs(1044, 600, 520)],
             width: Const(24), height: Const(18),
-        )])),
+        )]),
         domain: ((0, 0, 0), (1023, 1023, 1023)),
         voxel: 1.0,
     )"#;

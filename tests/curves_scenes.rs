@@ -1,36 +1,29 @@
 //! The thesis's examples (seed 000 §7.2) as scenes in `trees/curves/`: each is built by
 //! the voxel pipeline and its S field is checked against what the curves ask for.
 
-use std::path::{Path, PathBuf};
+mod curves_util;
 
 use glam::Vec3;
-use karstic::curves::spec::load_ron;
 use karstic::curves::{CurveSample, FeatureVolumeSpec, Features};
 use karstic::field::{Field, T};
 use karstic::voxel::SField;
 
-fn dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/curves")
-}
-
+/// A scene of `trees/curves/`: values come from the compiled tree, parameters and
+/// statistics from its S-field leaf.
 struct Scene {
     spec: FeatureVolumeSpec,
     features: Features,
-    field: SField,
+    leaf: SField,
+    field: Box<dyn Field>,
 }
 
 fn scene(name: &str) -> Scene {
-    let spec: FeatureVolumeSpec = load_ron(&dir().join(format!("{name}.ron"))).unwrap();
-    let features = spec
-        .feature_set(&dir())
-        .unwrap()
-        .resolve(&|_| None)
-        .unwrap();
-    let field = spec.build(&dir(), 7).unwrap();
+    let l = curves_util::load(name);
     Scene {
-        spec,
-        features,
-        field,
+        spec: l.spec,
+        features: l.features,
+        leaf: l.leaf,
+        field: Box::new(l.tree),
     }
 }
 
@@ -42,8 +35,8 @@ impl Scene {
     /// True when `p` is far enough from the domain's faces for the face falloff not to
     /// matter.
     fn inside(&self, p: Vec3) -> bool {
-        let d = self.field.params().domain;
-        let m = self.field.params().falloff + 2.0 * self.h();
+        let d = self.leaf.params().domain;
+        let m = self.leaf.params().falloff + 2.0 * self.h();
         p.cmpge(d.min + Vec3::splat(m)).all() && p.cmple(d.max - Vec3::splat(m)).all()
     }
 
@@ -135,8 +128,8 @@ impl Scene {
     /// Number of times the vertical line at `(x, y)` crosses the surface, away from the
     /// domain's top and bottom faces.
     fn crossings(&self, x: f32, y: f32) -> usize {
-        let d = self.field.params().domain;
-        let m = self.field.params().falloff + 2.0 * self.h();
+        let d = self.leaf.params().domain;
+        let m = self.leaf.params().falloff + 2.0 * self.h();
         let (top, bottom) = (d.max.z - m, d.min.z + m);
         let steps = ((top - bottom) / (0.25 * self.h())) as usize;
         let mut last = self.field.value(Vec3::new(x, y, top)) > T;
@@ -240,6 +233,72 @@ fn arch_from_three_curves() {
     assert!(s.crossings(64.0, 64.0) >= 3);
 }
 
+/// The artefact of the first version: rock in the domain's top corners, beyond the feet,
+/// far from every curve (the beam's top and underside mixed on coarse levels). Above the
+/// ground, every solid point is in the beam: within its thickness of the beam's curves.
+#[test]
+fn arch_has_no_rock_far_from_its_curves() {
+    let s = scene("arch");
+    let arch = &s.features.arches[0];
+    let beam: Vec<Vec3> = arch.curves()[..2]
+        .iter()
+        .flat_map(|c| (0..=400).map(move |i| c.sample(i as f32 / 400.0).pos))
+        .collect();
+    let d = s.leaf.params().domain;
+    let ground = arch.from.z;
+    let mut far = Vec::new();
+    for k in 0..=((d.max.z - ground - 6.0) / 2.0) as i32 {
+        for j in 0..=(d.size().y / 2.0) as i32 {
+            for i in 0..=(d.size().x / 2.0) as i32 {
+                let p = Vec3::new(
+                    2.0 * i as f32,
+                    2.0 * j as f32,
+                    ground + 6.0 + 2.0 * k as f32,
+                );
+                if s.field.value(p) > T {
+                    let near = beam.iter().map(|q| q.distance(p)).fold(f32::MAX, f32::min);
+                    if near > arch.thickness + 2.0 * s.h() {
+                        far.push((p, near));
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        far.is_empty(),
+        "{} solid points far from the arch, e.g. {:?}",
+        far.len(),
+        &far[..far.len().min(6)]
+    );
+    // In particular the top corners of the domain are air.
+    for x in [d.min.x + 6.0, d.max.x - 6.0] {
+        for y in [d.min.y + 6.0, 64.0, d.max.y - 6.0] {
+            assert!(s.field.value(Vec3::new(x, y, d.max.z - 6.0)) < T);
+        }
+    }
+}
+
+/// Without its ground curve the arch appears only on the levels fine enough for its
+/// beam; the levels before hold air (not rock, as around a tunnel): a lone beam in air.
+#[test]
+fn arch_without_ground_stands_in_air() {
+    let s = scene("arch");
+    let mut f = s.features.clone();
+    f.arches[0].ground = None;
+    let leaf = s.spec.build_features(&f, 7, 1 << 32).unwrap();
+    let levels = &leaf.stats().levels;
+    assert!(levels[0].seeds == 0 && levels.last().unwrap().seeds > 0);
+    let apex = f.arches[0].curves()[0].sample(0.5).pos;
+    assert!(leaf.value(apex - Vec3::Z * 4.5) > T, "rock in the beam");
+    assert!(leaf.value(apex + Vec3::Z * 6.0) < T, "air above it");
+    assert!(leaf.value(apex - Vec3::Z * 20.0) < T, "air under it");
+    let d = leaf.params().domain;
+    for p in [d.min, d.max, Vec3::new(d.min.x, d.max.y, d.max.z)] {
+        let q = p + (d.center() - p).signum() * 8.0;
+        assert!(leaf.value(q) < T, "air at {q}");
+    }
+}
+
 #[test]
 fn single_tunnel() {
     let s = scene("tunnel");
@@ -277,7 +336,7 @@ fn serpentine_road() {
 #[test]
 fn guidance_curves_alone_create_no_surface() {
     let s = scene("guidance");
-    assert!(s.field.is_empty());
+    assert!(s.leaf.is_empty());
     for i in 0..1000 {
         let p = Vec3::new(
             (i % 10) as f32 * 6.3,
@@ -292,8 +351,9 @@ fn guidance_curves_alone_create_no_surface() {
 fn ridge_with_streamline_propagation() {
     let mut s = scene("ridge");
     s.spec.propagation = karstic::curves::Propagation::Streamline;
-    s.field = s.spec.build_features(&s.features, 7, 1 << 32).unwrap();
-    let fine = s.field.stats().levels.last().unwrap().clone();
+    s.leaf = s.spec.build_features(&s.features, 7, 1 << 32).unwrap();
+    s.field = Box::new(s.leaf.clone());
+    let fine = s.leaf.stats().levels.last().unwrap().clone();
     assert!(fine.streamline_nodes > 0, "streamlines added surface nodes");
     assert!(fine.bitangent_sweeps > 0);
     s.assert_surface_through_seeds();

@@ -1,4 +1,5 @@
-//! `karstic curves ...`: run the Feature Curve pipeline on a `FeatureVolume` file.
+//! `karstic curves ...`: run the Feature Curve pipeline on a tree file's `FeatureVolume`
+//! (or a bare `FeatureVolume(..)` file) and write its mesh or its sampled field.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -9,13 +10,17 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::curves::FeatureVolumeSpec;
-use crate::curves::spec::{BuildOptions, load_ron};
+use crate::curves::spec::{BuildOptions, parse_ron};
 use crate::field::Field;
 use crate::io::{DEFAULT_MEMORY_BUDGET, check_budget, human_bytes, write_atomic};
+use crate::mesh::MeshOptions;
+use crate::mesh::export::{self, ExportOptions, Format};
+use crate::mesh::npy;
+use crate::scene::{SceneFile, parse_scene};
 use crate::voxel::SField;
 use crate::voxel::pipeline::Stats;
 
-/// Feature Curves: build the S field of a `FeatureVolume(..)` file.
+/// Feature Curves: build the S field of a tree file's `FeatureVolume`.
 #[derive(Args, Debug)]
 pub struct CurvesArgs {
     /// What to do.
@@ -26,28 +31,37 @@ pub struct CurvesArgs {
 /// `curves` subcommands.
 #[derive(Subcommand, Debug)]
 pub enum CurvesCommand {
-    /// Run the voxel pipeline and write the field.
+    /// Run the voxel pipeline and write the S-field leaf's mesh or sampled field.
     Build(BuildArgs),
 }
 
-/// `karstic curves build FILE -o field.npy`.
+/// `karstic curves build FILE -o mesh.glb -o field.npy --stats`.
 #[derive(Args, Debug)]
 pub struct BuildArgs {
-    /// A RON file holding one `FeatureVolume(..)`.
+    /// A tree file `(version: 1, root: ..)` holding a `FeatureVolume` node, or a RON file
+    /// holding one bare `FeatureVolume(..)`.
     pub file: PathBuf,
-    /// Output: `.npy` (the field f sampled on the finest grid, float32, shape
-    /// `(nz, ny, nx)`, index `[k, j, i]` at `domain.min + (i, j, k)·voxel`).
+    /// Outputs (repeatable): a mesh `.glb`, `.gltf`, `.obj` or `.ply` (Marching Cubes of
+    /// the leaf over its domain at the voxel size, in the leaf's own frame), or `.npy` (the
+    /// field f on the finest grid, float32, shape `(nz, ny, nx)`, index `[k, j, i]` at
+    /// `domain.min + (i, j, k)·voxel`).
     #[arg(short, long)]
-    pub output: Option<PathBuf>,
+    pub output: Vec<PathBuf>,
+    /// The `FeatureVolume` node to build, by name, when the tree has several.
+    #[arg(long)]
+    pub node: Option<String>,
+    /// Mesh cell size in metres (default: the volume's voxel).
+    #[arg(long)]
+    pub cell: Option<f32>,
     /// Also write the proxy ribbon meshes (finest level) as OBJ.
     #[arg(long)]
     pub ribbons: Option<PathBuf>,
-    /// Print per-stage times, iteration counts and memory.
+    /// Print per-stage times, iteration counts and memory (and the mesher's statistics).
     #[arg(long)]
     pub stats: bool,
-    /// Seed of the displacement noise.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u32,
+    /// Seed of the displacement noise (default: the tree's `seed`, 0 for a bare file).
+    #[arg(long)]
+    pub seed: Option<u32>,
     /// Memory budget for the grids, in MiB.
     #[arg(long, default_value_t = DEFAULT_MEMORY_BUDGET >> 20)]
     pub max_memory: u64,
@@ -60,38 +74,138 @@ pub fn run(args: CurvesArgs) -> anyhow::Result<()> {
     }
 }
 
+/// True when the first token of the RON text (after comments) is `FeatureVolume`.
+fn is_bare_volume(text: &str) -> bool {
+    let mut rest = text.trim_start();
+    loop {
+        if let Some(r) = rest.strip_prefix("//") {
+            rest = r.split_once('\n').map_or("", |(_, r)| r).trim_start();
+        } else if let Some(r) = rest.strip_prefix("/*") {
+            rest = r.split_once("*/").map_or("", |(_, r)| r).trim_start();
+        } else {
+            return rest.starts_with("FeatureVolume");
+        }
+    }
+}
+
+/// The volume `--node` names, or the file's only one.
+fn pick<'a>(file: &'a SceneFile, node: Option<&str>) -> anyhow::Result<&'a FeatureVolumeSpec> {
+    let all = file.feature_volumes();
+    let names = || {
+        all.iter()
+            .map(|f| f.name.as_deref().unwrap_or("<unnamed>"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    match (node, all.as_slice()) {
+        (_, []) => bail!(
+            "{}: the tree has no FeatureVolume node",
+            file.path.display()
+        ),
+        (None, [one]) => Ok(one),
+        (None, _) => bail!(
+            "{}: the tree has several FeatureVolume nodes ({}): pick one with --node NAME",
+            file.path.display(),
+            names()
+        ),
+        (Some(n), _) => all
+            .iter()
+            .copied()
+            .find(|f| f.name.as_deref() == Some(n))
+            .with_context(|| {
+                format!(
+                    "{}: no FeatureVolume named {n:?} (there are: {})",
+                    file.path.display(),
+                    names()
+                )
+            }),
+    }
+}
+
 fn build(args: BuildArgs) -> anyhow::Result<()> {
-    let spec: FeatureVolumeSpec = load_ron(&args.file)?;
+    for out in &args.output {
+        let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("");
+        if !ext.eq_ignore_ascii_case("npy") {
+            Format::from_path(out).map_err(|_| {
+                anyhow::anyhow!(
+                    "{}: unknown output type (expected .glb, .gltf, .obj, .ply or .npy)",
+                    out.display()
+                )
+            })?;
+        }
+    }
+    let text = std::fs::read_to_string(&args.file)
+        .with_context(|| format!("cannot read {}", args.file.display()))?;
     let base = args.file.parent().unwrap_or(Path::new("."));
     let budget = args.max_memory << 20;
-    if let Some(path) = &args.ribbons {
-        let features = spec.feature_set(base)?.resolve(&|_| None)?;
-        let mesh = features.proxy(
-            spec.ribbon_width(),
-            spec.ribbon_width(),
-            0.5 * spec.voxel.0,
-            0.0,
-        );
-        write_atomic(path, |w| mesh.write_obj(w))?;
-    }
     let clock = Instant::now();
-    let field = spec.build_with(
-        base,
-        &BuildOptions {
-            seed: args.seed,
+    let (spec, field) = if is_bare_volume(&text) {
+        if args.node.is_some() {
+            bail!("{}: --node applies to tree files", args.file.display());
+        }
+        let spec: FeatureVolumeSpec = parse_ron(&text, &args.file)?;
+        let opts = BuildOptions {
+            seed: args.seed.unwrap_or(0),
             ground: None,
             max_memory: budget,
-        },
-    )?;
+        };
+        let field = spec.build_with(base, &opts)?;
+        (spec, field)
+    } else {
+        let file = SceneFile {
+            scene: parse_scene(&text, &args.file)?,
+            path: args.file.clone(),
+            base_dir: base.to_path_buf(),
+        };
+        let spec = pick(&file, args.node.as_deref())?.clone();
+        let seed = args.seed.unwrap_or(file.scene.seed);
+        let field = file.build_feature_volume(&spec, seed, budget)?;
+        (spec, field)
+    };
     let elapsed = clock.elapsed();
+    if let Some(path) = &args.ribbons {
+        let features = spec.feature_set(base)?.resolve(&|_| None)?;
+        let w = spec.ribbon_width();
+        let mesh = features.proxy(w, w, 0.5 * spec.voxel.0, 0.0);
+        write_atomic(path, |w| mesh.write_obj(w))?;
+    }
     if args.stats {
         print_stats(field.stats(), elapsed.as_secs_f64() * 1e3);
     }
-    if let Some(out) = &args.output {
-        match out.extension().and_then(|e| e.to_str()) {
-            Some("npy") => write_npy(&field, &spec, out, budget)?,
-            _ => bail!("{}: unknown output type (expected .npy)", out.display()),
+    for out in &args.output {
+        if out
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("npy"))
+        {
+            write_npy(&field, out, budget)?;
+        } else {
+            write_mesh(&field, out, &args, budget)?;
         }
+    }
+    Ok(())
+}
+
+/// Polygonizes the leaf over its domain and writes the mesh.
+fn write_mesh(field: &SField, out: &Path, args: &BuildArgs, budget: u64) -> anyhow::Result<()> {
+    let opts = MeshOptions {
+        budget,
+        ..MeshOptions::default()
+    };
+    let (mesh, st) = field
+        .extract(args.cell, &opts)
+        .with_context(|| format!("meshing {}", args.file.display()))?;
+    export::write(&mesh, out, &ExportOptions::default())?;
+    if args.stats {
+        println!("{st}");
+    }
+    eprintln!(
+        "wrote {}: {} vertices, {} triangles",
+        out.display(),
+        mesh.positions.len(),
+        mesh.triangles.len()
+    );
+    if mesh.triangles.is_empty() {
+        eprintln!("warning: the field has no surface (no seed curve?); the mesh is empty");
     }
     Ok(())
 }
@@ -151,14 +265,8 @@ pub fn print_stats(st: &Stats, total_ms: f64) {
 }
 
 /// Writes the field sampled on the finest grid as a NumPy `.npy` array.
-fn write_npy(
-    field: &SField,
-    spec: &FeatureVolumeSpec,
-    out: &Path,
-    budget: u64,
-) -> anyhow::Result<()> {
-    let d = field.params().domain;
-    let h = spec.voxel.0;
+fn write_npy(field: &SField, out: &Path, budget: u64) -> anyhow::Result<()> {
+    let (d, h) = (field.params().domain, field.params().voxel);
     let n = ((d.size() / h).floor().as_ivec3() + IVec3::ONE).max(IVec3::ONE);
     let count = n.as_u64vec3().element_product();
     check_budget(
@@ -176,20 +284,8 @@ fn write_npy(
             out,
         );
     });
-    let mut header = format!(
-        "{{'descr': '<f4', 'fortran_order': False, 'shape': ({}, {}, {}), }}",
-        n.z, n.y, n.x
-    );
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    write_atomic(out, |w| {
-        w.write_all(b"\x93NUMPY\x01\x00")?;
-        w.write_all(&(header.len() as u16).to_le_bytes())?;
-        w.write_all(header.as_bytes())?;
-        w.write_all(bytemuck::cast_slice(&data))
-    })
-    .with_context(|| format!("writing {}", out.display()))?;
+    let shape = [n.z as usize, n.y as usize, n.x as usize];
+    write_atomic(out, |w| npy::write_f32(w, &shape, &data))
+        .with_context(|| format!("writing {}", out.display()))?;
     Ok(())
 }

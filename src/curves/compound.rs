@@ -205,9 +205,26 @@ pub struct Arch {
 impl Arch {
     /// The top, the underside and (optionally) the ground curve (§7.2, Figure 7.6).
     pub fn curves(&self) -> Vec<FeatureCurve> {
-        let span = self.to - self.from;
-        let dir = Vec3::new(span.x, span.y, 0.0).normalize_or(Vec3::X);
-        let side = Vec3::Z.cross(dir);
+        self.curves_at(0.0)
+    }
+
+    /// [`Arch::curves`] on a grid level whose cells are about `min_thickness / 3`: the
+    /// beam's two curves only when the beam is at least `min_thickness` thick. On coarser
+    /// levels one cell would hold the top and the underside, their opposite normals would
+    /// mix, and the normal field diffused from them would turn the air around the arch
+    /// into rock; the ground curve (if any) is always kept.
+    pub fn curves_at(&self, min_thickness: f32) -> Vec<FeatureCurve> {
+        let mut out = Vec::with_capacity(3);
+        if self.thickness >= min_thickness {
+            out.extend(self.beam());
+        }
+        out.extend(self.ground_curve());
+        out
+    }
+
+    /// The top and the underside of the beam.
+    fn beam(&self) -> [FeatureCurve; 2] {
+        let (dir, side) = self.frame();
         let base = 0.5 * (self.from.z + self.to.z);
         // A cubic Bézier rises to 3/4 of its control height at the middle.
         let arc = |a: Vec3, b: Vec3, apex: f32| {
@@ -250,21 +267,31 @@ impl Arch {
                 ribbon: None,
             }
         };
-        let mut out = vec![along(top, true), along(under, false)];
-        if let Some(g) = self.ground {
-            let mid = Vec3::new(
-                0.5 * (self.from.x + self.to.x),
-                0.5 * (self.from.y + self.to.y),
-                base,
-            );
-            // Running along `side`, its horizontal left is `-dir`.
-            out.push(curve_through(
-                vec![mid - side * g, mid + side * g],
-                vec![(-dir, dir); 2],
-                self.noise,
-            ));
-        }
-        out
+        [along(top, true), along(under, false)]
+    }
+
+    /// Horizontal direction from `from` to `to`, and the horizontal side (`ẑ × dir`).
+    fn frame(&self) -> (Vec3, Vec3) {
+        let span = self.to - self.from;
+        let dir = Vec3::new(span.x, span.y, 0.0).normalize_or(Vec3::X);
+        (dir, Vec3::Z.cross(dir))
+    }
+
+    /// The ground curve under the apex, across the span, if any.
+    fn ground_curve(&self) -> Option<FeatureCurve> {
+        let g = self.ground?;
+        let (dir, side) = self.frame();
+        let mid = Vec3::new(
+            0.5 * (self.from.x + self.to.x),
+            0.5 * (self.from.y + self.to.y),
+            0.5 * (self.from.z + self.to.z),
+        );
+        // Running along `side`, its horizontal left is `-dir`.
+        Some(curve_through(
+            vec![mid - side * g, mid + side * g],
+            vec![(-dir, dir); 2],
+            self.noise,
+        ))
     }
 }
 
@@ -354,5 +381,9 @@ mod tests {
         assert!(under.left_normal().z < -0.5 && under.right_normal().z < -0.5);
         let g = c[2].sample(0.5);
         assert!(g.left_normal().z > 0.99 && g.pos.z.abs() < 1e-6);
+        // Levels too coarse for the beam get only the ground curve.
+        assert_eq!(a.curves_at(5.0), c);
+        assert_eq!(a.curves_at(6.0), c[2..]);
+        assert!(Arch { ground: None, ..a }.curves_at(6.0).is_empty());
     }
 }

@@ -93,11 +93,24 @@ impl Features {
             .collect()
     }
 
-    /// True when some seed primitive is present once tunnels thinner than `min_section`
-    /// are left out.
+    /// Which side of the surface lies far from the primitives that are too thin for a
+    /// grid of cells `min_section / 3` (those [`Features::proxy`] leaves out): rock
+    /// (`-1`) around thin tunnels, air (`+1`) around thin arch beams when no tunnel is
+    /// thin. Levels before the first one with a seed hold a constant S of this sign.
+    pub fn outside_of_thin(&self, min_section: f32) -> f32 {
+        let thin_tunnel = self.tunnels.iter().any(|t| t.section() < min_section);
+        let thin_arch = self.arches.iter().any(|a| a.thickness < min_section);
+        if thin_arch && !thin_tunnel { 1.0 } else { -1.0 }
+    }
+
+    /// True when some seed primitive is present once tunnels and arch beams thinner than
+    /// `min_section` are left out.
     pub fn has_seed(&self, min_section: f32) -> bool {
         self.curves.iter().any(|c| c.seed)
-            || !self.arches.is_empty()
+            || self
+                .arches
+                .iter()
+                .any(|a| a.ground.is_some() || a.thickness >= min_section)
             || self.quads.iter().any(|q| q.seed)
             || self.discs.iter().any(|d| d.seed)
             || self.meshes.iter().any(|m| m.has_seed())
@@ -106,8 +119,8 @@ impl Features {
 
     /// All primitives as one proxy mesh: ribbons `ribbon` metres wide unless a curve sets
     /// its own, continued by guidance triangles up to `guide` metres, segments no longer
-    /// than `segment` (a voxel or less); tunnels with a section under `min_section` are
-    /// left out.
+    /// than `segment` (a voxel or less); tunnels with a section and arch beams with a
+    /// thickness under `min_section` are left out.
     pub fn proxy(&self, ribbon: f32, guide: f32, segment: f32, min_section: f32) -> ProxyMesh {
         let mut mesh = ProxyMesh::default();
         let all = |_: glam::Vec3| true;
@@ -116,7 +129,7 @@ impl Features {
             mesh.append(&curve_ribbon(c, w, guide.max(w), segment, &all));
         }
         for a in &self.arches {
-            for c in a.curves() {
+            for c in a.curves_at(min_section) {
                 mesh.append(&curve_ribbon(&c, ribbon, guide.max(ribbon), segment, &all));
             }
         }

@@ -3,12 +3,12 @@
 //!
 //! ```ron
 //! FeatureVolume(
-//!     curves: Inline((
+//!     curves: Inline(
 //!         curves: [(
 //!             points: [Abs(0, 32, 40), Abs(64, 40, 44), Abs(127, 32, 40)],
 //!             constraints: [(t: 0, left: Slope(35), right: Slope(35))],
 //!         )],
-//!     )),
+//!     ),
 //!     domain: ((0, 0, 0), (127, 63, 63)),
 //!     voxel: 1.0,
 //! )
@@ -320,10 +320,11 @@ pub struct FeatureVolumeSpec {
     pub noise: SurfaceNoiseSpec,
 }
 
-/// Reads a RON file, reporting parse errors with the path, line and column.
+/// Reads a RON file with the tree files' options (`Some` implicit, newtype variants
+/// unwrapped: `Inline(curves: [..])`), reporting parse errors with the path, line and
+/// column.
 pub fn parse_ron<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<T, CurveError> {
-    ron::Options::default()
-        .with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+    crate::scene::ron_options()
         .from_str(text)
         .map_err(|e| CurveError::Parse {
             path: path.to_path_buf(),
@@ -601,6 +602,7 @@ impl FeatureVolumeSpec {
         };
         let f = FieldParams {
             domain,
+            voxel: h,
             orientation: self.orientation,
             transition: self.transition.map_or(2.0 * h, |t| t.0),
             falloff: self.falloff.map_or(4.0 * h, |t| t.0),
@@ -666,7 +668,7 @@ mod tests {
     const SPEC: &str = r#"
         FeatureVolume(
             name: "cliff",
-            curves: Inline((
+            curves: Inline(
                 curves: [(
                     points: [Abs(0, 32, 40), Ground(64, 40, -2), Abs(127, 32, 40)],
                     constraints: [
@@ -675,7 +677,7 @@ mod tests {
                     ],
                 )],
                 tunnels: [(path: [Abs(0, 0, 0), Abs(10, 0, 0)], width: Const(4), height: Keys([(0, 3), (1, 5)]))],
-            )),
+            ),
             domain: ((0, 0, 0), (127, 63, 63)),
             voxel: 1.0,
         )

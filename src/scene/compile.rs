@@ -9,10 +9,12 @@ use super::load::{SceneError, SceneFile};
 use super::spec::{NodeSpec, Scene};
 use std::sync::Arc;
 
+use crate::curves::FeatureVolumeSpec;
 use crate::curves::spec::BuildOptions;
 use crate::dem::{DemCache, HeightfieldField};
 use crate::field::{Aabb, Fbm, NodeId, Primitive, Tree, TreeBuilder, Warp};
 use crate::io::DEFAULT_MEMORY_BUDGET;
+use crate::voxel::SField;
 
 /// A compiled scene: the tree, and for each node of the scene's root (pre-order, the order
 /// of [`NodeSpec::walk`]) the compiled node it became.
@@ -78,6 +80,41 @@ impl Compiler<'_> {
         Ok(hf)
     }
 
+    /// Runs the voxel pipeline of `f` (node `n`): `Ground(x, y, offset)` points resolve
+    /// on the scene's terrain when it has one.
+    fn feature_volume(
+        &mut self,
+        n: &NodeSpec,
+        f: &FeatureVolumeSpec,
+        seed: u32,
+        max_memory: u64,
+    ) -> Result<SField, SceneError> {
+        let has_terrain = self.scene.terrain.is_some()
+            || self
+                .scene
+                .all_nodes()
+                .iter()
+                .any(|m| matches!(m, NodeSpec::Heightfield(_)));
+        let terrain = if has_terrain {
+            Some(self.terrain(n)?)
+        } else {
+            None
+        };
+        let ground = |xy: glam::Vec2| {
+            terrain
+                .as_ref()
+                .map(|t| t.height(xy))
+                .filter(|h| h.is_finite())
+        };
+        let opts = BuildOptions {
+            seed,
+            ground: Some(&ground),
+            max_memory,
+        };
+        f.build_with(self.base_dir, &opts)
+            .map_err(|e| self.error(n, e.to_string()))
+    }
+
     fn error(&self, node: &NodeSpec, message: impl Into<String>) -> SceneError {
         SceneError::Node {
             path: self.path.to_path_buf(),
@@ -128,32 +165,7 @@ impl Compiler<'_> {
                 self.builder.leaf(Arc::new(leaf), name)
             }
             NodeSpec::FeatureVolume(f) => {
-                // `Ground(x, y, offset)` points resolve on the terrain, when the scene has one.
-                let has_terrain = self.scene.terrain.is_some()
-                    || self
-                        .scene
-                        .all_nodes()
-                        .iter()
-                        .any(|m| matches!(m, NodeSpec::Heightfield(_)));
-                let terrain = if has_terrain {
-                    Some(self.terrain(n)?)
-                } else {
-                    None
-                };
-                let ground = |xy: glam::Vec2| {
-                    terrain
-                        .as_ref()
-                        .map(|t| t.height(xy))
-                        .filter(|h| h.is_finite())
-                };
-                let opts = BuildOptions {
-                    seed: self.scene.seed,
-                    ground: Some(&ground),
-                    ..Default::default()
-                };
-                let leaf = f
-                    .build_with(self.base_dir, &opts)
-                    .map_err(|e| self.error(n, e.to_string()))?;
+                let leaf = self.feature_volume(n, f, self.scene.seed, DEFAULT_MEMORY_BUDGET)?;
                 self.builder.leaf(Arc::new(leaf), name)
             }
             NodeSpec::Anchor(a) => {
@@ -231,21 +243,53 @@ impl SceneFile {
     pub fn compile(&self) -> Result<Compiled, SceneError> {
         compile_scene(&self.scene, &self.path, &self.base_dir)
     }
+
+    /// The scene's `FeatureVolume` nodes (in `defs` and the tree, pre-order).
+    pub fn feature_volumes(&self) -> Vec<&FeatureVolumeSpec> {
+        self.scene
+            .all_nodes()
+            .into_iter()
+            .filter_map(|n| match n {
+                NodeSpec::FeatureVolume(f) => Some(f),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// The S-field leaf of one of the scene's feature volumes, built as [`Self::compile`]
+    /// builds it (the same pipeline cache, `Ground(..)` points on the scene's terrain),
+    /// with noise seed `seed` (the scene's is `self.scene.seed`) and a grid memory budget.
+    pub fn build_feature_volume(
+        &self,
+        f: &FeatureVolumeSpec,
+        seed: u32,
+        max_memory: u64,
+    ) -> Result<SField, SceneError> {
+        let node = NodeSpec::FeatureVolume(f.clone());
+        Compiler::new(&self.scene, &self.path, &self.base_dir)
+            .feature_volume(&node, f, seed, max_memory)
+    }
+}
+
+impl<'s> Compiler<'s> {
+    fn new(scene: &'s Scene, path: &'s Path, base_dir: &'s Path) -> Self {
+        Compiler {
+            scene,
+            path,
+            base_dir,
+            builder: TreeBuilder::new(),
+            named: BTreeMap::new(),
+            outline: Vec::new(),
+            record: true,
+            dems: DemCache::new(DEFAULT_MEMORY_BUDGET),
+            terrain: None,
+        }
+    }
 }
 
 /// Compiles `scene`; asset paths are relative to `base_dir`, `path` names the file in errors.
 pub fn compile_scene(scene: &Scene, path: &Path, base_dir: &Path) -> Result<Compiled, SceneError> {
-    let mut c = Compiler {
-        scene,
-        path,
-        base_dir,
-        builder: TreeBuilder::new(),
-        named: BTreeMap::new(),
-        outline: Vec::new(),
-        record: true,
-        dems: DemCache::new(DEFAULT_MEMORY_BUDGET),
-        terrain: None,
-    };
+    let mut c = Compiler::new(scene, path, base_dir);
     let root = c.node(&scene.root, 0)?;
     let tree = c.builder.build(root);
     Ok(Compiled {

@@ -2,6 +2,7 @@
 //! primitive it produces ([`SField`]).
 
 pub mod diffuse;
+pub mod extract;
 pub mod pipeline;
 pub mod propagate;
 pub mod sfield;

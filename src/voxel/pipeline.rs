@@ -56,7 +56,8 @@ pub struct Params {
 /// [`crate::curves::curve_ribbon`]).
 const GUIDE_VOXELS: f32 = 1.5;
 
-/// A level voxelizes a tunnel only if its section spans this many voxels.
+/// A level voxelizes a tunnel (an arch beam) only if its section (thickness) spans this
+/// many voxels.
 const TUNNEL_VOXELS: f32 = 3.0;
 
 /// What happened on one level.
@@ -245,8 +246,9 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
         p.max_memory,
     )?;
 
-    // Levels before the first one with seeds (thin tunnels only appear on fine levels)
-    // hold a constant S behind every surface, just outside the first seeded level's band.
+    // Levels before the first one with seeds (thin tunnels and arch beams only appear on
+    // fine levels) hold a constant S just outside the first seeded level's band: in the
+    // rock around thin tunnels, in the air around thin arches.
     let Some(first_seeded) = (0..=top)
         .rev()
         .find(|&l| features.has_seed(TUNNEL_VOXELS * geoms[l].h))
@@ -257,7 +259,9 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
             ..Default::default()
         });
     };
-    let behind = -(p.band + 2.0) * geoms[first_seeded].h;
+    let behind = (p.band + 2.0)
+        * geoms[first_seeded].h
+        * features.outside_of_thin(TUNNEL_VOXELS * geoms[top].h);
     let finest = features.proxy(p.ribbon, p.ribbon, 0.5 * p.voxel, 0.0);
     let uniform_noise = finest.vertices.windows(2).all(|w| w[0].noise == w[1].noise);
     drop(finest);

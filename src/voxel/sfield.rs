@@ -32,6 +32,8 @@ use crate::field::{Aabb, Fbm, Field, Interval};
 pub struct FieldParams {
     /// The domain box: the support.
     pub domain: Aabb,
+    /// The finest voxel size (metres): the default cell of [`SField::extract`].
+    pub voxel: f32,
     /// Solid side.
     pub orientation: Orientation,
     /// Sigmoid width `R` (metres).
