@@ -47,7 +47,7 @@ fn renders_png_and_cost_image_and_checks_the_budget() {
     let terrain = Terrain::new(100.0, 12.0, 4.0);
     let tree = LoadedTree {
         field: Box::new(terrain),
-        tape: None,
+        tape: Err(karstic::render::gpu::GpuError::Tape("not needed".into())),
     };
     let mut a = args(&["--size", "120", "80", "--quiet"]);
     a.output = dir.path().join("t.png");
@@ -88,7 +88,7 @@ fn gpu_flag_falls_back_or_renders() {
     let tape = tapes::terrain(&terrain, 48);
     let tree = LoadedTree {
         field: Box::new(tape.clone()),
-        tape: Some(tape),
+        tape: Ok(tape),
     };
     let mut a = args(&["--size", "48", "32", "--gpu", "--quiet"]);
     a.output = dir.path().join("g.png");
