@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 use common::{Rng, assert_frames_match, depth_agreement, gpu};
 use glam::Vec3;
 use indicatif::ProgressBar;
-use karstic::field::{Aabb, Field, T, Tree};
+use karstic::dem::{Heightfield, HeightfieldField, ImplicitParams, Interpolation};
+use karstic::field::{Aabb, Field, T, Tree, TreeBuilder};
 use karstic::mesh::{GridSpec, MeshOptions, polygonize};
 use karstic::render::gpu::{GpuError, Tape, tape_from_tree};
 use karstic::render::raycast::MeshRaycaster;
@@ -260,4 +261,164 @@ fn traced_depth_matches_the_marching_cubes_mesh_of_the_scenes() {
             frac * 100.0
         );
     }
+}
+
+fn prim(spec: &str) -> std::sync::Arc<dyn Field> {
+    let spec: karstic::field::PrimitiveSpec =
+        ron::from_str(spec).unwrap_or_else(|e| panic!("{spec}: {e}"));
+    std::sync::Arc::new(karstic::field::Primitive::from_spec(&spec, 1))
+}
+
+fn heightfield(cell: glam::Vec2, interp: Interpolation) -> std::sync::Arc<dyn Field> {
+    let (nx, ny) = (24, 17);
+    let z = (0..nx * ny)
+        .map(|k| {
+            let (i, j) = ((k % nx) as f32, (k / nx) as f32);
+            3.0 * (0.5 * i).sin() + 2.0 * (0.3 * j).cos() + 0.1 * i
+        })
+        .collect();
+    let hf = Heightfield::new(nx, ny, glam::Vec2::new(-5.0, 3.0), cell, z).unwrap();
+    let mut params = ImplicitParams::with_falloff(2.5);
+    params.vertical_scale = 1.5;
+    params.vertical_offset = 4.0;
+    params.placement = glam::Vec2::new(2.0, -1.0);
+    params.interpolation = interp;
+    std::sync::Arc::new(HeightfieldField::new(&hf, &params).unwrap())
+}
+
+/// A tree using every encoded node and skeleton kind — big BVH blend, union, intersection,
+/// difference with a negative curve, rotated and scaled transforms, constants, a box
+/// turned by 90°, a zero-length segment and a placed, scaled heightfield — equals its tape.
+#[test]
+fn every_encoding_equals_its_node() {
+    let mut b = TreeBuilder::new();
+    let mut blobs: Vec<_> = (0..40)
+        .map(|i| {
+            let a = i as f32 * 0.7;
+            let s = format!(
+                "(shape: Point(center: ({}, {}, {})), falloff: 2.5, energy: 0.8)",
+                8.0 * a.cos(),
+                8.0 * a.sin(),
+                0.2 * i as f32
+            );
+            b.leaf(prim(&s), None)
+        })
+        .collect();
+    for s in [
+        "(shape: Segment(a: (-3, 0, 1), b: (4, 2, 3)), falloff: 2)",
+        "(shape: Segment(a: (1, 1, 1), b: (1, 1, 1)), falloff: 2)",
+        "(shape: Sphere(center: (0, 4, 2), radius: 1.5), falloff: 2, energy: 1.3)",
+        "(shape: Capsule(a: (-5, -5, 0), b: (-2, -6, 4), radius: 1), falloff: 1.5)",
+        "(shape: Box(center: (3, -4, 0), half_size: (2, 1, 0.5), yaw: 90), falloff: 1.2)",
+        "(shape: Polyline(points: [(-6, 2, 0), (-3, 5, 2), (0, 6, 1)]), falloff: 1.8)",
+    ] {
+        blobs.push(b.leaf(prim(s), None));
+    }
+    let blend = b.blend(blobs, None);
+    let curve = b.leaf(
+        prim(
+            "(shape: Curve(points: [(-8, 0, 2), (0, 1, 3), (8, 0, 2)]), falloff: 2, energy: -0.7)",
+        ),
+        None,
+    );
+    let carve = b.leaf(
+        prim("(shape: Sphere(center: (2, 2, 2), radius: 2), falloff: 1.5, energy: 1.4)"),
+        None,
+    );
+    let carved = b.difference(blend, vec![carve], None);
+    let with_curve = b.blend(vec![carved, curve], None);
+    let boxed = b.leaf(
+        prim("(shape: Box(center: (0, 0, 1), half_size: (4, 3, 2)), falloff: 2)"),
+        None,
+    );
+    let moved = b.transform(
+        boxed,
+        glam::Affine3A::from_scale_rotation_translation(
+            Vec3::new(1.2, 0.7, 1.0),
+            glam::Quat::from_rotation_z(0.5) * glam::Quat::from_rotation_x(0.3),
+            Vec3::new(-9.0, 9.0, 2.0),
+        ),
+        None,
+    );
+    let third = b.constant(0.3, None);
+    let ball = b.leaf(prim("(shape: Point(center: (-9, 9, 2)), falloff: 6)"), None);
+    let capped = b.intersection(vec![moved, ball], None);
+    let lifted = b.union(vec![capped, third], None);
+    let capped_lift = b.intersection(vec![lifted, ball], None);
+    let terrain = b.leaf(
+        heightfield(glam::Vec2::splat(1.5), Interpolation::Bilinear),
+        None,
+    );
+    let flipped = b.transform(
+        terrain,
+        glam::Affine3A::from_scale_rotation_translation(
+            Vec3::new(1.0, 1.0, -1.0),
+            glam::Quat::IDENTITY,
+            Vec3::new(0.0, 0.0, 12.0),
+        ),
+        None,
+    );
+    let island = b.intersection(vec![terrain, flipped], None);
+    let root = b.union(vec![with_curve, capped_lift, island], Some("root".into()));
+    let tree = b.build(root);
+    let tape = tape_equals_tree(&tree, 30_000);
+    common::check_segment_lipschitz(&tape, &tree.support(), 20_000, 4);
+    // The heightfield alone, where the prism's corners get their share of the points.
+    let mut b = TreeBuilder::new();
+    let leaf = b.leaf(
+        heightfield(glam::Vec2::splat(1.5), Interpolation::Bilinear),
+        None,
+    );
+    tape_equals_tree(&b.build(leaf), 20_000);
+}
+
+/// Compares the tree and its tape at [`sample_points`]; returns the tape.
+fn tape_equals_tree(tree: &Tree, n: usize) -> Tape {
+    let tape = tape_from_tree(tree).unwrap();
+    let (pts, surface) = sample_points(tree, n, 3);
+    assert!(surface >= n / 50, "{surface} surface points");
+    for p in pts {
+        let (v, t) = (tree.value(p), tape.value(p));
+        assert!(
+            (v - t).abs() <= 1e-4 * v.abs().max(1.0),
+            "at {p}: tree {v}, tape {t}"
+        );
+    }
+    tape
+}
+
+#[test]
+fn nodes_without_an_encoding_are_named_errors() {
+    let refused = |leaf: std::sync::Arc<dyn Field>, expect: &str| {
+        let mut b = TreeBuilder::new();
+        let a = b.leaf(leaf, Some("it".into()));
+        let other = b.leaf(prim("(shape: Point(center: (0, 0, 0)), falloff: 1)"), None);
+        let root = b.blend(vec![other, a], None);
+        let e = tape_from_tree(&b.build(root)).unwrap_err();
+        let msg = e.to_string();
+        assert!(matches!(e, GpuError::NoEncoding { .. }), "{msg}");
+        assert!(msg.contains(expect), "{msg} lacks {expect:?}");
+    };
+    refused(
+        prim("(shape: Box(center: (0, 0, 0), half_size: (1, 2, 1), yaw: 30), falloff: 1)"),
+        "the Box primitive \"it\" has no GPU encoding: only boxes with a yaw",
+    );
+    refused(
+        prim("(shape: Disc(center: (0, 0, 0), normal: (0, 0, 1), radius: 2), falloff: 1)"),
+        "not Disc",
+    );
+    refused(
+        prim(
+            "(shape: Point(center: (0, 0, 0)), falloff: 2, noise: Some((amplitude: 0.5, wavelength: 2)))",
+        ),
+        "noisy primitives",
+    );
+    refused(
+        heightfield(glam::Vec2::new(1.5, 2.0), Interpolation::Bilinear),
+        "square cells",
+    );
+    refused(
+        heightfield(glam::Vec2::splat(1.5), Interpolation::Bicubic),
+        "bicubic",
+    );
 }
