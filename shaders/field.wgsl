@@ -19,6 +19,7 @@ const OP_UNWARP: u32 = 34u;
 
 const SHAPE_SPHERE: u32 = 0u;
 const SHAPE_CAPSULE: u32 = 1u;
+const SHAPE_BOX: u32 = 2u;
 const SIGMA_FLAG: u32 = 256u;
 
 const WYVILL_MAX_SLOPE: f32 = 1.7173008;
@@ -92,8 +93,18 @@ fn signed_distance(kind: u32, o: u32, p: vec3<f32>) -> f32 {
         }
         return length(ap - ab * h) - params[o + 6u];
     }
-    let d = abs(p - param3(o)) - param3(o + 3u);
-    return length(max(d, vec3<f32>(0.0))) + min(max(d.x, max(d.y, d.z)), 0.0);
+    if kind == SHAPE_BOX {
+        let d = abs(p - param3(o)) - param3(o + 3u);
+        return length(max(d, vec3<f32>(0.0))) + min(max(d.x, max(d.y, d.z)), 0.0);
+    }
+    // SHAPE_PRISM: a heightfield's prism, the largest horizontal excess over [lo, hi]
+    // combined with the vertical one.
+    let lo = param3(o);
+    let hi = param3(o + 3u);
+    let e = max(lo - p, p - hi);
+    let dxy = max(max(e.x, e.y), 0.0);
+    let dz = max(e.z, 0.0);
+    return sqrt(dxy * dxy + dz * dz);
 }
 
 fn primitive(flags: u32, o: u32, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {

@@ -3,9 +3,11 @@
 
 mod common;
 
+use karstic::field::Field;
+
 use clap::Parser;
 use common::{Terrain, tapes};
-use karstic::cli::render::{LoadedTree, RenderArgs, render_tree};
+use karstic::cli::render::{LoadedTree, RenderArgs, load_tree, render_tree};
 use karstic::cli::{Cli, Command};
 
 fn args(extra: &[&str]) -> RenderArgs {
@@ -47,7 +49,7 @@ fn renders_png_and_cost_image_and_checks_the_budget() {
     let terrain = Terrain::new(100.0, 12.0, 4.0);
     let tree = LoadedTree {
         field: Box::new(terrain),
-        tape: None,
+        tape: Err(karstic::render::gpu::GpuError::Tape("not needed".into())),
     };
     let mut a = args(&["--size", "120", "80", "--quiet"]);
     a.output = dir.path().join("t.png");
@@ -88,7 +90,7 @@ fn gpu_flag_falls_back_or_renders() {
     let tape = tapes::terrain(&terrain, 48);
     let tree = LoadedTree {
         field: Box::new(tape.clone()),
-        tape: Some(tape),
+        tape: Ok(tape),
     };
     let mut a = args(&["--size", "48", "32", "--gpu", "--quiet"]);
     a.output = dir.path().join("g.png");
@@ -96,5 +98,28 @@ fn gpu_flag_falls_back_or_renders() {
     assert_eq!(
         image::open(&a.output).unwrap().to_rgba8().dimensions(),
         (48, 32)
+    );
+}
+
+#[test]
+fn tree_files_load_with_their_tape_or_the_reason_they_have_none() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
+    let blobs = load_tree(&dir.join("blobs.ron")).unwrap();
+    let tape = blobs.tape.as_ref().expect("point blobs encode");
+    assert!(blobs.field.support().contains_box(&tape.support()));
+    let spire = load_tree(&dir.join("rock_spire.ron")).unwrap();
+    let e = spire.tape.as_ref().unwrap_err().to_string();
+    assert!(
+        e.contains("\"ground\"") && e.contains("no GPU encoding"),
+        "{e}"
+    );
+    // --gpu without an encoding still renders, on the CPU.
+    let out = tempfile::tempdir().unwrap();
+    let mut a = args(&["--size", "40", "30", "--gpu", "--quiet"]);
+    a.output = out.path().join("spire.png");
+    render_tree(&a, &spire).unwrap();
+    assert_eq!(
+        image::open(&a.output).unwrap().to_rgba8().dimensions(),
+        (40, 30)
     );
 }

@@ -3,15 +3,15 @@
 
 mod common;
 
-use std::sync::OnceLock;
-
-use common::{Blobs, Rng, SigmaSphere, Terrain, check_segment_lipschitz, dem, tapes};
+use common::{
+    Blobs, Rng, SigmaSphere, Terrain, assert_frames_match, check_segment_lipschitz, dem, gpu, tapes,
+};
 use glam::{Affine3A, Quat, Vec3};
 use indicatif::ProgressBar;
 use karstic::field::falloff::{sigma, wyvill};
 use karstic::field::{Aabb, Field, T};
 use karstic::render::gpu::{
-    Combine, GpuContext, GpuError, Profile, SHADER_MODULES, Shape, Tape, TapeBuilder, shader_source,
+    Combine, GpuContext, Profile, SHADER_MODULES, Shape, Tape, TapeBuilder, shader_source,
 };
 use karstic::render::{Camera, Method, RenderSettings, render};
 
@@ -240,22 +240,6 @@ fn malformed_tapes_are_errors() {
     assert!(t.finish().is_err(), "deeper than the GPU stack");
 }
 
-fn gpu() -> Option<&'static GpuContext> {
-    static CTX: OnceLock<Option<GpuContext>> = OnceLock::new();
-    CTX.get_or_init(|| match GpuContext::new() {
-        Ok(c) => {
-            eprintln!("GPU tests on {}", c.adapter);
-            Some(c)
-        }
-        Err(e @ GpuError::NoAdapter(_)) => {
-            eprintln!("NOTICE: skipping the GPU comparison: {e}");
-            None
-        }
-        Err(e) => panic!("the GPU adapter exists but the tracer cannot run on it: {e}"),
-    })
-    .as_ref()
-}
-
 #[test]
 fn gpu_probes_match_the_cpu_tape() {
     let Some(ctx) = gpu() else { return };
@@ -310,23 +294,8 @@ fn compare(
         cpu.hits(),
         gpu.hits()
     );
-    let n = (w * h) as usize;
-    let close = (0..n)
-        .filter(|&k| (0..3).all(|c| cpu.rgba[4 * k + c].abs_diff(gpu.rgba[4 * k + c]) <= 6))
-        .count();
-    let hits_agree = (0..n)
-        .filter(|&k| cpu.depth[k].is_finite() == gpu.depth[k].is_finite())
-        .count();
     assert!(cpu.hits() >= min_hits, "{name}: the scene is in view");
-    assert!(
-        close as f64 >= 0.99 * n as f64,
-        "{name}: {close} of {n} pixels match"
-    );
-    assert!(
-        hits_agree as f64 >= 0.99 * n as f64,
-        "{name}: hit masks differ on {} pixels",
-        n - hits_agree
-    );
+    assert_frames_match(name, &cpu, &gpu);
 }
 
 #[test]

@@ -2,7 +2,9 @@
 
 mod common;
 
-use common::{Blobs, Rng, SigmaSphere, Terrain, check_segment_lipschitz, uv_sphere};
+use common::{
+    Blobs, Rng, SigmaSphere, Terrain, check_segment_lipschitz, depth_agreement, uv_sphere,
+};
 use glam::{Vec2, Vec3};
 use indicatif::ProgressBar;
 use karstic::field::{Aabb, Field};
@@ -11,23 +13,6 @@ use karstic::render::cpu::{self, RenderSettings};
 use karstic::render::raycast::MeshRaycaster;
 use karstic::render::trace::{Method, TraceParams, occluded, trace};
 use karstic::render::{Camera, render};
-
-/// Fraction of pixels where both images agree on hit/miss and, on hits, on depth within
-/// `tol`. `None` in the first image counts as a miss.
-fn depth_agreement(a: &[f32], b: &[f32], tol: f32) -> (f64, usize) {
-    let mut ok = 0;
-    let mut hits = 0;
-    for (x, y) in a.iter().zip(b) {
-        hits += usize::from(x.is_finite() || y.is_finite());
-        let same = match (x.is_finite(), y.is_finite()) {
-            (true, true) => (x - y).abs() <= tol,
-            (false, false) => true,
-            _ => false,
-        };
-        ok += usize::from(same && (x.is_finite() || y.is_finite()));
-    }
-    (ok as f64 / hits.max(1) as f64, hits)
-}
 
 #[test]
 fn sigma_sphere_depth_matches_the_analytic_intersection() {

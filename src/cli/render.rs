@@ -8,7 +8,7 @@ use glam::Vec3;
 
 use crate::field::Field;
 use crate::io::{DEFAULT_MEMORY_BUDGET, progress};
-use crate::render::gpu::{self, Tape};
+use crate::render::gpu::{self, GpuError, Tape};
 use crate::render::{Camera, Frame, Method, RenderSettings, cpu};
 
 /// Arguments of `karstic render`.
@@ -54,16 +54,18 @@ pub struct RenderArgs {
 pub struct LoadedTree {
     /// The compiled field (CPU tracing).
     pub field: Box<dyn Field>,
-    /// Its GPU encoding, when every node has one.
-    pub tape: Option<Tape>,
+    /// Its GPU encoding, or why there is none (a node without an encoding).
+    pub tape: Result<Tape, GpuError>,
 }
 
-/// Loads and compiles a tree file for rendering.
-fn load_tree(path: &Path) -> anyhow::Result<LoadedTree> {
+/// Loads and compiles a tree file for rendering, with its GPU tape when every node has an
+/// encoding ([`gpu::tape_from_tree`]).
+pub fn load_tree(path: &Path) -> anyhow::Result<LoadedTree> {
     let tree = super::load_tree(path)?;
+    let tape = gpu::tape_from_tree(&tree);
     Ok(LoadedTree {
         field: Box::new(tree),
-        tape: None,
+        tape,
     })
 }
 
@@ -94,17 +96,15 @@ pub fn render_tree(args: &RenderArgs, tree: &LoadedTree) -> anyhow::Result<()> {
     settings.shading.shadows = !args.no_shadows;
     let start = Instant::now();
     let (frame, device) = match (args.gpu, &tree.tape) {
-        (true, Some(tape)) => match gpu::render(tape, &camera, &settings) {
+        (true, Ok(tape)) => match gpu::render(tape, &camera, &settings) {
             Ok(frame) => (frame, "GPU"),
             Err(e) => {
                 eprintln!("--gpu: {e}; rendering on the CPU instead");
                 (cpu_frame(field, &camera, &settings, args.quiet), "CPU")
             }
         },
-        (true, None) => {
-            eprintln!(
-                "--gpu: this tree has nodes without a GPU encoding; rendering on the CPU instead"
-            );
+        (true, Err(e)) => {
+            eprintln!("--gpu: {e}; rendering on the CPU instead");
             (cpu_frame(field, &camera, &settings, args.quiet), "CPU")
         }
         (false, _) => (cpu_frame(field, &camera, &settings, args.quiet), "CPU"),

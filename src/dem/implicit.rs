@@ -402,6 +402,9 @@ impl Field for HeightfieldField {
             z: self.dz,
         })
     }
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
 }
 
 impl ElevationSource for HeightfieldField {

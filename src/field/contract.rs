@@ -66,6 +66,13 @@ pub trait Field: Send + Sync {
     fn elevation(&self, _fp: &Rect) -> Option<Elevation<'_>> {
         None
     }
+
+    /// The concrete leaf as [`std::any::Any`], for encoders that translate known leaf
+    /// kinds (the GPU tape, `render::gpu::tape_from_tree`). Leaves that want to be
+    /// recognised return `Some(self)`; the default is opaque.
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        None
+    }
 }
 
 /// An elevation function `h(x, y)` in the tree's frame (metres).

@@ -414,6 +414,10 @@ impl Field for Primitive {
             }
         }
     }
+
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
 }
 
 /// An optional name written without `Some(...)`.

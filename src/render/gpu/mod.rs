@@ -2,15 +2,18 @@
 //! invocation, running the same march and shading as the CPU path over a [`Tape`].
 //!
 //! * [`tape`]: the GPU encoding of a field and its CPU reference evaluator.
+//! * [`from_tree`]: a compiled tree as a tape ([`tape_from_tree`]).
 //! * [`context`]: adapter, device, pipelines, buffers and read-back.
 //!
 //! The WGSL lives in `shaders/` and is assembled by [`shader_source`]; the tests validate
 //! every module with naga so shader errors fail without a GPU.
 
 pub mod context;
+pub mod from_tree;
 pub mod tape;
 
 pub use context::{GpuContext, render};
+pub use from_tree::tape_from_tree;
 pub use tape::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder};
 
 /// Errors of the GPU path.
@@ -25,6 +28,14 @@ pub enum GpuError {
     /// The tree cannot be encoded for the GPU.
     #[error("cannot encode the tree for the GPU: {0}")]
     Tape(String),
+    /// A node of the tree has no GPU encoding (yet).
+    #[error("{node} has no GPU encoding: {why}")]
+    NoEncoding {
+        /// The node, by user name or arena index, and its kind.
+        node: String,
+        /// What is missing.
+        why: String,
+    },
     /// The work exceeds what the device allows.
     #[error("{0}")]
     Limits(String),

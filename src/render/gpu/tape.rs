@@ -8,7 +8,7 @@
 //! | op | params at `param` | stack | meaning |
 //! | --- | --- | --- | --- |
 //! | `CONST` | `v` | push | constant `v` (Lipschitz 0) |
-//! | `PRIM` | `R, e, shape…` | push | `e·g(max(sd, 0)/R)` (Wyvill) or `σ(−sd, R)` (σ, `flags` bit 8); `sd` = signed distance to the shape (`flags & 0xff`: sphere `c, ρ`; capsule `a, b, ρ`; box `c, half`) |
+//! | `PRIM` | `R, e, shape…` | push | `e·g(max(sd, 0)/R)` (Wyvill) or `σ(−sd, R)` (σ, `flags` bit 8); `sd` = signed distance to the shape (`flags & 0xff`: sphere `c, ρ`; capsule `a, b, ρ`; box `c, half`; heightfield prism `min, max`) |
 //! | `HEIGHT` | `R, L, ox, oy, cell, nx, ny, offset` | push | `σ(h(x, y) − z, R)`, `h` bilinear in `heights[offset..]`, `L ≥ |∇h|` |
 //! | `BLEND` / `UNION` / `INTER` / `DIFF` | – | pop 2, push 1 | `a + b`, `max`, `min`, `min(a, 2T − b)` |
 //! | `GUARD` | `min.xyz, max.xyz` | – | when neither `p` nor the ball touches the box, push `(0, 0)` and jump to `jump` (the instruction after the guarded subtree) |
@@ -75,6 +75,8 @@ pub mod shape {
     pub const CAPSULE: u32 = 1;
     /// Box `centre, half-size`.
     pub const BOX: u32 = 2;
+    /// A heightfield's prism `min, max` ([`super::Shape::Prism`]).
+    pub const PRISM: u32 = 3;
     /// Flag: σ profile instead of Wyvill.
     pub const SIGMA: u32 = 1 << 8;
 }
@@ -116,6 +118,17 @@ pub enum Shape {
         /// Half the edge lengths.
         half: Vec3,
     },
+    /// The prism of an implicit heightfield ([`crate::dem::HeightfieldField`], seed 002
+    /// §5.1): its distance is `√(d_xy² + d_z²)` with `d_xy` the largest excess of `x, y`
+    /// over `[min, max]` (the leaf's `R − clearance` of its rectangle, so `min, max` is the
+    /// rectangle eroded by `R`) and `d_z` the distance from `z` to `[min.z, max.z]`. Not a
+    /// Euclidean distance at the corners, but 1-Lipschitz like the others.
+    Prism {
+        /// Lower corner (`min > max` along x or y is allowed: a domain narrower than 2R).
+        min: Vec3,
+        /// Upper corner.
+        max: Vec3,
+    },
 }
 
 impl Shape {
@@ -139,6 +152,10 @@ impl Shape {
                 out.extend([center.x, center.y, center.z, half.x, half.y, half.z]);
                 shape::BOX
             }
+            Shape::Prism { min, max } => {
+                out.extend([min.x, min.y, min.z, max.x, max.y, max.z]);
+                shape::PRISM
+            }
         }
     }
 
@@ -150,6 +167,11 @@ impl Shape {
             Shape::Segment(a, b) => Aabb::new(a, b).dilate(reach),
             Shape::Capsule { a, b, radius } => Aabb::new(a, b).dilate(radius + reach),
             Shape::Box { center, half } => Aabb::new(center - half, center + half).dilate(reach),
+            // Not `Aabb::new`: the corners are kept as given even when min > max.
+            Shape::Prism { min, max } => Aabb {
+                min: min - Vec3::splat(reach),
+                max: max + Vec3::splat(reach),
+            },
         }
     }
 }
@@ -241,7 +263,8 @@ pub struct TapeBuilder {
     heights: Vec<f32>,
     stack: Vec<Entry>,
     max_stack: usize,
-    warps: Vec<(usize, Affine3A)>,
+    /// Open warps: stack depth at entry, `M`, `M⁻¹`.
+    warps: Vec<(usize, Affine3A, Affine3A)>,
     max_warps: usize,
     guards: usize,
 }
@@ -381,7 +404,13 @@ impl TapeBuilder {
             Combine::Intersection => (
                 op::INTER,
                 Entry {
-                    support: a.support.intersection(b.support),
+                    // Outside one support the result is min(0, other): zero unless the
+                    // other can be negative.
+                    support: if a.range.lo < 0.0 || b.range.lo < 0.0 {
+                        a.support.union(b.support)
+                    } else {
+                        a.support.intersection(b.support)
+                    },
                     range: a.range.min(b.range),
                 },
             ),
@@ -448,24 +477,46 @@ impl TapeBuilder {
         Ok(())
     }
 
+    /// Declares that the top subtree vanishes outside `b`, when the caller knows a tighter
+    /// support than the builder's own estimate (a compiled tree's cached supports): the
+    /// entry's support becomes its intersection with `b`. `b` must be sound — the guards
+    /// checked against it and the tape's [`Field::support`] trust it.
+    pub fn assume_support(&mut self, b: Aabb) -> Result<(), GpuError> {
+        let top = self
+            .stack
+            .last_mut()
+            .ok_or_else(|| GpuError::Tape("assume_support on an empty stack".into()))?;
+        top.support = top.support.intersection(b);
+        Ok(())
+    }
+
     /// Enters an affine warp `x ↦ M x` of the subtree emitted until
     /// [`TapeBuilder::warp_end`]: the subtree is evaluated at `M⁻¹p`.
     pub fn warp_begin(&mut self, m: Affine3A) -> Result<(), GpuError> {
-        let inv = m.inverse();
-        if !(m.matrix3.determinant().abs() > 1e-12 && inv.is_finite()) {
+        self.warp_enter(m, m.inverse())
+    }
+
+    /// [`TapeBuilder::warp_begin`] given `M⁻¹` (parent to child space), as a compiled
+    /// tree stores it: the tape then evaluates the subtree at exactly the tree's points.
+    pub fn warp_begin_inverse(&mut self, to_child: Affine3A) -> Result<(), GpuError> {
+        self.warp_enter(to_child.inverse(), to_child)
+    }
+
+    fn warp_enter(&mut self, m: Affine3A, inv: Affine3A) -> Result<(), GpuError> {
+        if !(m.matrix3.determinant().abs() > 1e-12 && inv.is_finite() && m.is_finite()) {
             return Err(GpuError::Tape(format!(
                 "affine warp {m:?} is not invertible"
             )));
         }
         self.emit(op::WARP, 0, &warp_params(&inv));
-        self.warps.push((self.stack.len(), m));
+        self.warps.push((self.stack.len(), m, inv));
         self.max_warps = self.max_warps.max(self.warps.len());
         Ok(())
     }
 
     /// Leaves the innermost warp; it must enclose exactly one subtree.
     pub fn warp_end(&mut self) -> Result<(), GpuError> {
-        let (depth, m) = self
+        let (depth, m, inv) = self
             .warps
             .pop()
             .ok_or_else(|| GpuError::Tape("warp_end without warp_begin".into()))?;
@@ -474,7 +525,7 @@ impl TapeBuilder {
                 "a warp must enclose exactly one subtree".into(),
             ));
         }
-        self.emit(op::UNWARP, 0, &warp_params(&m.inverse()));
+        self.emit(op::UNWARP, 0, &warp_params(&inv));
         let top = self.stack.last_mut().expect("checked above");
         if !top.support.is_empty() && top.support.min.is_finite() && top.support.max.is_finite() {
             top.support = Aabb::from_points(top.support.corners().map(|c| m.transform_point3(c)));
@@ -718,9 +769,19 @@ fn signed_distance(kind: u32, q: &[f32], p: Vec3) -> f32 {
             };
             (ap - ab * h).length() - q[6]
         }
-        _ => {
+        shape::BOX => {
             let d = (p - Vec3::new(q[0], q[1], q[2])).abs() - Vec3::new(q[3], q[4], q[5]);
             Vec3A::from(d).max(Vec3A::ZERO).length() + d.max_element().min(0.0)
+        }
+        _ => {
+            let (lo, hi) = (Vec3::new(q[0], q[1], q[2]), Vec3::new(q[3], q[4], q[5]));
+            let dxy = (lo.x - p.x)
+                .max(p.x - hi.x)
+                .max(lo.y - p.y)
+                .max(p.y - hi.y)
+                .max(0.0);
+            let dz = (lo.z - p.z).max(p.z - hi.z).max(0.0);
+            (dxy * dxy + dz * dz).sqrt()
         }
     }
 }

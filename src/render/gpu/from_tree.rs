@@ -1,0 +1,281 @@
+//! Encoding a compiled [`Tree`] as a GPU [`Tape`]: a depth-first walk of its arena that
+//! emits every node through the [`TapeBuilder`], reproducing the tree's values exactly
+//! (up to float rounding).
+//!
+//! | tree node | tape |
+//! | --- | --- |
+//! | constant | `CONST` |
+//! | [`Primitive`] without noise on a point, segment, sphere, capsule or axis-aligned box | `PRIM` (Wyvill) |
+//! | [`Primitive`] without noise on a polyline or curve | its segments' `PRIM`s under a BVH of guards, combined by `UNION` (`E ≥ 0`: `E·g(minᵢ dᵢ/R) = maxᵢ E·g(dᵢ/R)`, `g` decreasing) or `INTER` (`E < 0`) |
+//! | [`HeightfieldField`] (bilinear, square cells, no nodata, no domain polygon) | `HEIGHT` ∩ `PRIM` on its [`Shape::Prism`], energy `2T`: `min(σ(h − z), 2T·g(d_P/R))` as the leaf defines it |
+//! | blend | children chained by `BLEND`; with a BVH (many children), [`TapeBuilder::combine_bvh`] over the children's supports |
+//! | union / intersection | children chained by `UNION` / `INTER` |
+//! | difference | base, then each carve and `DIFF` |
+//! | affine transform | `WARP`, child, `UNWARP` with the tree's own `M⁻¹` |
+//!
+//! Every emitted subtree is then told its support from the tree's cache
+//! ([`TapeBuilder::assume_support`]), so the tape's guards and support box are the tree's.
+//! A node with no encoding — a turbulence warp, a noisy primitive, another skeleton, an
+//! S-field volume or any other leaf — is a [`GpuError::NoEncoding`] naming it, and
+//! `karstic render --gpu` falls back to the CPU with that message. An instanced subtree
+//! (one node with several parents) is emitted once per use: a tape is a tree.
+
+use glam::Vec3;
+
+use super::GpuError;
+use super::tape::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder};
+use crate::dem::{HeightfieldField, Interpolation};
+use crate::field::skeleton::Project;
+use crate::field::{Field, Node, NodeId, Primitive, Skeleton, T, Tree};
+
+/// The GPU tape of a compiled tree, or the first node without an encoding.
+pub fn tape_from_tree(tree: &Tree) -> Result<Tape, GpuError> {
+    let mut b = TapeBuilder::new();
+    emit(tree, &mut b, tree.root())?;
+    b.finish()
+}
+
+impl Tape {
+    /// [`tape_from_tree`].
+    pub fn from_tree(tree: &Tree) -> Result<Tape, GpuError> {
+        tape_from_tree(tree)
+    }
+}
+
+/// How to name node `id` in messages: its user name when it has one.
+fn describe(tree: &Tree, id: NodeId, kind: &str) -> String {
+    match &tree.info(id).name {
+        Some(n) => format!("the {kind} {n:?}"),
+        None => format!("a {kind} (node #{id})"),
+    }
+}
+
+fn no_encoding(tree: &Tree, id: NodeId, kind: &str, why: &str) -> GpuError {
+    GpuError::NoEncoding {
+        node: describe(tree, id, kind),
+        why: why.into(),
+    }
+}
+
+/// Emits node `id`, leaving one entry on the builder's stack.
+fn emit(tree: &Tree, b: &mut TapeBuilder, id: NodeId) -> Result<(), GpuError> {
+    match &tree.nodes()[id as usize] {
+        Node::Constant(v) => b.constant(*v),
+        Node::Leaf(f) => leaf(tree, b, id, f.as_ref())?,
+        Node::Blend { children, bvh } => {
+            if bvh.is_some() {
+                let boxes: Vec<_> = children.iter().map(|&c| tree.info(c).support).collect();
+                b.combine_bvh(Combine::Blend, &boxes, &mut |b, i| {
+                    emit(tree, b, children[i])
+                })?;
+            } else {
+                chain(tree, b, Combine::Blend, children)?;
+            }
+        }
+        Node::Union(children) => chain(tree, b, Combine::Union, children)?,
+        Node::Intersection(children) => chain(tree, b, Combine::Intersection, children)?,
+        Node::Difference { base, carves } => {
+            emit(tree, b, *base)?;
+            for &c in carves.iter() {
+                emit(tree, b, c)?;
+                b.combine(Combine::Difference)?;
+            }
+        }
+        Node::Affine {
+            child, to_child, ..
+        } => {
+            b.warp_begin_inverse(*to_child)?;
+            emit(tree, b, *child)?;
+            b.warp_end()?;
+        }
+        Node::Warp { .. } => {
+            return Err(no_encoding(
+                tree,
+                id,
+                "turbulence warp",
+                "the GPU evaluator has no noise yet",
+            ));
+        }
+    }
+    b.assume_support(tree.info(id).support)
+}
+
+/// `c₀ ∘ c₁ ∘ …` as a chain of binary ops (an empty list is the constant 0).
+fn chain(
+    tree: &Tree,
+    b: &mut TapeBuilder,
+    how: Combine,
+    children: &[NodeId],
+) -> Result<(), GpuError> {
+    let Some((&first, rest)) = children.split_first() else {
+        b.constant(0.0);
+        return Ok(());
+    };
+    emit(tree, b, first)?;
+    for &c in rest {
+        emit(tree, b, c)?;
+        b.combine(how)?;
+    }
+    Ok(())
+}
+
+fn leaf(tree: &Tree, b: &mut TapeBuilder, id: NodeId, f: &dyn Field) -> Result<(), GpuError> {
+    let any = f.as_any();
+    if let Some(p) = any.and_then(|a| a.downcast_ref::<Primitive>()) {
+        return primitive(tree, b, id, p);
+    }
+    if let Some(h) = any.and_then(|a| a.downcast_ref::<HeightfieldField>()) {
+        return heightfield(tree, b, id, h);
+    }
+    Err(no_encoding(
+        tree,
+        id,
+        "leaf",
+        "only skeletal primitives and heightfields are encoded; S-field volumes (FeatureVolume) are not yet",
+    ))
+}
+
+fn primitive(tree: &Tree, b: &mut TapeBuilder, id: NodeId, p: &Primitive) -> Result<(), GpuError> {
+    let skeleton = p.skeleton();
+    let kind = format!("{} primitive", skeleton.kind());
+    if p.noise().is_some() {
+        return Err(no_encoding(
+            tree,
+            id,
+            &kind,
+            "noisy primitives need the turbulence, which the GPU evaluator does not have yet",
+        ));
+    }
+    let profile = Profile::Wyvill {
+        radius: p.radius(),
+        energy: p.energy(),
+    };
+    let shape = match skeleton {
+        Skeleton::Point(s) => Shape::Point(s.center),
+        Skeleton::Segment(s) => Shape::Segment(s.a(), s.b()),
+        Skeleton::Sphere(s) => Shape::Sphere {
+            center: s.inner().center,
+            radius: s.radius(),
+        },
+        Skeleton::Capsule(s) => Shape::Capsule {
+            a: s.inner().a(),
+            b: s.inner().b(),
+            radius: s.radius(),
+        },
+        Skeleton::Box(c) => axis_aligned_box(c).ok_or_else(|| {
+            no_encoding(
+                tree,
+                id,
+                &kind,
+                "only boxes with a yaw that is a multiple of 90° are encoded",
+            )
+        })?,
+        Skeleton::Polyline(chain) | Skeleton::Curve(chain) => {
+            // E·g(minᵢ dᵢ/R): the max of the segments' fields for E ≥ 0 (g decreasing), the
+            // min for E < 0.
+            let how = if p.energy() >= 0.0 {
+                Combine::Union
+            } else {
+                Combine::Intersection
+            };
+            let shapes: Vec<Shape> = chain
+                .segments()
+                .iter()
+                .map(|s| Shape::Segment(s.a(), s.b()))
+                .collect();
+            let boxes: Vec<_> = chain
+                .segments()
+                .iter()
+                .map(|s| s.bounds().dilate(p.radius()))
+                .collect();
+            return b.combine_bvh(how, &boxes, &mut |b, i| {
+                b.primitive(shapes[i], profile);
+                Ok(())
+            });
+        }
+        other => {
+            return Err(no_encoding(
+                tree,
+                id,
+                &kind,
+                &format!(
+                    "the GPU evaluator knows point, segment, polyline, curve, sphere, capsule and box skeletons, not {}",
+                    other.kind()
+                ),
+            ));
+        }
+    };
+    b.primitive(shape, profile);
+    Ok(())
+}
+
+/// The box as centre and half-size when its yaw is a multiple of 90° (it then fills its
+/// bounding box); `None` for any other turn. The cuboid's fields are private, so this is
+/// read off its bounds and checked through its projection: a turned rectangle does not
+/// contain the corners of its bounding rectangle.
+fn axis_aligned_box(c: &crate::field::skeleton::Cuboid) -> Option<Shape> {
+    let bounds = c.bounds();
+    let tol = 1e-5 * (bounds.max.abs().max_element() + bounds.min.abs().max_element()).max(1.0);
+    let corners = [
+        bounds.max,
+        bounds.min,
+        Vec3::new(bounds.min.x, bounds.max.y, bounds.max.z),
+        Vec3::new(bounds.max.x, bounds.min.y, bounds.min.z),
+    ];
+    corners
+        .iter()
+        .all(|&k| c.distance(k) <= tol)
+        .then(|| Shape::Box {
+            center: bounds.center(),
+            half: 0.5 * bounds.size(),
+        })
+}
+
+fn heightfield(
+    tree: &Tree,
+    b: &mut TapeBuilder,
+    id: NodeId,
+    h: &HeightfieldField,
+) -> Result<(), GpuError> {
+    let params = h.params();
+    let grid = h.heightfield();
+    let cell = grid.cell();
+    let refuse = |why: &str| Err(no_encoding(tree, id, "heightfield", why));
+    if params.interpolation != Interpolation::Bilinear {
+        return refuse("only bilinear interpolation is encoded, not bicubic");
+    }
+    if params.domain.is_some() {
+        return refuse("a domain polygon is not encoded");
+    }
+    if grid.nodata_count() > 0 {
+        return refuse("DEMs with nodata samples are not encoded");
+    }
+    if cell.x != cell.y {
+        return refuse("only square cells are encoded");
+    }
+    let r = params.falloff;
+    b.heightfield(
+        &HeightGrid {
+            origin: grid.origin(),
+            cell: cell.x,
+            nx: grid.nx(),
+            ny: grid.ny(),
+            z: grid.samples(),
+        },
+        r,
+    )?;
+    // The leaf's prism field 2T·g(d_P/R), d_xy = R − clearance of the grid's rectangle.
+    let rect = grid.extent();
+    let dz = h.prism_z();
+    b.primitive(
+        Shape::Prism {
+            min: (rect.min + r).extend(dz.lo),
+            max: (rect.max - r).extend(dz.hi),
+        },
+        Profile::Wyvill {
+            radius: r,
+            energy: 2.0 * T,
+        },
+    );
+    b.combine(Combine::Intersection)
+}
