@@ -4,6 +4,9 @@
 //! both combine with skeletal primitives through blend, carve and warp nodes. The compiled
 //! [`field`] tree is the single thing the mesher and the tracers consume.
 
+// `!(a < b)` is how this crate says "not less, or NaN": the negation is the point.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod cli;
 pub mod curves;
 pub mod dem;

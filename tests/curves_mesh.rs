@@ -73,7 +73,7 @@ fn components(m: &Mesh) -> Vec<Component> {
             volume,
         })
         .collect();
-    out.sort_unstable_by(|a, b| b.triangles.cmp(&a.triangles));
+    out.sort_unstable_by_key(|m| std::cmp::Reverse(m.triangles));
     out
 }
 

@@ -222,14 +222,6 @@ impl Interval {
         0.5 * (self.lo + self.hi)
     }
 
-    /// Interval sum.
-    pub fn add(self, o: Interval) -> Self {
-        Interval {
-            lo: self.lo + o.lo,
-            hi: self.hi + o.hi,
-        }
-    }
-
     /// Interval scaled by a constant.
     pub fn scale(self, k: f32) -> Self {
         Interval::new(self.lo * k, self.hi * k)
@@ -240,20 +232,6 @@ impl Interval {
         Interval {
             lo: self.lo + k,
             hi: self.hi + k,
-        }
-    }
-
-    /// Interval product.
-    pub fn mul(self, o: Interval) -> Self {
-        let c = [
-            self.lo * o.lo,
-            self.lo * o.hi,
-            self.hi * o.lo,
-            self.hi * o.hi,
-        ];
-        Interval {
-            lo: c.iter().copied().fold(f32::INFINITY, f32::min),
-            hi: c.iter().copied().fold(f32::NEG_INFINITY, f32::max),
         }
     }
 
@@ -401,5 +379,35 @@ impl ZBands {
     /// True when `z` is inside some band.
     pub fn contains(&self, z: f32) -> bool {
         self.bands.iter().any(|b| b.contains(z))
+    }
+}
+
+impl std::ops::Add for Interval {
+    type Output = Interval;
+
+    /// Interval sum.
+    fn add(self, o: Interval) -> Self {
+        Interval {
+            lo: self.lo + o.lo,
+            hi: self.hi + o.hi,
+        }
+    }
+}
+
+impl std::ops::Mul for Interval {
+    type Output = Interval;
+
+    /// Interval product.
+    fn mul(self, o: Interval) -> Self {
+        let c = [
+            self.lo * o.lo,
+            self.lo * o.hi,
+            self.hi * o.lo,
+            self.hi * o.hi,
+        ];
+        Interval {
+            lo: c.iter().copied().fold(f32::INFINITY, f32::min),
+            hi: c.iter().copied().fold(f32::NEG_INFINITY, f32::max),
+        }
     }
 }

@@ -43,7 +43,7 @@ impl Tree {
             Node::Leaf(f) => f.interval(b),
             Node::Blend { children, bvh } => {
                 let mut sum = Interval::ZERO;
-                self.blend_children_in(children, bvh, b, |c| sum = sum.add(self.interval_at(c, b)));
+                self.blend_children_in(children, bvh, b, |c| sum = sum + self.interval_at(c, b));
                 sum
             }
             Node::Union(children) => children

@@ -177,7 +177,7 @@ impl TreeBuilder {
                     .fold(Aabb::EMPTY, |b, c| b.union(info(c).support));
                 let range = children
                     .iter()
-                    .fold(Interval::ZERO, |r, c| r.add(info(c).range));
+                    .fold(Interval::ZERO, |r, c| r + info(c).range);
                 // ∇ of a sum is the sum of the gradients of the children non-zero at a point.
                 let slopes: Vec<(Aabb, f32)> = children
                     .iter()

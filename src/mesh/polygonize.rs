@@ -576,8 +576,9 @@ impl<'f> Ctx<'_, 'f> {
                     let d = (k - ka) as usize;
                     let p: [usize; 8] = std::array::from_fn(|c| q0[c & 3] + d + (c >> 2));
                     debug_assert!(
-                        (0..8).all(|c| cursors[c & 3].find(k + (c >> 2) as u32).map(|x| x.0)
-                            == Some(p[c])),
+                        (0..8)
+                            .all(|c| cursors[c & 3].find(k + (c >> 2) as u32).map(|x| x.0)
+                                == Some(p[c])),
                         "cell ({i}, {j}, {k}): corner samples not consecutive"
                     );
                     let v: [f32; 8] = p.map(|q| values[q] - T);

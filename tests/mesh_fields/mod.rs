@@ -212,7 +212,7 @@ impl Field for Blobs {
     fn interval(&self, b: &Aabb) -> Interval {
         self.0.iter().fold(Interval::ZERO, |acc, &(c, r, e)| {
             let d = dist_range(b, c);
-            acc.add(wyvill_interval(Interval::new(d.lo / r, d.hi / r)).scale(e))
+            acc + wyvill_interval(Interval::new(d.lo / r, d.hi / r)).scale(e)
         })
     }
     fn lipschitz(&self) -> f32 {
@@ -344,7 +344,7 @@ impl Field for CavedTerrain {
             .iter()
             .fold(self.ground.interval(b), |acc, &(c, r)| {
                 let d = dist_range(b, c);
-                acc.add(wyvill_interval(Interval::new(d.lo / r, d.hi / r)).scale(-1.0))
+                acc + wyvill_interval(Interval::new(d.lo / r, d.hi / r)).scale(-1.0)
             })
     }
     fn lipschitz(&self) -> f32 {

@@ -61,6 +61,7 @@ fn no_encoding(tree: &Tree, id: NodeId, kind: &str, why: &str) -> GpuError {
 fn emit(tree: &Tree, b: &mut TapeBuilder, id: NodeId) -> Result<(), GpuError> {
     match &tree.nodes()[id as usize] {
         Node::Constant(v) => b.constant(*v),
+        Node::Primitive(p) => primitive(tree, b, id, p)?,
         Node::Leaf(f) => leaf(tree, b, id, f.as_ref())?,
         Node::Blend { children, bvh } => {
             if bvh.is_some() {

@@ -391,7 +391,7 @@ impl TapeBuilder {
                 op::BLEND,
                 Entry {
                     support: a.support.union(b.support),
-                    range: a.range.add(b.range),
+                    range: a.range + b.range,
                 },
             ),
             Combine::Union => (
