@@ -9,7 +9,7 @@ use indicatif::ProgressBar;
 use crate::field::{Aabb, Field, Tree};
 use crate::io::progress;
 use crate::mesh::export::{self, ExportOptions};
-use crate::mesh::{GridSpec, MeshOptions, MeshStats, polygonize};
+use crate::mesh::{GridSpec, Mesh, MeshOptions, MeshStats, polygonize};
 use crate::render::{Camera, Frame, Method, RenderSettings, cpu};
 use crate::scene::{self, SceneFile};
 
@@ -38,6 +38,8 @@ pub struct JobReport {
     pub mesh_path: PathBuf,
     /// The preview image, if rendered.
     pub image_path: Option<PathBuf>,
+    /// The mesh that was written.
+    pub mesh: Mesh,
     /// Mesher statistics.
     pub mesh_stats: MeshStats,
     /// `(stage, duration)` in order.
@@ -137,6 +139,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         cell,
         mesh_path,
         image_path,
+        mesh,
         mesh_stats,
         stages,
         notices: compiled.notices,

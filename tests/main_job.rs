@@ -1,12 +1,19 @@
 //! Issue 7: the bundled default scene has an open tunnel cave, a free-standing arch and a
 //! grotto, and the main job writes a valid mesh and image.
 
-use glam::Vec3;
-use karstic::field::{Field, T, Tree};
+mod gltf_validator;
+
+use glam::{Vec2, Vec3};
+use karstic::dem::HeightfieldField;
+use karstic::field::{Aabb, Field, T, Tree};
+use karstic::job::{JobOptions, JobReport};
+use karstic::render::Ray;
+use karstic::render::raycast::MeshRaycaster;
+
+const SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/trees/jacksboro_caves.ron");
 
 fn tree() -> Tree {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/trees/jacksboro_caves.ron");
-    karstic::scene::load(path).unwrap().compile().unwrap().tree
+    karstic::scene::load(SCENE).unwrap().compile().unwrap().tree
 }
 
 fn crossings(t: &Tree, from: Vec3, to: Vec3, n: usize) -> usize {
@@ -42,7 +49,7 @@ fn default_scene_has_an_open_tunnel_an_arch_and_a_grotto() {
         assert!(t.value(p) < T, "rock in the tunnel at {p}");
     }
     // That axis does run inside the hill: rock above it.
-    assert!(t.value(Vec3::new(3480.0, 4972.0, 900.0)) > T);
+    assert!(t.value(Vec3::new(3480.0, 4972.0, 886.0)) > T);
     // A horizontal ray under the arch's span, between the ground and the arch.
     for i in 0..=200 {
         let p = Vec3::new(4594.0, 4950.0, 642.0)
@@ -67,4 +74,127 @@ fn default_scene_has_an_open_tunnel_an_arch_and_a_grotto() {
         3000,
     );
     assert!(g >= 3, "the grotto makes an overhang: {g} crossings");
+}
+
+/// The job's mesh: the main job without its preview.
+fn job(dir: &std::path::Path) -> JobReport {
+    let opts = JobOptions {
+        out_dir: dir.to_path_buf(),
+        full: false,
+        no_render: true,
+        quiet: true,
+    };
+    karstic::job::run(std::path::Path::new(SCENE), &opts).unwrap()
+}
+
+/// Every crossing of the mesh along `ray` up to `t_max` (distances, ascending).
+fn hits(mesh: &MeshRaycaster, ray: Ray, t_max: f32) -> Vec<f32> {
+    let mut out = Vec::new();
+    let mut t0 = 0.0;
+    while let Some(t) = mesh.first_hit(&Ray {
+        origin: ray.at(t0),
+        dir: ray.dir,
+    }) {
+        let t = t0 + t;
+        if t > t_max {
+            break;
+        }
+        out.push(t);
+        t0 = t + 1e-3;
+    }
+    out
+}
+
+#[test]
+fn main_job_mesh_is_watertight_valid_caved_and_on_the_dem() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = job(dir.path());
+    let (region, cell) = (r.region, r.cell);
+    // Watertight inside the region: the only open edges lie on the box's faces.
+    let topo = r
+        .mesh
+        .check_topology(Some((&region, 1e-3 * cell)))
+        .unwrap_or_else(|e| panic!("the job's mesh is not watertight: {e}"));
+    assert!(topo.faces > 100_000, "{topo:?}");
+    gltf_validator::assert_valid(&r.mesh_path);
+
+    let positions: Vec<Vec3> = r.mesh.positions.iter().map(|&p| p.into()).collect();
+    let caster = MeshRaycaster::new(&positions, &r.mesh.triangles);
+    // A vertical line through the tunnel's inner end crosses the mesh at the ground, the
+    // upper chamber's roof and floor, the tunnel's ceiling and floor.
+    let down = Ray {
+        origin: Vec3::new(3470.0, 4980.0, region.max.z - 1.0),
+        dir: Vec3::NEG_Z,
+    };
+    let z: Vec<f32> = hits(&caster, down, region.size().z)
+        .iter()
+        .map(|&t| down.at(t).z)
+        .collect();
+    assert!(
+        z.len() >= 4,
+        "the vertical line crosses the mesh at z = {z:?}"
+    );
+    // Along the tunnel's axis from the air in front of the mouth: no face for its length.
+    let (mouth, inner) = (
+        Vec3::new(3800.0, 4950.0, 863.0),
+        Vec3::new(3480.0, 4972.0, 867.0),
+    );
+    let axis = Ray {
+        origin: mouth,
+        dir: (inner - mouth).normalize(),
+    };
+    let blocked = hits(&caster, axis, mouth.distance(inner));
+    assert!(
+        blocked.is_empty(),
+        "the tunnel's axis meets the mesh at {blocked:?}"
+    );
+    // Under the arch: a horizontal ray between the ground and the span meets nothing.
+    let (a, b) = (
+        Vec3::new(4594.0, 4950.0, 642.0),
+        Vec3::new(4690.0, 4950.0, 642.0),
+    );
+    let under = Ray {
+        origin: a,
+        dir: (b - a).normalize(),
+    };
+    assert!(
+        hits(&caster, under, a.distance(b)).is_empty(),
+        "rock under the arch"
+    );
+
+    // Away from the features, the vertices lie on the DEM's surface (its bicubic
+    // interpolant, as the tree defines it) within 1% of a cell.
+    let t = &r.tree;
+    let dem = t.nodes()[t.find("dem").unwrap() as usize]
+        .leaf()
+        .and_then(|f| f.as_any())
+        .and_then(|a| a.downcast_ref::<HeightfieldField>())
+        .expect("the dem node is a heightfield");
+    let features: Vec<Aabb> = ["arch_clip", "cave", "grotto", "chamber"]
+        .iter()
+        .map(|n| t.info(t.find(n).unwrap()).support.dilate(2.0 * cell))
+        .collect();
+    let mut checked = 0;
+    let mut worst = 0.0f32;
+    for p in &positions {
+        if features.iter().any(|b| b.contains(*p)) {
+            continue;
+        }
+        // Vertices on the region's faces close the surface there, not the DEM.
+        if (0..3)
+            .any(|k| (p[k] - region.min[k]).abs() < 1e-2 || (p[k] - region.max[k]).abs() < 1e-2)
+        {
+            continue;
+        }
+        worst = worst.max((p.z - dem.height(Vec2::new(p.x, p.y))).abs());
+        checked += 1;
+    }
+    assert!(
+        checked > 50_000,
+        "{checked} vertices away from the features"
+    );
+    assert!(
+        worst <= 0.01 * cell,
+        "a vertex lies {worst} m off the DEM's surface (cell {cell} m)"
+    );
 }

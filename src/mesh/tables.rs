@@ -3,7 +3,8 @@
 //! Instead of the classic hand-written 256-entry table (whose complementary cases crack
 //! across shared faces), the triangulation of every case is *derived*: on each of the six
 //! faces the corner signs give one or two iso-segments, the segments chain into closed
-//! loops on the cube's surface, and each loop becomes a triangle fan. A face with four
+//! loops on the cube's surface, and each loop is triangulated without a diagonal inside a
+//! face (see [`triangulate`]). A face with four
 //! crossings (two diagonal solid corners) is ambiguous; the caller decides it with the
 //! asymptotic decider ([`crate::mesh::cell::ambiguity_mask`]) and passes one bit per
 //! ambiguous face, so every case has `2^n` variants for its `n ≤ 6` ambiguous faces.
@@ -217,6 +218,7 @@ fn variant_triangles(case: usize, ambiguous: &[u8], mask: usize) -> Vec<[u8; 3]>
         next[a as usize] = b;
         incoming[b as usize] += 1;
     }
+    let ambiguous_faces = ambiguous.iter().fold(0u8, |m, &f| m | 1 << f);
     let mut tris = Vec::new();
     let mut seen = [false; 12];
     for start in 0..12u8 {
@@ -235,11 +237,80 @@ fn variant_triangles(case: usize, ambiguous: &[u8], mask: usize) -> Vec<[u8; 3]>
             lp.push(e);
             e = next[e as usize];
         }
-        for i in 1..lp.len() - 1 {
-            tris.push([lp[0], lp[i], lp[i + 1]]);
+        if !triangulate(&lp, ambiguous_faces, &mut tris) {
+            panic!("case {case} mask {mask}: loop {lp:?} has no triangulation off the faces");
         }
     }
     tris
+}
+
+/// Bit `f` set when edge `e` lies on face `f`.
+fn edge_faces(e: u8) -> u8 {
+    let [a, b] = EDGE_CORNERS[e as usize];
+    (0..6)
+        .filter(|&f| FACE_CORNERS[f].contains(&a) && FACE_CORNERS[f].contains(&b))
+        .fold(0, |m, f| m | 1 << f)
+}
+
+/// True when a diagonal joining the vertices on edges `a` and `b` may be drawn inside a cell,
+/// given its faces with four crossings (`ambiguous`, a face mask).
+///
+/// Two vertices of one face are either a loop segment (the face has two crossings) or, on
+/// a face with four crossings, may be joined by a diagonal lying in that face. If the
+/// cells on both sides of the face drew the same diagonal, its edge would have four
+/// triangles (a non-manifold mesh: seen on a noisy carve, where a plain fan ran the same
+/// diagonal across a face from both cells). So the diagonals of a face are split between
+/// its two cells: the cell below the face (for which it is an upper face) draws those
+/// that touch the face's first edge (between its corners 0 and 1 of [`FACE_CORNERS`],
+/// the same grid edge seen from both cells), the cell above draws the others.
+fn diagonal_allowed(a: u8, b: u8, ambiguous: u8) -> bool {
+    let shared = edge_faces(a) & edge_faces(b) & ambiguous;
+    if shared == 0 {
+        return true;
+    }
+    let f = shared.trailing_zeros() as usize;
+    let [c0, c1, ..] = FACE_CORNERS[f];
+    let first = edge_between(c0, c1);
+    let touches_first = a == first || b == first;
+    let upper = f % 2 == 1;
+    touches_first == upper
+}
+
+/// Triangulates the loop `lp` (edge ids, in order) into `out` with diagonals allowed by
+/// [`diagonal_allowed`]. Returns false when there is no such triangulation (never, for
+/// the cube's loops: the tests build every variant).
+fn triangulate(lp: &[u8], ambiguous: u8, out: &mut Vec<[u8; 3]>) -> bool {
+    let n = lp.len();
+    // `ok(i, j)`: `lp[i]`–`lp[j]` may be a triangle side (a loop segment or a diagonal off
+    // the faces).
+    let ok = |i: usize, j: usize| {
+        let d = i.abs_diff(j);
+        d == 1 || d == n - 1 || diagonal_allowed(lp[i], lp[j], ambiguous)
+    };
+    // Triangulates the sub-polygon `lp[i..=j]` closed by the side `i`–`j`.
+    fn sub(
+        lp: &[u8],
+        i: usize,
+        j: usize,
+        ok: &dyn Fn(usize, usize) -> bool,
+        out: &mut Vec<[u8; 3]>,
+    ) -> bool {
+        if j - i < 2 {
+            return true;
+        }
+        let mark = out.len();
+        for k in i + 1..j {
+            if ok(i, k) && ok(k, j) {
+                out.push([lp[i], lp[k], lp[j]]);
+                if sub(lp, i, k, ok, out) && sub(lp, k, j, ok, out) {
+                    return true;
+                }
+                out.truncate(mark);
+            }
+        }
+        false
+    }
+    sub(lp, 0, n - 1, &ok, out)
 }
 
 fn build() -> Tables {
@@ -317,6 +388,79 @@ mod tests {
                 assert_eq!(used, c.edges, "case {case} mask {mask}");
             }
         }
+    }
+
+    /// Sides drawn by two triangles of `case`/`mask` (diagonals) with both ends on face
+    /// `f`, as pairs of the face's local corner indices `(i, j)` of [`FACE_CORNERS`].
+    fn face_diagonals(case: usize, mask: usize, f: usize) -> Vec<[(usize, usize); 2]> {
+        let local = |e: u8| {
+            let [a, b] = EDGE_CORNERS[e as usize];
+            let q = FACE_CORNERS[f];
+            let (i, j) = (
+                q.iter().position(|&c| c == a),
+                q.iter().position(|&c| c == b),
+            );
+            i.zip(j).map(|(i, j)| (i.min(j), i.max(j)))
+        };
+        let tris = TABLES.triangles(case, mask);
+        let sides: Vec<(u8, u8)> = tris
+            .iter()
+            .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+            .map(|(a, b)| (a.min(b), a.max(b)))
+            .collect();
+        let mut out: Vec<[(usize, usize); 2]> = sides
+            .iter()
+            .filter(|&&s| sides.iter().filter(|&&t| t == s).count() == 2)
+            .filter_map(|&(a, b)| Some([local(a)?, local(b)?]))
+            .map(|mut d| {
+                d.sort();
+                d
+            })
+            .collect();
+        out.dedup();
+        out
+    }
+
+    #[test]
+    fn cells_sharing_a_face_never_draw_the_same_diagonal_in_it() {
+        let solid = |case: usize, c: u8| case >> c & 1 == 1;
+        let mut shared_ambiguous = 0;
+        for axis in 0..3 {
+            let (up, down) = (2 * axis + 1, 2 * axis);
+            for a in 0..256 {
+                for b in 0..256 {
+                    let same = (0..4)
+                        .all(|i| solid(a, FACE_CORNERS[up][i]) == solid(b, FACE_CORNERS[down][i]));
+                    let (ca, cb) = (TABLES.cases[a], TABLES.cases[b]);
+                    let slot = |c: Case, f: usize| {
+                        c.ambiguous[..c.n_ambiguous as usize]
+                            .iter()
+                            .position(|&g| g as usize == f)
+                    };
+                    let (Some(sa), Some(sb)) = (slot(ca, up), slot(cb, down)) else {
+                        continue;
+                    };
+                    if !same {
+                        continue;
+                    }
+                    shared_ambiguous += 1;
+                    for ma in 0..1usize << ca.n_ambiguous {
+                        for mb in 0..1usize << cb.n_ambiguous {
+                            // Both cells decide the shared face the same way.
+                            if (ma >> sa & 1) != (mb >> sb & 1) {
+                                continue;
+                            }
+                            let (da, db) = (face_diagonals(a, ma, up), face_diagonals(b, mb, down));
+                            assert!(
+                                da.iter().all(|d| !db.contains(d)),
+                                "cases {a}/{b} masks {ma}/{mb}: both draw {da:?} / {db:?}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        assert!(shared_ambiguous > 0);
     }
 
     #[test]
