@@ -76,15 +76,25 @@ fn default_scene_has_an_open_tunnel_an_arch_and_a_grotto() {
     assert!(g >= 3, "the grotto makes an overhang: {g} crossings");
 }
 
-/// The job's mesh: the main job without its preview.
-fn job(dir: &std::path::Path) -> JobReport {
+/// The job's mesh: the main job without its preview (`full`: the whole DEM at the coarse
+/// cell size).
+fn job(dir: &std::path::Path, full: bool) -> JobReport {
     let opts = JobOptions {
         out_dir: dir.to_path_buf(),
-        full: false,
+        full,
         no_render: true,
         quiet: true,
     };
     karstic::job::run(std::path::Path::new(SCENE), &opts).unwrap()
+}
+
+/// The tree's DEM leaf.
+fn dem_of(t: &Tree) -> &HeightfieldField {
+    t.nodes()[t.find("dem").unwrap() as usize]
+        .leaf()
+        .and_then(|f| f.as_any())
+        .and_then(|a| a.downcast_ref::<HeightfieldField>())
+        .expect("the dem node is a heightfield")
 }
 
 /// Every crossing of the mesh along `ray` up to `t_max` (distances, ascending).
@@ -108,7 +118,7 @@ fn hits(mesh: &MeshRaycaster, ray: Ray, t_max: f32) -> Vec<f32> {
 #[test]
 fn main_job_mesh_is_watertight_valid_caved_and_on_the_dem() {
     let dir = tempfile::tempdir().unwrap();
-    let r = job(dir.path());
+    let r = job(dir.path(), false);
     let (region, cell) = (r.region, r.cell);
     // Watertight inside the region: the only open edges lie on the box's faces.
     let topo = r
@@ -165,11 +175,7 @@ fn main_job_mesh_is_watertight_valid_caved_and_on_the_dem() {
     // Away from the features, the vertices lie on the DEM's surface (its bicubic
     // interpolant, as the tree defines it) within 1% of a cell.
     let t = &r.tree;
-    let dem = t.nodes()[t.find("dem").unwrap() as usize]
-        .leaf()
-        .and_then(|f| f.as_any())
-        .and_then(|a| a.downcast_ref::<HeightfieldField>())
-        .expect("the dem node is a heightfield");
+    let dem = dem_of(t);
     let features: Vec<Aabb> = ["arch_clip", "cave", "grotto", "chamber"]
         .iter()
         .map(|n| t.info(t.find(n).unwrap()).support.dilate(2.0 * cell))
@@ -196,5 +202,39 @@ fn main_job_mesh_is_watertight_valid_caved_and_on_the_dem() {
     assert!(
         worst <= 0.01 * cell,
         "a vertex lies {worst} m off the DEM's surface (cell {cell} m)"
+    );
+}
+
+#[test]
+fn full_extent_job_meshes_the_whole_dem_watertight() {
+    let dir = tempfile::tempdir().unwrap();
+    let r = job(dir.path(), true);
+    assert_eq!(r.cell, 15.0, "the job's full_cell");
+    assert!(r.mesh_path.ends_with("jacksboro_caves_full.glb"));
+    // The region is the tree's support: the whole 128 × 128 DEM at 90 m, to within the
+    // heightfield's 30 m falloff at its sides.
+    let b = r.mesh.bounds();
+    let side = 127.0 * 90.0;
+    assert!(b.min.x <= 30.0 && b.min.y <= 30.0, "{b:?}");
+    assert!(b.max.x >= side - 30.0 && b.max.y >= side - 30.0, "{b:?}");
+    r.mesh
+        .check_topology(Some((&r.region, 1e-3 * r.cell)))
+        .unwrap_or_else(|e| panic!("the full-extent mesh is not watertight: {e}"));
+    // The features are in it: at mid-span the mesh's top is the arch (a 14 m beam, not
+    // resolved into top and underside at 15 m cells), well above the DEM's surface.
+    let positions: Vec<Vec3> = r.mesh.positions.iter().map(|&p| p.into()).collect();
+    let caster = MeshRaycaster::new(&positions, &r.mesh.triangles);
+    let top = Vec3::new(4630.0, 4950.0, 1000.0);
+    let t = caster
+        .first_hit(&Ray {
+            origin: top,
+            dir: Vec3::NEG_Z,
+        })
+        .expect("the mesh covers mid-span");
+    let ground = dem_of(&r.tree).height(Vec2::new(top.x, top.y));
+    assert!(
+        top.z - t > ground + 40.0,
+        "mid-span: the mesh's top at {} m, the DEM at {ground} m",
+        top.z - t
     );
 }
