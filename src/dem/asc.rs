@@ -6,11 +6,9 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use glam::Vec2;
-
 use super::georef::{Crs, Georef, RasterType};
 use super::geotiff::{finish_samples, read_file, reorder};
-use super::{Dem, DemError, Heightfield, ReadOptions, check_grid_size};
+use super::{Dem, DemError, ReadOptions, check_grid_size};
 
 /// Reads an ESRI ASCII grid, and its `.prj` when there is one.
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<Dem, DemError> {
@@ -215,23 +213,7 @@ pub fn read_bytes(
             raster_type: RasterType::PixelIsArea,
         },
     };
-    let [cx, cy] = georef.cell_size_m();
-    let heightfield = Heightfield::new(
-        h.ncols,
-        h.nrows,
-        Vec2::ZERO,
-        Vec2::new(cx as f32, cy as f32),
-        z,
-    )
-    .map_err(|e| DemError::Malformed {
-        path: path.to_path_buf(),
-        what: e.to_string(),
-    })?;
-    Ok(Dem {
-        heightfield,
-        georef,
-        notices,
-    })
+    Dem::new(path, h.ncols, h.nrows, z, georef, notices)
 }
 
 /// The CRS kind and the metres per linear unit of a WKT 1 `.prj`.

@@ -10,12 +10,11 @@
 use std::io::Cursor;
 use std::path::Path;
 
-use glam::Vec2;
 use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::tags::Tag;
 
 use super::georef::{Crs, Georef, RasterType};
-use super::{Dem, DemError, Heightfield, ReadOptions, check_grid_size};
+use super::{Dem, DemError, ReadOptions, check_grid_size};
 
 /// GeoKey ids used here (GeoTIFF 1.0 §6).
 pub(crate) mod key {
@@ -263,14 +262,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Dem, 
     dec.read_image_to_buffer(&mut data).map_err(tiff_err)?;
     let samples = to_f32(path, data, nx, ny, nodata)?;
     let z = reorder(&samples, nx, ny, flip_x, flip_y);
-    let [dx, dy] = georef.cell_size_m();
-    let hf = Heightfield::new(nx, ny, Vec2::ZERO, Vec2::new(dx as f32, dy as f32), z)
-        .map_err(|e| malformed(e.to_string()))?;
-    Ok(Dem {
-        heightfield: hf,
-        georef,
-        notices,
-    })
+    Dem::new(path, nx, ny, z, georef, notices)
 }
 
 /// Reorders file samples (row 0 first) into the grid's south-first, west-first order:

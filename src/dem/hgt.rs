@@ -4,11 +4,9 @@
 
 use std::path::Path;
 
-use glam::Vec2;
-
 use super::georef::{Georef, RasterType};
 use super::geotiff::{finish_samples, read_file, reorder};
-use super::{Dem, DemError, Heightfield, ReadOptions};
+use super::{Dem, DemError, ReadOptions};
 
 /// The void value of SRTM tiles.
 const VOID: i16 = -32768;
@@ -51,17 +49,7 @@ pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Dem, 
         RasterType::PixelIsPoint,
     );
     let notices = georef.degrees_notice(n).into_iter().collect();
-    let [dx, dy] = georef.cell_size_m();
-    let heightfield = Heightfield::new(n, n, Vec2::ZERO, Vec2::new(dx as f32, dy as f32), z)
-        .map_err(|e| DemError::Malformed {
-            path: path.to_path_buf(),
-            what: e.to_string(),
-        })?;
-    Ok(Dem {
-        heightfield,
-        georef,
-        notices,
-    })
+    Dem::new(path, n, n, z, georef, notices)
 }
 
 /// `(latitude, longitude)` of a tile's south-west corner from its name, e.g. `S12E130.hgt`.

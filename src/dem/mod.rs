@@ -54,6 +54,34 @@ pub struct Dem {
     pub notices: Vec<String>,
 }
 
+impl Dem {
+    /// A DEM read from `path`: `nx × ny` samples `z` (south row first, west first) on the
+    /// georeference's cells, in the local frame with its south-west sample at the origin.
+    /// A grid the samples do not fill is [`DemError::Malformed`], naming the file.
+    pub fn new(
+        path: &std::path::Path,
+        nx: usize,
+        ny: usize,
+        z: Vec<f32>,
+        georef: Georef,
+        notices: Vec<String>,
+    ) -> Result<Dem, DemError> {
+        let [dx, dy] = georef.cell_size_m();
+        let cell = glam::Vec2::new(dx as f32, dy as f32);
+        let heightfield = Heightfield::new(nx, ny, glam::Vec2::ZERO, cell, z).map_err(|e| {
+            DemError::Malformed {
+                path: path.to_path_buf(),
+                what: e.to_string(),
+            }
+        })?;
+        Ok(Dem {
+            heightfield,
+            georef,
+            notices,
+        })
+    }
+}
+
 /// Options shared by every reader.
 #[derive(Clone, Debug)]
 pub struct ReadOptions {

@@ -10,13 +10,12 @@
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
-use glam::Vec2;
 use image::{ExtendedColorType, ImageDecoder, ImageEncoder, ImageFormat, ImageReader};
 use serde_json::{Value, json};
 
 use super::georef::{Crs, Georef, RasterType};
 use super::geotiff::{finish_samples, read_file, reorder};
-use super::{Dem, DemError, Heightfield, ReadOptions, check_grid_size};
+use super::{Dem, DemError, ReadOptions, check_grid_size};
 
 /// How raw PNG values map to elevations: `raw[0] ↦ z[0]`, `raw[1] ↦ z[1]`, linear between.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -200,17 +199,7 @@ pub fn read_bytes(
             Georef::local(c, c)
         }
     };
-    let [cx, cy] = georef.cell_size_m();
-    let heightfield = Heightfield::new(nx, ny, Vec2::ZERO, Vec2::new(cx as f32, cy as f32), z)
-        .map_err(|e| DemError::Malformed {
-            path: path.to_path_buf(),
-            what: e.to_string(),
-        })?;
-    Ok(Dem {
-        heightfield,
-        georef,
-        notices,
-    })
+    Dem::new(path, nx, ny, z, georef, notices)
 }
 
 /// What a sidecar says.
