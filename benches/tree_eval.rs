@@ -3,7 +3,9 @@
 //! * a blend of 100,000 small spheres scattered over a 5 km square: point queries
 //!   (≥ 10 M/s on 2 cores) and a 256³ grid (≥ 40 M values/s);
 //! * the 1,000-point blob scene of `trees/blobs.ron` over a 256³ grid;
-//!   with the naive, unpruned per-point evaluation as the baseline in the same run.
+//!   with the naive, unpruned per-point evaluation as the baseline in the same run;
+//! * point queries one by one (`Field::value` over rayon chunks) and batched
+//!   (`Tree::values`: Morton-sorted, parallel).
 
 use std::hint::black_box;
 
@@ -77,6 +79,13 @@ fn bench(c: &mut Criterion) {
                 .par_chunks(4096)
                 .map(|ch| ch.iter().map(|&p| spheres.value(p)).sum::<f32>())
                 .sum::<f32>()
+        })
+    });
+    let mut out = vec![0.0; n];
+    g.bench_function("uniform_in_box_batched", |b| {
+        b.iter(|| {
+            spheres.values(&uniform, &mut out);
+            black_box(&out);
         })
     });
     g.finish();

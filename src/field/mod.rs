@@ -4,6 +4,7 @@
 //! arena ([`Tree`], [`node`]), and the evaluators (point values and gradients in `eval`,
 //! box bounds in `box_bounds`, z-bands in `zband`, pruning in `prune`, grids in [`grid`]).
 
+mod batch;
 mod block;
 pub mod bounds;
 mod box_bounds;
