@@ -2,6 +2,7 @@
 //! primitive it produces ([`SField`]).
 
 pub mod diffuse;
+pub mod expand;
 pub mod extract;
 pub mod pipeline;
 pub mod propagate;
@@ -10,5 +11,6 @@ pub mod smooth;
 pub mod sparse;
 pub mod voxelize;
 
+pub use expand::{Expanded, Expansion, expand};
 pub use pipeline::{Params, Stats, Volume, run, run_cached};
 pub use sfield::{FieldParams, SField};

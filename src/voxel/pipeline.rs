@@ -50,6 +50,9 @@ pub struct Params {
     pub max_memory: u64,
     /// Ribbon width of curves that set none (metres).
     pub ribbon: f32,
+    /// Keep the diffused guidance normals N in the result ([`Volume::normals`]), e.g.
+    /// for Feature Curve expansion.
+    pub keep_normals: bool,
 }
 
 /// Guidance ribbons reach at least this many voxels of each level (see
@@ -176,6 +179,9 @@ pub struct Volume {
     pub beta: Vec<Vec<f32>>,
     /// Bounds per level and brick.
     pub bounds: Vec<Vec<BrickBounds>>,
+    /// The diffused guidance normals N per level, with [`Params::keep_normals`] (empty
+    /// otherwise).
+    pub normals: Vec<Vec<Vec3>>,
     /// Statistics.
     pub stats: Stats,
 }
@@ -491,13 +497,21 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
         .iter()
         .map(|r| r.iter().map(|v| v.y).collect())
         .collect();
+    let normals: Vec<Vec<Vec3>> = if p.keep_normals {
+        n_ch.drain(first..).collect()
+    } else {
+        Vec::new()
+    };
     drop((n_ch, b_ch, r_ch));
     let bounds = (0..levels.len())
         .map(|l| brick_bounds(&levels[l], &s[l], &alpha[l], &beta[l]))
         .collect();
     stats.field_bytes = levels
         .iter()
-        .map(|b| b.len() as u64 * BRICK_NODES as u64 * 12 + b.overhead_bytes())
+        .map(|b| {
+            let per_node = if p.keep_normals { 24 } else { 12 };
+            b.len() as u64 * BRICK_NODES as u64 * per_node + b.overhead_bytes()
+        })
         .sum();
     stats.times.finish += clock.elapsed();
     Ok(Volume {
@@ -506,6 +520,7 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
         alpha,
         beta,
         bounds,
+        normals,
         stats,
     })
 }

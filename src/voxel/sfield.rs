@@ -18,6 +18,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
+use super::expand::Expanded;
 use super::pipeline::{BrickBounds, Stats, Volume};
 use super::sparse::{BRICK, Bricks, locate, trilinear_grad};
 use crate::curves::Orientation;
@@ -64,6 +65,8 @@ pub struct SField {
     lip_noise: f32,
     /// `max |α·fbm|`.
     noise_amp: f32,
+    /// The curves Feature Curve expansion added before the run that made this field.
+    expanded: Option<Arc<Expanded>>,
 }
 
 fn hull(a: &BrickBounds, b: &BrickBounds) -> BrickBounds {
@@ -119,7 +122,21 @@ impl SField {
             lip_s,
             lip_noise,
             noise_amp,
+            expanded: None,
         }
+    }
+
+    /// This field, recording the expansion whose curves its run included.
+    pub fn with_expansion(self, e: Expanded) -> Self {
+        SField {
+            expanded: Some(Arc::new(e)),
+            ..self
+        }
+    }
+
+    /// The curves Feature Curve expansion (§4.5) added, when the volume asked for it.
+    pub fn expanded(&self) -> Option<&Expanded> {
+        self.expanded.as_deref()
     }
 
     /// True when there was no seed primitive: the field is 0 everywhere.
@@ -151,6 +168,20 @@ impl SField {
     /// the noise displacement); `f`'s bound is this times `σ`'s slope.
     pub fn s_lipschitz(&self) -> f32 {
         self.lip_s + self.lip_noise
+    }
+
+    /// The diffused guidance normal N at `p` (clamped to the domain), when the run kept
+    /// them ([`super::Params::keep_normals`]); not normalised between nodes.
+    pub fn guidance_normal(&self, p: Vec3) -> Option<Vec3> {
+        if self.vol.normals.is_empty() {
+            return None;
+        }
+        let q = self.params.domain.clamp(p);
+        Some(super::sparse::sample(
+            &self.vol.levels,
+            &self.vol.normals,
+            q,
+        ))
     }
 
     /// `S'(p)`: the displaced surface field at `p` clamped to the domain (`+∞` when empty).
