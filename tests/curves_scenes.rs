@@ -208,6 +208,10 @@ fn riverbed() {
 #[test]
 fn hill() {
     let s = scene("hill");
+    assert_eq!(
+        s.leaf.params().interpolation,
+        karstic::voxel::Interpolation::Tricubic
+    );
     s.assert_surface_through_seeds();
     s.assert_constraint_normals(20.0);
     let top = |x: f32, y: f32| {

@@ -31,7 +31,7 @@ use crate::field::Aabb;
 use crate::field::Fbm;
 use crate::field::noise::{Octaves, mix32};
 use crate::scene::{Dir3, Finite, NonNegative, P3, Positive, Unit};
-use crate::voxel::{Expansion, FieldParams, Params, SField, expand, run_cached};
+use crate::voxel::{Expansion, FieldParams, Interpolation, Params, SField, expand, run_cached};
 
 /// A point: absolute, or anchored to the ground.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -338,6 +338,9 @@ pub struct FeatureVolumeSpec {
     /// Feature Curve expansion (none by default).
     #[serde(default)]
     pub expansion: Option<ExpansionSpec>,
+    /// Interpolation of S between the voxel nodes (trilinear by default).
+    #[serde(default)]
+    pub interpolation: Interpolation,
 }
 
 /// Reads a RON file with the tree files' options (`Some` implicit, newtype variants
@@ -628,6 +631,7 @@ impl FeatureVolumeSpec {
             transition: self.transition.map_or(2.0 * h, |t| t.0),
             falloff: self.falloff.map_or(4.0 * h, |t| t.0),
             fbm: self.noise.fbm(seed),
+            interpolation: self.interpolation,
         };
         (p, f)
     }

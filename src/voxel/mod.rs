@@ -9,8 +9,10 @@ pub mod propagate;
 pub mod sfield;
 pub mod smooth;
 pub mod sparse;
+pub mod tricubic;
 pub mod voxelize;
 
 pub use expand::{Expanded, Expansion, expand};
 pub use pipeline::{Params, Stats, Volume, run, run_cached};
 pub use sfield::{FieldParams, SField};
+pub use tricubic::Interpolation;
