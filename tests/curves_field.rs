@@ -9,7 +9,7 @@ use std::path::Path;
 use glam::Vec3;
 use karstic::curves::{FeatureVolumeSpec, Features, Orientation};
 use karstic::field::{Aabb, Field, Interval, Rect, T, ZBands};
-use karstic::voxel::{SField, run};
+use karstic::voxel::{Interpolation, SField, run};
 
 fn load(name: &str) -> (FeatureVolumeSpec, Features) {
     let l = curves_util::load(name);
@@ -19,7 +19,12 @@ fn load(name: &str) -> (FeatureVolumeSpec, Features) {
 /// The ridge with noise that varies along the crest (amplitude 0 → 2.5 m, roughness
 /// 0.05 → 0.2 /m): the displacement and its bounds are exercised.
 fn noisy_ridge() -> SField {
-    let (spec, mut f) = load("ridge");
+    noisy_ridge_with(Interpolation::Trilinear)
+}
+
+fn noisy_ridge_with(interpolation: Interpolation) -> SField {
+    let (mut spec, mut f) = load("ridge");
+    spec.interpolation = interpolation;
     for c in &mut f.curves {
         for (k, cp) in c.constraints.iter_mut().enumerate() {
             cp.amplitude = 2.5 * k as f32;
@@ -148,14 +153,10 @@ fn check_soundness(f: &SField, seed: u64, loose: f32) {
     }
 }
 
-#[test]
-fn bounds_are_sound_with_noise() {
-    let f = noisy_ridge();
-    assert!(f.stats().levels.len() >= 3);
-    check_soundness(&f, 1, 100.0);
-    // The displaced S' itself (not only σ(S'), which saturates away from the surface)
-    // obeys the widened bound on close and far pairs inside the domain.
-    let (mut rng, dom, ls) = (Rng(5), f.support().dilate(-0.5), f.s_lipschitz());
+/// `S'` obeys [`SField::s_lipschitz`] on close and far pairs inside the domain; returns
+/// the largest slope seen.
+fn check_s_slope(f: &SField, seed: u64) -> f32 {
+    let (mut rng, dom, ls) = (Rng(seed), f.support().dilate(-0.5), f.s_lipschitz());
     let mut seen = 0.0f32;
     for i in 0..20_000 {
         let a = rng.point(&dom);
@@ -174,6 +175,49 @@ fn bounds_are_sound_with_noise() {
         );
     }
     eprintln!("S' slope seen {seen:.2}, bound {ls:.2}");
+    seen
+}
+
+/// `S'` over random small boxes anywhere in the domain (also where σ saturates and
+/// `check_soundness` cannot see S): the values lie in [`SField::s_interval`] and pairs obey
+/// [`SField::s_lipschitz_box`].
+fn check_s_boxes(f: &SField, seed: u64) {
+    let mut rng = Rng(seed);
+    let h = f.params().voxel;
+    let dom = f.support();
+    for _ in 0..3000 {
+        let b = Aabb::around(rng.point(&dom), h * (0.3 + 2.0 * rng.f()));
+        let (iv, lb) = (f.s_interval(&b), f.s_lipschitz_box(&b));
+        let b = b.intersection(dom);
+        let mut prev: Option<(Vec3, f32)> = None;
+        for _ in 0..40 {
+            let p = rng.point(&b);
+            let v = f.s_value(p);
+            assert!(
+                iv.contains(v),
+                "S interval {iv:?} misses {v} at {p} in {b:?}"
+            );
+            if let Some((q, w)) = prev {
+                let d = p.distance(q).max(1e-6);
+                assert!(
+                    (v - w).abs() <= lb * d * (1.0 + 1e-4) + 1e-5,
+                    "S box Lipschitz {lb} broken in {b:?}: {}",
+                    (v - w).abs() / d
+                );
+            }
+            prev = Some((p, v));
+        }
+    }
+}
+
+#[test]
+fn bounds_are_sound_with_noise() {
+    let f = noisy_ridge();
+    assert!(f.stats().levels.len() >= 3);
+    check_soundness(&f, 1, 100.0);
+    // The displaced S' itself (not only σ(S'), which saturates away from the surface)
+    // obeys the widened bound on close and far pairs inside the domain.
+    let seen = check_s_slope(&f, 5);
     assert!(
         seen > 1.0,
         "the noise steepens S' beyond its unit distance slope"
@@ -195,6 +239,95 @@ fn bounds_are_sound_on_a_carving_tunnel() {
     check_soundness(&f, 2, 5.0);
     // Air orientation: the tunnel's inside is the solid of the carving field.
     assert!(f.value(feats.tunnels[0].path.eval(0.5)) > T);
+}
+
+/// A scene of `trees/curves/` with tricubic interpolation, and with trilinear.
+fn tricubic(name: &str) -> (SField, SField) {
+    let (mut spec, f) = load(name);
+    let lin = spec.build_features(&f, 0, 1 << 32).unwrap();
+    spec.interpolation = Interpolation::Tricubic;
+    (spec.build_features(&f, 0, 1 << 32).unwrap(), lin)
+}
+
+#[test]
+fn tricubic_bounds_are_sound() {
+    let (f, lin) = tricubic("overhang");
+    check_soundness(&f, 11, 5.0);
+    check_s_slope(&f, 12);
+    check_s_boxes(&f, 16);
+    check_s_boxes(&lin, 17);
+    eprintln!(
+        "S Lipschitz bound: tricubic {:.2}, trilinear {:.2}",
+        f.s_lipschitz(),
+        lin.s_lipschitz()
+    );
+    // Intervals of S' over small boxes where the blend is on contain the sampled values
+    // (the σ of `check_soundness` saturates away from the surface).
+    let mut rng = Rng(13);
+    let dom = f.support().dilate(-3.0);
+    for _ in 0..400 {
+        let b = Aabb::around(rng.point(&dom), 0.5 + 3.0 * rng.f());
+        let iv = f.interval(&b);
+        for _ in 0..40 {
+            let p = rng.point(&b);
+            assert!(iv.contains(f.value(p)));
+        }
+    }
+    // With the noise displacement, on the ridge.
+    let g = noisy_ridge_with(Interpolation::Tricubic);
+    check_soundness(&g, 14, 100.0);
+    check_s_slope(&g, 15);
+    check_s_boxes(&g, 18);
+}
+
+#[test]
+fn tricubic_interpolates_the_nodes_and_is_smooth() {
+    let (f, lin) = tricubic("overhang");
+    let fine = f.levels().last().unwrap().geom;
+    let mut rng = Rng(21);
+    let (mut differ, mut n) = (0, 0);
+    for _ in 0..4000 {
+        // At the nodes both interpolants take the node values.
+        let g = (Vec3::new(rng.f(), rng.f(), rng.f()) * (fine.dims - 1).as_vec3()).floor();
+        let p = fine.origin + g * fine.h;
+        let (a, b) = (f.s_value(p), lin.s_value(p));
+        assert!(
+            (a - b).abs() < 1e-4 * (1.0 + b.abs()),
+            "{a} vs {b} at node {p}"
+        );
+        // Between them they differ near the surface, where S bends.
+        let q = p + Vec3::new(0.5, 0.3, 0.6) * fine.h;
+        if lin.s_value(q).abs() < 2.0 * fine.h {
+            n += 1;
+            differ += ((f.s_value(q) - lin.s_value(q)).abs() > 1e-4) as usize;
+        }
+    }
+    assert!(
+        n > 50 && differ * 2 > n,
+        "tricubic differs at {differ} of {n}"
+    );
+    // C¹: the gradient does not jump across cell faces near the surface (trilinear's does).
+    let jumps = |f: &SField| {
+        let mut rng = Rng(22);
+        let mut j = Vec::new();
+        while j.len() < 300 {
+            let g = (Vec3::new(rng.f(), rng.f(), rng.f()) * (fine.dims - 1).as_vec3()).floor();
+            let p = fine.origin + (g + Vec3::new(0.0, rng.f(), rng.f())) * fine.h;
+            if f.s_value(p).abs() > 2.0 * fine.h || !f.support().dilate(-8.0).contains(p) {
+                continue;
+            }
+            let e = 1e-3 * fine.h;
+            let (a, b) = (f.s_grad(p - Vec3::X * e).1, f.s_grad(p + Vec3::X * e).1);
+            j.push((a - b).length());
+        }
+        j.sort_by(f32::total_cmp);
+        j[j.len() * 9 / 10]
+    };
+    let (jc, jl) = (jumps(&f), jumps(&lin));
+    eprintln!(
+        "90th percentile of the gradient jumps across x faces: tricubic {jc:.2e}, trilinear {jl:.2e}"
+    );
+    assert!(jc * 20.0 < jl, "tricubic {jc} vs trilinear {jl}");
 }
 
 #[test]

@@ -280,6 +280,7 @@ fn every_scene_meshes_to_one_closed_piece() {
         "riverbed",
         "hill",
         "serpentine",
+        "expansion",
     ] {
         let (mesh, l) = meshed(name);
         assert_eq!(genus(&mesh, l.spec.voxel.0), 0, "{name}");

@@ -208,6 +208,10 @@ fn riverbed() {
 #[test]
 fn hill() {
     let s = scene("hill");
+    assert_eq!(
+        s.leaf.params().interpolation,
+        karstic::voxel::Interpolation::Tricubic
+    );
     s.assert_surface_through_seeds();
     s.assert_constraint_normals(20.0);
     let top = |x: f32, y: f32| {
@@ -297,6 +301,80 @@ fn arch_without_ground_stands_in_air() {
         let q = p + (d.center() - p).signum() * 8.0;
         assert!(leaf.value(q) < T, "air at {q}");
     }
+}
+
+/// Feature Curve expansion (§4.5): the crest's ends are continued through the first
+/// run's guidance field, tangent-continuous, the east one up to the saddle curve and the
+/// west one to the domain's face; the second run puts the surface through the
+/// continuations, which extends the ridge: where the first run's surface fell away beyond
+/// the crest's ends, the continuations were in the air.
+#[test]
+fn feature_curve_expansion() {
+    let s = scene("expansion");
+    s.assert_surface_through_seeds();
+    let h = s.h();
+    let e = s.leaf.expanded().expect("the expansion ran");
+    let first = FeatureVolumeSpec {
+        expansion: None,
+        ..s.spec.clone()
+    }
+    .build_features(&s.features, 7, 1 << 32)
+    .unwrap();
+    let (crest, saddle) = (&s.features.curves[0], &s.features.curves[1]);
+    let from = |t: f32| {
+        let end = crest.sample(t);
+        let c = e
+            .curves
+            .iter()
+            .find(|c| c.spline.eval(0.0).distance(end.pos) < 1e-4)
+            .expect("both ends of the crest are continued");
+        let v = if t == 0.0 { -end.tangent } else { end.tangent };
+        let turn = c.spline.tangent(0.0).dot(v).acos().to_degrees();
+        assert!(turn < 20.0, "the continuation turns by {turn}°");
+        c
+    };
+    let (west, east) = (from(0.0), from(1.0));
+    for c in [west, east] {
+        let above = (0..=100)
+            .map(|i| first.s_value(c.spline.eval(i as f32 / 100.0)))
+            .fold(f32::MIN, f32::max);
+        assert!(
+            above > 2.0 * h,
+            "the first run's surface fell away: {above}"
+        );
+    }
+    for c in &e.curves {
+        assert!(c.spline.length(64) <= 60.0 + 2.0 * h);
+        for i in 0..=100 {
+            let p = c.spline.eval(i as f32 / 100.0);
+            assert!(
+                s.leaf.s_value(p).abs() < h,
+                "the second run misses a continuation at {p}: S = {}",
+                s.leaf.s_value(p)
+            );
+        }
+    }
+    let saddle_dist = |p: Vec3| {
+        (0..=200)
+            .map(|i| saddle.spline.eval(i as f32 / 200.0).distance(p))
+            .fold(f32::MAX, f32::min)
+    };
+    let east_end = east.spline.eval(1.0);
+    let stop = 4.0 * h;
+    assert!(
+        saddle_dist(east_end) >= stop && saddle_dist(east_end) < stop + 2.5 * h,
+        "the east continuation stops at the saddle: {east_end}, {} m from it",
+        saddle_dist(east_end)
+    );
+    let west_end = west.spline.eval(1.0);
+    let inner = s.leaf.params().domain.min.x + s.leaf.params().falloff + h;
+    assert!(
+        west_end.x < inner + 2.0 * h,
+        "the west continuation runs to the domain's face: {west_end}"
+    );
+    // The continuations are seeds of the second run.
+    let seeds = |f: &SField| f.stats().levels.last().unwrap().seeds;
+    assert!(seeds(&s.leaf) > seeds(&first));
 }
 
 #[test]

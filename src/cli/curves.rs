@@ -171,6 +171,17 @@ fn build(args: BuildArgs) -> anyhow::Result<()> {
     }
     if args.stats {
         print_stats(field.stats(), elapsed.as_secs_f64() * 1e3);
+        if let Some(e) = field.expanded() {
+            println!(
+                "expansion (§4.5): {} curves, {} control vertices, traced in {:.1} ms (the stats above are of the second run)",
+                e.curves.len(),
+                e.curves
+                    .iter()
+                    .map(|c| c.spline.control().len())
+                    .sum::<usize>(),
+                e.trace_time.as_secs_f64() * 1e3
+            );
+        }
     }
     for out in &args.output {
         if out

@@ -31,7 +31,7 @@ use crate::field::Aabb;
 use crate::field::Fbm;
 use crate::field::noise::{Octaves, mix32};
 use crate::scene::{Dir3, Finite, NonNegative, P3, Positive, Unit};
-use crate::voxel::{FieldParams, Params, SField, run_cached};
+use crate::voxel::{Expansion, FieldParams, Interpolation, Params, SField, expand, run_cached};
 
 /// A point: absolute, or anchored to the ground.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -283,6 +283,23 @@ impl SurfaceNoiseSpec {
     }
 }
 
+/// Feature Curve expansion (seed 000 §4.5): `expansion: (length: 40)`. Each end of every
+/// seed Feature Curve is continued along the surface of a first run, for at most `length`
+/// metres or until it comes within `stop` of another curve; the pipeline then runs again
+/// with the continuations as seed curves.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExpansionSpec {
+    /// Longest continuation of each end (metres).
+    pub length: Positive,
+    /// Spacing of the continuation's control vertices (default 2 voxels).
+    #[serde(default)]
+    pub step: Option<Positive>,
+    /// Distance to another curve at which a continuation stops (default 4 voxels).
+    #[serde(default)]
+    pub stop: Option<Positive>,
+}
+
 /// A tree node: Feature Curves compiled by the voxel pipeline into an S-field primitive.
 /// Written `FeatureVolume(..)` in RON.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -318,6 +335,12 @@ pub struct FeatureVolumeSpec {
     /// Noise settings.
     #[serde(default)]
     pub noise: SurfaceNoiseSpec,
+    /// Feature Curve expansion (none by default).
+    #[serde(default)]
+    pub expansion: Option<ExpansionSpec>,
+    /// Interpolation of S between the voxel nodes (trilinear by default).
+    #[serde(default)]
+    pub interpolation: Interpolation,
 }
 
 /// Reads a RON file with the tree files' options (`Some` implicit, newtype variants
@@ -599,6 +622,7 @@ impl FeatureVolumeSpec {
             propagation: self.propagation,
             max_memory,
             ribbon: self.ribbon_width(),
+            keep_normals: false,
         };
         let f = FieldParams {
             domain,
@@ -607,6 +631,7 @@ impl FeatureVolumeSpec {
             transition: self.transition.map_or(2.0 * h, |t| t.0),
             falloff: self.falloff.map_or(4.0 * h, |t| t.0),
             fbm: self.noise.fbm(seed),
+            interpolation: self.interpolation,
         };
         (p, f)
     }
@@ -656,8 +681,31 @@ impl FeatureVolumeSpec {
         max_memory: u64,
     ) -> Result<SField, CurveError> {
         let (p, f) = self.params(seed, max_memory);
-        let (vol, _) = run_cached(features, &p)?;
-        Ok(SField::new(vol, f))
+        let Some(e) = &self.expansion else {
+            let (vol, _) = run_cached(features, &p)?;
+            return Ok(SField::new(vol, f));
+        };
+        // The first run keeps its guidance normals for tracing.
+        let first = Params {
+            keep_normals: true,
+            ..p.clone()
+        };
+        let (vol, _) = run_cached(features, &first)?;
+        let field = SField::new(vol, f);
+        let h = self.voxel.0;
+        let expansion = Expansion {
+            length: e.length.0,
+            step: e.step.map_or(2.0 * h, |s| s.0),
+            stop: e.stop.map_or(4.0 * h, |s| s.0),
+        };
+        let grown = expand(features, &field, &expansion);
+        if grown.curves.is_empty() {
+            return Ok(field.with_expansion(grown));
+        }
+        let mut all = features.clone();
+        all.curves.extend(grown.curves.iter().cloned());
+        let (vol, _) = run_cached(&all, &p)?;
+        Ok(SField::new(vol, f).with_expansion(grown))
     }
 }
 

@@ -48,9 +48,9 @@ pub const FACES: [(isize, usize, i32); 6] = [
 /// Runs Jacobi sweeps of `update` over the non-`fixed` nodes of `data`, in the bricks
 /// marked in `active` (all bricks when `active` is empty; the others keep their values).
 ///
-/// `update(pad, aux_pad, i, g)` gets brick copies with a one-node halo of `data` and
-/// `aux` (empty `aux` is not gathered), the padded index `i` of the node and its global
-/// coordinates `g`; it returns the node's new value. `change` measures a node's update;
+/// `update(pad, aux_pad, i, g, k)` gets brick copies with a one-node halo of `data` and
+/// `aux` (empty `aux` is not gathered), the padded index `i` of the node, its global
+/// coordinates `g` and its data index `k`; it returns the node's new value. `change` measures a node's update;
 /// returns the number of sweeps run.
 #[allow(clippy::too_many_arguments)]
 pub fn jacobi<T, A>(
@@ -60,7 +60,7 @@ pub fn jacobi<T, A>(
     aux: &[A],
     fixed: &[bool],
     sweeps: Sweeps,
-    update: impl Fn(&[T], &[A], usize, IVec3) -> T + Sync,
+    update: impl Fn(&[T], &[A], usize, IVec3, usize) -> T + Sync,
     change: impl Fn(T, T) -> f32 + Sync,
 ) -> u32
 where
@@ -107,8 +107,8 @@ where
                                 out[l] = if fixed[i] {
                                     src[i]
                                 } else {
-                                    let v =
-                                        update(pt, pa, padded(x, y, z), base + IVec3::new(x, y, z));
+                                    let g = base + IVec3::new(x, y, z);
+                                    let v = update(pt, pa, padded(x, y, z), g, i);
                                     if measure {
                                         worst = worst.max(change(v, src[i]));
                                     }
@@ -149,7 +149,7 @@ pub fn diffuse_normals(
         &[] as &[()],
         fixed,
         sweeps,
-        |p, _, i, _| {
+        |p, _, i, _, _| {
             let c = p[i];
             let c_set = c != Vec3::ZERO;
             let mut acc = Vec3::ZERO;
@@ -196,7 +196,7 @@ pub fn diffuse_bitangents(
         &[] as &[()],
         fixed,
         sweeps,
-        |p, _, i, _| {
+        |p, _, i, _, _| {
             let pair = |o: usize| avg(p[i + o], p[i - o]);
             let v = avg(avg(pair(1), pair(PAD * PAD)), pair(PAD));
             if v == Vec3::ZERO { p[i] } else { v }
@@ -220,7 +220,7 @@ pub fn diffuse_noise(
         &[] as &[()],
         fixed,
         sweeps,
-        |p, _, i, _| {
+        |p, _, i, _, _| {
             let mut acc = Vec2::ZERO;
             for (o, _, _) in FACES {
                 acc += p[(i as isize + o) as usize];

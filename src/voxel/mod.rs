@@ -2,13 +2,17 @@
 //! primitive it produces ([`SField`]).
 
 pub mod diffuse;
+pub mod expand;
 pub mod extract;
 pub mod pipeline;
 pub mod propagate;
 pub mod sfield;
 pub mod smooth;
 pub mod sparse;
+pub mod tricubic;
 pub mod voxelize;
 
+pub use expand::{Expanded, Expansion, expand};
 pub use pipeline::{Params, Stats, Volume, run, run_cached};
 pub use sfield::{FieldParams, SField};
+pub use tricubic::Interpolation;

@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use super::diffuse::{Sweeps, diffuse_bitangents, diffuse_noise, diffuse_normals};
 use super::propagate::{relax, streamlines, waves};
 use super::smooth::smooth;
-use super::sparse::{BRICK, BRICK_NODES, Bricks, LevelGeom, prolong};
+use super::sparse::{BRICK, BRICK_NODES, Bricks, LevelGeom, local, prolong};
 use super::voxelize::{Constraint, voxelize};
 use crate::curves::{CurveError, Features, Propagation};
 use crate::field::Aabb;
@@ -50,6 +50,9 @@ pub struct Params {
     pub max_memory: u64,
     /// Ribbon width of curves that set none (metres).
     pub ribbon: f32,
+    /// Keep the diffused guidance normals N in the result ([`Volume::normals`]), e.g.
+    /// for Feature Curve expansion.
+    pub keep_normals: bool,
 }
 
 /// Guidance ribbons reach at least this many voxels of each level (see
@@ -176,6 +179,9 @@ pub struct Volume {
     pub beta: Vec<Vec<f32>>,
     /// Bounds per level and brick.
     pub bounds: Vec<Vec<BrickBounds>>,
+    /// The diffused guidance normals N per level, with [`Params::keep_normals`] (empty
+    /// otherwise).
+    pub normals: Vec<Vec<Vec3>>,
     /// Statistics.
     pub stats: Stats,
 }
@@ -491,13 +497,21 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
         .iter()
         .map(|r| r.iter().map(|v| v.y).collect())
         .collect();
+    let normals: Vec<Vec<Vec3>> = if p.keep_normals {
+        n_ch.drain(first..).collect()
+    } else {
+        Vec::new()
+    };
     drop((n_ch, b_ch, r_ch));
     let bounds = (0..levels.len())
         .map(|l| brick_bounds(&levels[l], &s[l], &alpha[l], &beta[l]))
         .collect();
     stats.field_bytes = levels
         .iter()
-        .map(|b| b.len() as u64 * BRICK_NODES as u64 * 12 + b.overhead_bytes())
+        .map(|b| {
+            let per_node = if p.keep_normals { 24 } else { 12 };
+            b.len() as u64 * BRICK_NODES as u64 * per_node + b.overhead_bytes()
+        })
         .sum();
     stats.times.finish += clock.elapsed();
     Ok(Volume {
@@ -506,6 +520,7 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
         alpha,
         beta,
         bounds,
+        normals,
         stats,
     })
 }
@@ -585,6 +600,7 @@ fn active_bricks(bricks: &Bricks, at: &[(usize, &Constraint)]) -> Vec<bool> {
 /// Ranges and slopes of the channels per brick.
 fn brick_bounds(bricks: &Bricks, s: &[f32], alpha: &[f32], beta: &[f32]) -> Vec<BrickBounds> {
     let g = bricks.geom;
+    const STRIDE: [usize; 3] = [1, BRICK as usize, (BRICK * BRICK) as usize];
     (0..bricks.len())
         .into_par_iter()
         .map(|b| {
@@ -594,35 +610,42 @@ fn brick_bounds(bricks: &Bricks, s: &[f32], alpha: &[f32], beta: &[f32]) -> Vec<
                 beta: [f32::INFINITY, f32::NEG_INFINITY],
                 ..Default::default()
             };
-            let (mut ga, mut gb) = (Vec3::ZERO, Vec3::ZERO);
-            for k in 0..BRICK_NODES {
-                let i = b * BRICK_NODES + k;
-                let c = bricks.node_coord(i);
-                if !g.contains(c) {
-                    continue;
-                }
-                let grow = |r: &mut [f32; 2], v: f32| *r = [r[0].min(v), r[1].max(v)];
-                grow(&mut out.s, s[i]);
-                grow(&mut out.alpha, alpha[i]);
-                grow(&mut out.beta, beta[i]);
-                let l = c & 7;
-                for a in 0..3 {
-                    let mut e = IVec3::ZERO;
-                    e[a] = 1;
-                    let next = if l[a] < BRICK - 1 {
-                        Some(i + [1, 8, 64][a])
-                    } else {
-                        bricks.node(c + e)
-                    };
-                    if let Some(j) = next.filter(|_| g.contains(c + e)) {
-                        out.grad_s[a] = out.grad_s[a].max((s[j] - s[i]).abs() / g.h);
-                        ga[a] = ga[a].max((alpha[j] - alpha[i]).abs() / g.h);
-                        gb[a] = gb[a].max((beta[j] - beta[i]).abs() / g.h);
+            let base = bricks.coords()[b] * BRICK;
+            // The brick's nodes inside the domain.
+            let lim = (g.dims - base).min(IVec3::splat(BRICK));
+            let (mut gs, mut ga, mut gb) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
+            let grow = |r: &mut [f32; 2], v: f32| *r = [r[0].min(v), r[1].max(v)];
+            for z in 0..lim.z {
+                for y in 0..lim.y {
+                    for x in 0..lim.x {
+                        let l = IVec3::new(x, y, z);
+                        let i = b * BRICK_NODES + local(l);
+                        grow(&mut out.s, s[i]);
+                        grow(&mut out.alpha, alpha[i]);
+                        grow(&mut out.beta, beta[i]);
+                        for a in 0..3 {
+                            // The edge to the next node along the axis, inside the domain.
+                            let next = if l[a] < lim[a] - 1 {
+                                Some(i + STRIDE[a])
+                            } else if base[a] + l[a] + 1 < g.dims[a] {
+                                let mut e = IVec3::ZERO;
+                                e[a] = 1;
+                                bricks.node(base + l + e)
+                            } else {
+                                None
+                            };
+                            if let Some(j) = next {
+                                gs[a] = gs[a].max((s[j] - s[i]).abs());
+                                ga[a] = ga[a].max((alpha[j] - alpha[i]).abs());
+                                gb[a] = gb[a].max((beta[j] - beta[i]).abs());
+                            }
+                        }
                     }
                 }
             }
-            out.grad_alpha = ga.length();
-            out.grad_beta = gb.length();
+            out.grad_s = gs / g.h;
+            out.grad_alpha = ga.length() / g.h;
+            out.grad_beta = gb.length() / g.h;
             out
         })
         .collect()

@@ -13,11 +13,11 @@
 //!
 //! S is positive on the normals' side (the air) and negative behind them (the solid).
 
-use glam::Vec3;
+use glam::{IVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::diffuse::{FACES, Sweeps, jacobi};
-use super::sparse::{BRICK, BRICK_NODES, Bricks, PAD_NODES, padded};
+use super::sparse::{BRICK, BRICK_NODES, Bricks, PAD, PAD_NODES, padded};
 
 /// Runs distance-propagation waves on `s`. `wave[i]` is 0 for unset nodes and the wave
 /// that set the node plus one otherwise (seeds: 1); rim nodes are never set. Stops after
@@ -116,6 +116,10 @@ pub fn waves(bricks: &Bricks, s: &mut [f32], wave: &mut [u16], n: &[Vec3], max_w
 
 /// Jacobi sweeps of the local distance model averaged over the in-domain face
 /// neighbours, with relaxation factor 0.85, on the non-`fixed` nodes.
+///
+/// A node's update is `(1 − ω) S + ω · mean over its neighbours q of (S_q + (p − q)·N̄)`
+/// with `N̄` the normal half-way between the nodes. N does not change during the sweeps, so
+/// the normal terms and the neighbour counts are computed once per node.
 pub fn relax(
     bricks: &Bricks,
     active: &[bool],
@@ -124,37 +128,86 @@ pub fn relax(
     fixed: &[bool],
     sweeps: Sweeps,
 ) -> u32 {
-    let h = bricks.geom.h;
     let dims = bricks.geom.dims;
-    const OMEGA: f32 = 0.85;
+    let coef = relax_coefficients(bricks, active, n, fixed);
     jacobi(
         bricks,
         active,
         s,
-        n,
+        &[] as &[()],
         fixed,
         sweeps,
-        |ps, pn, i, g| {
-            let mut acc = 0.0;
-            let mut cnt = 0.0;
-            for (o, axis, dir) in FACES {
-                let ga = g[axis] + dir;
-                if ga < 0 || ga >= dims[axis] {
-                    continue;
-                }
-                let q = (i as isize + o) as usize;
-                // The normal interpolated half-way between the two nodes.
-                acc += ps[q] - dir as f32 * h * 0.5 * (pn[i][axis] + pn[q][axis]);
-                cnt += 1.0;
-            }
-            if cnt == 0.0 {
-                ps[i]
+        |ps, _, i, g, k| {
+            let c = coef[k];
+            let sum = if g.cmpgt(IVec3::ZERO).all() && g.cmplt(dims - IVec3::ONE).all() {
+                ps[i - 1]
+                    + ps[i + 1]
+                    + ps[i - PAD]
+                    + ps[i + PAD]
+                    + ps[i - PAD * PAD]
+                    + ps[i + PAD * PAD]
             } else {
-                (1.0 - OMEGA) * ps[i] + OMEGA * acc / cnt
-            }
+                let mut acc = 0.0;
+                for (o, axis, dir) in FACES {
+                    let ga = g[axis] + dir;
+                    if ga >= 0 && ga < dims[axis] {
+                        acc += ps[(i as isize + o) as usize];
+                    }
+                }
+                acc
+            };
+            (1.0 - OMEGA) * ps[i] + c.y * sum + c.x
         },
         |a, b| (a - b).abs(),
     )
+}
+
+/// Relaxation factor of [`relax`].
+const OMEGA: f32 = 0.85;
+
+/// Per node of the swept bricks, `(ω · Σ (p − q)·N̄ / count, ω / count)` over its
+/// in-domain face neighbours `q` (zero for fixed nodes and those without neighbours).
+fn relax_coefficients(bricks: &Bricks, active: &[bool], n: &[Vec3], fixed: &[bool]) -> Vec<Vec2> {
+    let h = bricks.geom.h;
+    let dims = bricks.geom.dims;
+    let mut coef = vec![Vec2::ZERO; n.len()];
+    coef.par_chunks_mut(BRICK_NODES).enumerate().for_each_init(
+        || vec![Vec3::ZERO; PAD_NODES],
+        |pn, (b, out)| {
+            if !active.is_empty() && !active[b] {
+                return;
+            }
+            bricks.gather(n, b, pn);
+            let base = bricks.coords()[b] * BRICK;
+            let mut l = 0;
+            for z in 0..BRICK {
+                for y in 0..BRICK {
+                    for x in 0..BRICK {
+                        let (k, g) = (b * BRICK_NODES + l, base + IVec3::new(x, y, z));
+                        l += 1;
+                        if fixed[k] {
+                            continue;
+                        }
+                        let i = padded(x, y, z);
+                        let (mut acc, mut cnt) = (0.0, 0.0);
+                        for (o, axis, dir) in FACES {
+                            let ga = g[axis] + dir;
+                            if ga < 0 || ga >= dims[axis] {
+                                continue;
+                            }
+                            let q = (i as isize + o) as usize;
+                            acc -= dir as f32 * h * 0.5 * (pn[i][axis] + pn[q][axis]);
+                            cnt += 1.0;
+                        }
+                        if cnt > 0.0 {
+                            out[l - 1] = Vec2::new(OMEGA * acc / cnt, OMEGA / cnt);
+                        }
+                    }
+                }
+            }
+        },
+    );
+    coef
 }
 
 /// Streamline propagation (§4.6.1, Algorithm 4.2): from every seed node, a curve is
@@ -235,7 +288,6 @@ pub fn seed_count(wave: &[u16]) -> usize {
 mod tests {
     use super::*;
     use crate::voxel::sparse::LevelGeom;
-    use glam::IVec3;
 
     #[test]
     fn waves_reproduce_the_distance_to_a_tilted_plane() {

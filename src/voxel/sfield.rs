@@ -17,9 +17,12 @@
 use std::sync::Arc;
 
 use glam::Vec3;
+use rayon::prelude::*;
 
+use super::expand::Expanded;
 use super::pipeline::{BrickBounds, Stats, Volume};
-use super::sparse::{BRICK, Bricks, locate, trilinear_grad};
+use super::sparse::{BRICK, Bricks, NONE, locate, trilinear_grad};
+use super::tricubic::{Cubic, CubicBounds, Interpolation};
 use crate::curves::Orientation;
 use crate::field::falloff::{
     T, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope, wyvill,
@@ -43,6 +46,8 @@ pub struct FieldParams {
     /// The displacement noise, evaluated at `β·(p − domain.min)`: wavelength 1 there, so
     /// β is the first octave's frequency (1/m).
     pub fbm: Fbm,
+    /// Interpolation of S between the nodes.
+    pub interpolation: Interpolation,
 }
 
 /// `max |fbm|`: the shared fBm is normalised to `[−1, 1]` (proven in `field::noise`).
@@ -64,6 +69,10 @@ pub struct SField {
     lip_noise: f32,
     /// `max |α·fbm|`.
     noise_amp: f32,
+    /// The curves Feature Curve expansion added before the run that made this field.
+    expanded: Option<Arc<Expanded>>,
+    /// The finest level's tricubic blend, with [`Interpolation::Tricubic`].
+    cubic: Option<Arc<Cubic>>,
 }
 
 fn hull(a: &BrickBounds, b: &BrickBounds) -> BrickBounds {
@@ -96,6 +105,36 @@ fn noise_lipschitz(params: &FieldParams, b: &BrickBounds, reach: f32) -> f32 {
     b.grad_alpha * a + b.alpha[1].max(0.0) * l * (b.beta[1].max(0.0) + reach * b.grad_beta)
 }
 
+/// Bounds of `S'` over a box.
+struct SBox {
+    range: Interval,
+    lip: f32,
+}
+
+/// `max |∇S|` with the tricubic blend on the finest level: per finest brick, the blend's
+/// bounds over the bricks its cells' stencils reach (its 26 neighbours and itself); the
+/// coarser levels' trilinear slopes.
+fn cubic_lipschitz(vol: &Volume, level_bounds: &[BrickBounds], c: &Cubic) -> f32 {
+    let last = vol.levels.len() - 1;
+    let fine = &vol.levels[last];
+    let coarse = level_bounds[..last]
+        .iter()
+        .fold(EMPTY_BOUNDS, |a, x| hull(&a, x))
+        .grad_s
+        .length();
+    (0..fine.len())
+        .into_par_iter()
+        .map(|b| {
+            let (mut bb, mut cb) = (EMPTY_BOUNDS, CubicBounds::EMPTY);
+            for &k in fine.neighbours(b).iter().filter(|&&k| k != NONE) {
+                bb = hull(&bb, &vol.bounds[last][k as usize]);
+                cb = cb.hull(c.brick(k as usize));
+            }
+            cb.widen(&bb, fine.geom.h).grad_s.length()
+        })
+        .reduce(|| coarse, f32::max)
+}
+
 impl SField {
     /// The field of a pipeline result.
     pub fn new(vol: Arc<Volume>, params: FieldParams) -> Self {
@@ -104,8 +143,15 @@ impl SField {
             .iter()
             .map(|b| b.iter().fold(EMPTY_BOUNDS, |a, x| hull(&a, x)))
             .collect();
+        let cubic = match (params.interpolation, vol.levels.last(), vol.s.last()) {
+            (Interpolation::Tricubic, Some(b), Some(s)) => Some(Arc::new(Cubic::new(b, s))),
+            _ => None,
+        };
         let all = level_bounds.iter().fold(EMPTY_BOUNDS, |a, x| hull(&a, x));
-        let lip_s = all.grad_s.length();
+        let lip_s = match &cubic {
+            Some(c) => cubic_lipschitz(&vol, &level_bounds, c),
+            None => all.grad_s.length(),
+        };
         let noise_amp = all.alpha[1].max(0.0) * FBM_AMPLITUDE;
         let lip_noise = if noise_amp > 0.0 {
             noise_lipschitz(&params, &all, params.domain.size().length())
@@ -119,7 +165,22 @@ impl SField {
             lip_s,
             lip_noise,
             noise_amp,
+            expanded: None,
+            cubic,
         }
+    }
+
+    /// This field, recording the expansion whose curves its run included.
+    pub fn with_expansion(self, e: Expanded) -> Self {
+        SField {
+            expanded: Some(Arc::new(e)),
+            ..self
+        }
+    }
+
+    /// The curves Feature Curve expansion (§4.5) added, when the volume asked for it.
+    pub fn expanded(&self) -> Option<&Expanded> {
+        self.expanded.as_deref()
     }
 
     /// True when there was no seed primitive: the field is 0 everywhere.
@@ -144,13 +205,27 @@ impl SField {
 
     /// Bytes held by the field's grids.
     pub fn memory_bytes(&self) -> u64 {
-        self.vol.stats.field_bytes
+        self.vol.stats.field_bytes + self.cubic.as_ref().map_or(0, |c| c.bytes())
     }
 
     /// A global Lipschitz bound of `S'` (the S slopes of every brick plus the widening by
     /// the noise displacement); `f`'s bound is this times `σ`'s slope.
     pub fn s_lipschitz(&self) -> f32 {
         self.lip_s + self.lip_noise
+    }
+
+    /// The diffused guidance normal N at `p` (clamped to the domain), when the run kept
+    /// them ([`super::Params::keep_normals`]); not normalised between nodes.
+    pub fn guidance_normal(&self, p: Vec3) -> Option<Vec3> {
+        if self.vol.normals.is_empty() {
+            return None;
+        }
+        let q = self.params.domain.clamp(p);
+        Some(super::sparse::sample(
+            &self.vol.levels,
+            &self.vol.normals,
+            q,
+        ))
     }
 
     /// `S'(p)`: the displaced surface field at `p` clamped to the domain (`+∞` when empty).
@@ -165,7 +240,13 @@ impl SField {
             return (f32::INFINITY, Vec3::ZERO);
         };
         let h = self.vol.levels[l].geom.h;
-        let (s, gs) = trilinear_grad(&self.vol.s[l], &idx, f, h);
+        let mut lin = trilinear_grad(&self.vol.s[l], &idx, f, h);
+        if let Some(c) = &self.cubic
+            && l + 1 == self.vol.levels.len()
+        {
+            lin = c.eval(&self.vol.levels[l], &self.vol.s[l], &idx, f, lin);
+        }
+        let (s, gs) = lin;
         if self.noise_amp == 0.0 {
             return (s, gs);
         }
@@ -216,17 +297,22 @@ impl SField {
     }
 
     /// Bounds over the bricks whose nodes the field can read inside `b` (clamped to the
-    /// domain), across all levels.
+    /// domain), across all levels; with the tricubic blend, over its stencils too, widened.
     fn box_bounds(&self, b: &Aabb) -> BrickBounds {
         let mut acc = EMPTY_BOUNDS;
+        let mut cubic = CubicBounds::EMPTY;
+        let finest = self.vol.levels.len().saturating_sub(1);
+        // Nodes read around a point: its cell's corners, or the tricubic stencil.
+        let reach = if self.cubic.is_some() { 2.0 } else { 1.0 };
         for (l, bricks) in self.vol.levels.iter().enumerate() {
             let g = bricks.geom;
-            let lo = ((b.min - g.origin) / g.h - Vec3::ONE)
+            let tc = self.cubic.as_deref().filter(|_| l == finest);
+            let lo = ((b.min - g.origin) / g.h - Vec3::splat(reach))
                 .floor()
                 .as_ivec3()
                 .max(glam::IVec3::ZERO)
                 / BRICK;
-            let hi = ((b.max - g.origin) / g.h + Vec3::ONE)
+            let hi = ((b.max - g.origin) / g.h + Vec3::splat(reach))
                 .ceil()
                 .as_ivec3()
                 .min(g.dims - glam::IVec3::ONE)
@@ -237,20 +323,75 @@ impl SField {
                 .element_product();
             if count > MAX_QUERY_BRICKS {
                 acc = hull(&acc, &self.level_bounds[l]);
+                if let Some(c) = tc {
+                    cubic = cubic.hull(c.all());
+                }
                 continue;
             }
             for z in lo.z..=hi.z {
                 for y in lo.y..=hi.y {
                     for x in lo.x..=hi.x {
                         let k = bricks.brick(glam::IVec3::new(x, y, z));
-                        if k != super::sparse::NONE {
+                        if k != NONE {
                             acc = hull(&acc, &self.vol.bounds[l][k as usize]);
+                            if let Some(c) = tc {
+                                cubic = cubic.hull(c.brick(k as usize));
+                            }
                         }
                     }
                 }
             }
         }
-        acc
+        match self.vol.levels.last() {
+            Some(f) if self.cubic.is_some() => cubic.widen(&acc, f.geom.h),
+            _ => acc,
+        }
+    }
+
+    /// A conservative range of `S'` over `b` clamped to the domain (`b` must overlap it;
+    /// `+∞` for an empty field).
+    pub fn s_interval(&self, b: &Aabb) -> Interval {
+        if self.is_empty() {
+            return Interval::point(f32::INFINITY);
+        }
+        self.s_box(&b.intersection(self.params.domain)).range
+    }
+
+    /// A Lipschitz bound of `S'` over `b` clamped to the domain (`b` must overlap it).
+    pub fn s_lipschitz_box(&self, b: &Aabb) -> f32 {
+        if self.is_empty() {
+            return 0.0;
+        }
+        self.s_box(&b.intersection(self.params.domain)).lip
+    }
+
+    /// Range and Lipschitz bound of `S'` over `bc` (inside the domain): the brick ranges
+    /// widened by the noise, intersected with the Lipschitz bound around the centre
+    /// (tighter on small boxes); both are sound, so is their intersection.
+    fn s_box(&self, bc: &Aabb) -> SBox {
+        let bb = self.box_bounds(bc);
+        let (amp, lip_noise) = if self.noise_amp > 0.0 {
+            let reach = bc
+                .corners()
+                .iter()
+                .map(|c| c.distance(self.params.domain.min))
+                .fold(0.0, f32::max);
+            (
+                bb.alpha[1].max(0.0) * FBM_AMPLITUDE,
+                noise_lipschitz(&self.params, &bb, reach),
+            )
+        } else {
+            (0.0, 0.0)
+        };
+        let lip = bb.grad_s.length() + lip_noise;
+        let bricks = Interval::new(bb.s[0], bb.s[1]).dilate(amp);
+        let around = Interval::point(self.s_value(bc.center())).dilate(lip * bc.radius());
+        let mut s = bricks.intersect(around);
+        if s.is_empty() {
+            s = bricks;
+        }
+        let range = s.dilate(1e-5 * (1.0 + s.lo.abs().max(s.hi.abs())));
+        SBox { range, lip }
     }
 
     fn face_falloff(&self, d: f32) -> f32 {
@@ -302,33 +443,7 @@ impl Field for SField {
             return Interval::ZERO;
         }
         let bc = b.intersection(self.params.domain);
-        let bb = self.box_bounds(&bc);
-        // Brick ranges of S widened by the noise, and the Lipschitz bound around the
-        // centre (tighter on small boxes); both are sound, so is their intersection.
-        let amp = if self.noise_amp > 0.0 {
-            bb.alpha[1].max(0.0) * FBM_AMPLITUDE
-        } else {
-            0.0
-        };
-        let bricks = Interval::new(bb.s[0], bb.s[1]).dilate(amp);
-        let c = bc.center();
-        let reach = bc
-            .corners()
-            .iter()
-            .map(|c| c.distance(self.params.domain.min))
-            .fold(0.0, f32::max);
-        let lip_noise = if self.noise_amp > 0.0 {
-            noise_lipschitz(&self.params, &bb, reach)
-        } else {
-            0.0
-        };
-        let lip =
-            Interval::point(self.s_value(c)).dilate((bb.grad_s.length() + lip_noise) * bc.radius());
-        let mut s = bricks.intersect(lip);
-        if s.is_empty() {
-            s = bricks;
-        }
-        let s = s.dilate(1e-5 * (1.0 + s.lo.abs().max(s.hi.abs())));
+        let s = self.s_box(&bc).range;
         let x = if self.params.orientation == Orientation::Solid {
             s.scale(-1.0)
         } else {
@@ -359,19 +474,7 @@ impl Field for SField {
             return 0.0;
         }
         let bc = b.intersection(self.params.domain);
-        let bb = self.box_bounds(&bc);
-        let lip_noise = if self.noise_amp > 0.0 {
-            let reach = bc
-                .corners()
-                .iter()
-                .map(|c| c.distance(self.params.domain.min))
-                .fold(0.0, f32::max);
-            noise_lipschitz(&self.params, &bb, reach)
-        } else {
-            0.0
-        };
-        let ls = bb.grad_s.length() + lip_noise;
-        let s = Interval::new(bb.s[0], bb.s[1]).dilate(self.noise_amp);
+        let SBox { range: s, lip: ls } = self.s_box(&bc);
         let x = if self.params.orientation == Orientation::Solid {
             s.scale(-1.0)
         } else {

@@ -20,7 +20,7 @@ pub fn smooth(bricks: &Bricks, active: &[bool], s: &mut Vec<f32>, fixed: &[bool]
                 &[] as &[Vec3],
                 fixed,
                 Sweeps::Fixed(1),
-                |p, _, i, g| {
+                |p, _, i, g, _| {
                     if g[axis] == 0 || g[axis] == dims[axis] - 1 {
                         p[i]
                     } else {
