@@ -1,14 +1,16 @@
 //! The Feature Curve pipeline on the thesis's benchmark scene (seed 000 Table 7.1): a
 //! ridge from three curves, full pipeline with distance propagation, at 64×32×64,
 //! 128×64×128 and 256×128×256 voxels (z up here: x × y × z = 128 × 128 × 64 and so on),
-//! with and without varying noise parameters (the noise diffusion stage).
+//! with and without varying noise parameters (the noise diffusion stage); and the S-field
+//! leaf's evaluation with trilinear and tricubic interpolation.
 
 use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use karstic::curves::FeatureVolumeSpec;
+use karstic::field::Field;
 use karstic::scene::Positive;
-use karstic::voxel::run;
+use karstic::voxel::{Interpolation, run};
 
 fn ridge(c: &mut Criterion) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/curves");
@@ -38,5 +40,38 @@ fn ridge(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, ridge);
+/// `value_grad` of the ridge's leaf (128×64×128) at 100k points near its surface.
+fn interpolation(c: &mut Criterion) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/curves");
+    let file = karstic::scene::load(dir.join("ridge.ron")).unwrap();
+    let mut spec = file.feature_volumes()[0].clone();
+    let features = spec.feature_set(&dir).unwrap().resolve(&|_| None).unwrap();
+    let lin = spec.build_features(&features, 0, 8 << 30).unwrap();
+    spec.interpolation = Interpolation::Tricubic;
+    let cubic = spec.build_features(&features, 0, 8 << 30).unwrap();
+    // Points near the surface: a deterministic scatter, kept where |S| < 3 m.
+    let d = lin.params().domain;
+    let mut seed = 1u64;
+    let mut points = Vec::new();
+    while points.len() < 100_000 {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let r = |k: u32| ((seed >> (k * 21)) & 0x1f_ffff) as f32 / 0x1f_ffff as f32;
+        let p = d.min + glam::Vec3::new(r(0), r(1), r(2)) * d.size();
+        if lin.s_value(p).abs() < 3.0 {
+            points.push(p);
+        }
+    }
+    let mut g = c.benchmark_group("feature_volume_eval_100k");
+    g.sample_size(10);
+    for (label, f) in [("trilinear", &lin), ("tricubic", &cubic)] {
+        g.bench_function(label, |b| {
+            b.iter(|| points.iter().map(|&p| f.value_grad(p).0).sum::<f32>())
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, ridge, interpolation);
 criterion_main!(benches);

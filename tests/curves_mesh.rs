@@ -8,6 +8,7 @@ use std::collections::HashMap;
 
 use glam::{IVec3, Vec3};
 use karstic::mesh::{Mesh, MeshOptions};
+use karstic::voxel::voxelize::closest_on_triangle;
 
 /// The leaf of `trees/curves/NAME.ron` meshed at its voxel size, and the scene.
 fn meshed(name: &str) -> (Mesh, curves_util::Loaded) {
@@ -98,39 +99,6 @@ fn genus(m: &Mesh, h: f32) -> i64 {
     (2 - pieces[0].euler) / 2
 }
 
-/// The point of triangle `abc` closest to `p` (Ericson, Real-Time Collision Detection 5.1.5).
-fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
-    }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return b;
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return a + ab * (d1 / (d1 - d3));
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return c;
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return a + ac * (d2 / (d2 - d6));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-    }
-    let denom = 1.0 / (va + vb + vc);
-    a + ab * (vb * denom) + ac * (vc * denom)
-}
-
 /// Triangles bucketed in cubes of side `cell`, for nearest-triangle queries.
 struct Buckets<'m> {
     mesh: &'m Mesh,
@@ -170,7 +138,7 @@ impl<'m> Buckets<'m> {
                         .flatten()
                     {
                         let [a, b, cc] = self.mesh.triangles[i].map(|v| self.mesh.position(v));
-                        best = best.min(p.distance(closest_on_triangle(p, a, b, cc)));
+                        best = best.min(p.distance(closest_on_triangle(p, [a, b, cc])));
                     }
                 }
             }

@@ -48,24 +48,21 @@ pub const FACES: [(isize, usize, i32); 6] = [
 /// Runs Jacobi sweeps of `update` over the non-`fixed` nodes of `data`, in the bricks
 /// marked in `active` (all bricks when `active` is empty; the others keep their values).
 ///
-/// `update(pad, aux_pad, i, g, k)` gets brick copies with a one-node halo of `data` and
-/// `aux` (empty `aux` is not gathered), the padded index `i` of the node, its global
-/// coordinates `g` and its data index `k`; it returns the node's new value. `change` measures a node's update;
-/// returns the number of sweeps run.
-#[allow(clippy::too_many_arguments)]
-pub fn jacobi<T, A>(
+/// `update(pad, i, g, k)` gets a brick copy of `data` with a one-node halo, the padded
+/// index `i` of the node, its global coordinates `g` and its data index `k`; it returns
+/// the node's new value. `change` measures a node's update. Returns the number of sweeps
+/// run.
+pub fn jacobi<T>(
     bricks: &Bricks,
     active: &[bool],
     data: &mut Vec<T>,
-    aux: &[A],
     fixed: &[bool],
     sweeps: Sweeps,
-    update: impl Fn(&[T], &[A], usize, IVec3, usize) -> T + Sync,
+    update: impl Fn(&[T], usize, IVec3, usize) -> T + Sync,
     change: impl Fn(T, T) -> f32 + Sync,
 ) -> u32
 where
     T: Copy + Default + Send + Sync,
-    A: Copy + Default + Send + Sync,
 {
     let (max, tol) = match sweeps {
         Sweeps::Fixed(n) => (n, -1.0),
@@ -83,20 +80,12 @@ where
             .par_chunks_mut(BRICK_NODES)
             .enumerate()
             .map_init(
-                || {
-                    (
-                        vec![T::default(); PAD_NODES],
-                        vec![A::default(); if aux.is_empty() { 0 } else { PAD_NODES }],
-                    )
-                },
-                |(pt, pa), (b, out)| {
+                || vec![T::default(); PAD_NODES],
+                |pt, (b, out)| {
                     if !active.is_empty() && !active[b] {
                         return 0.0;
                     }
                     bricks.gather(&src, b, pt);
-                    if !aux.is_empty() {
-                        bricks.gather(aux, b, pa);
-                    }
                     let base = bricks.coords()[b] * BRICK;
                     let mut worst = 0.0f32;
                     let mut l = 0;
@@ -108,7 +97,7 @@ where
                                     src[i]
                                 } else {
                                     let g = base + IVec3::new(x, y, z);
-                                    let v = update(pt, pa, padded(x, y, z), g, i);
+                                    let v = update(pt, padded(x, y, z), g, i);
                                     if measure {
                                         worst = worst.max(change(v, src[i]));
                                     }
@@ -146,10 +135,9 @@ pub fn diffuse_normals(
         bricks,
         active,
         n,
-        &[] as &[()],
         fixed,
         sweeps,
-        |p, _, i, _, _| {
+        |p, i, _, _| {
             let c = p[i];
             let c_set = c != Vec3::ZERO;
             let mut acc = Vec3::ZERO;
@@ -193,10 +181,9 @@ pub fn diffuse_bitangents(
         bricks,
         active,
         b,
-        &[] as &[()],
         fixed,
         sweeps,
-        |p, _, i, _, _| {
+        |p, i, _, _| {
             let pair = |o: usize| avg(p[i + o], p[i - o]);
             let v = avg(avg(pair(1), pair(PAD * PAD)), pair(PAD));
             if v == Vec3::ZERO { p[i] } else { v }
@@ -217,10 +204,9 @@ pub fn diffuse_noise(
         bricks,
         active,
         r,
-        &[] as &[()],
         fixed,
         sweeps,
-        |p, _, i, _, _| {
+        |p, i, _, _| {
             let mut acc = Vec2::ZERO;
             for (o, _, _) in FACES {
                 acc += p[(i as isize + o) as usize];
@@ -244,19 +230,31 @@ mod tests {
         })
     }
 
+    /// A field of `b` that is zero but on the planes `x = x0` and `x = x1`, where it is
+    /// fixed to `v0` and `v1`.
+    fn two_planes<T: Copy + Default>(
+        b: &Bricks,
+        (x0, v0): (i32, T),
+        (x1, v1): (i32, T),
+    ) -> (Vec<T>, Vec<bool>) {
+        let mut v = vec![T::default(); b.len() * BRICK_NODES];
+        let mut fixed = vec![false; v.len()];
+        for i in 0..v.len() {
+            let g = b.node_coord(i);
+            if g.x == x0 {
+                (v[i], fixed[i]) = (v0, true);
+            } else if g.x == x1 {
+                (v[i], fixed[i]) = (v1, true);
+            }
+        }
+        (v, fixed)
+    }
+
     #[test]
     fn laplace_converges_to_the_linear_solution() {
         // α fixed to 0 on the plane x = 0 and 1 on x = 15: the harmonic solution is linear.
         let b = level(16);
-        let mut r = vec![Vec2::ZERO; b.len() * BRICK_NODES];
-        let mut fixed = vec![false; r.len()];
-        for i in 0..r.len() {
-            let g = b.node_coord(i);
-            if g.x == 0 || g.x == 15 {
-                fixed[i] = true;
-                r[i] = Vec2::splat(g.x as f32 / 15.0);
-            }
-        }
+        let (mut r, fixed) = two_planes(&b, (0, Vec2::ZERO), (15, Vec2::ONE));
         let n = diffuse_noise(
             &b,
             &[],
@@ -281,16 +279,7 @@ mod tests {
         // Two constraint planes with normals 90° apart: the filled field is unit
         // everywhere and the transition between the two halves stays sharp.
         let b = level(24);
-        let mut n = vec![Vec3::ZERO; b.len() * BRICK_NODES];
-        let mut fixed = vec![false; n.len()];
-        for i in 0..n.len() {
-            let g = b.node_coord(i);
-            if g.x == 2 {
-                (n[i], fixed[i]) = (Vec3::Z, true);
-            } else if g.x == 21 {
-                (n[i], fixed[i]) = (Vec3::X, true);
-            }
-        }
+        let (n, fixed) = two_planes(&b, (2, Vec3::Z), (21, Vec3::X));
         let (mut sharp, mut smooth) = (n.clone(), n.clone());
         diffuse_normals(&b, &[], &mut sharp, &fixed, 0.01, Sweeps::Fixed(200));
         diffuse_normals(&b, &[], &mut smooth, &fixed, 1e3, Sweeps::Fixed(200));
@@ -307,16 +296,7 @@ mod tests {
     #[test]
     fn bitangents_ignore_sign() {
         let b = level(8);
-        let mut v = vec![Vec3::ZERO; b.len() * BRICK_NODES];
-        let mut fixed = vec![false; v.len()];
-        for i in 0..v.len() {
-            let g = b.node_coord(i);
-            if g.x == 0 {
-                (v[i], fixed[i]) = (Vec3::Y, true);
-            } else if g.x == 7 {
-                (v[i], fixed[i]) = (-Vec3::Y, true);
-            }
-        }
+        let (mut v, fixed) = two_planes(&b, (0, Vec3::Y), (7, -Vec3::Y));
         diffuse_bitangents(&b, &[], &mut v, &fixed, Sweeps::Fixed(20));
         for (i, x) in v.iter().enumerate() {
             if b.geom.contains(b.node_coord(i)) {

@@ -415,66 +415,60 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
             }
         }
         let full = !seen_seeds;
-        if ls.seeds == 0 && (l == 0 || !seen_seeds) {
-            if l == 0 {
-                stats.empty = true;
-                stats.times = times;
-                stats.levels.push(ls);
-                return Ok(Volume {
-                    stats,
-                    ..Default::default()
-                });
-            }
+        let waiting = ls.seeds == 0 && (l == 0 || !seen_seeds);
+        if waiting && l == 0 {
+            stats.empty = true;
+            stats.times = times;
+            stats.levels.push(ls);
+            return Ok(Volume {
+                stats,
+                ..Default::default()
+            });
+        }
+        if waiting {
             // Nothing here yet: keep the constant.
             t.propagate += clock.elapsed();
-            kept += total as u64 * kept_bytes(streamline) + bricks.overhead_bytes();
-            levels.push(bricks);
-            n_ch.push(n);
-            b_ch.push(b);
-            r_ch.push(r);
-            s_ch.push(s);
-            stats.levels.push(ls);
-            continue;
-        }
-        seen_seeds = true;
-        let reach = if full && first {
-            (geom.dims.element_sum() * 2) as u32
         } else {
-            p.band.ceil() as u32
-        };
-        if streamline {
-            ls.streamline_nodes = streamlines(&bricks, &mut s, &mut wave, &n, &b, 2 * reach);
-        }
-        ls.waves = waves(&bricks, &mut s, &mut wave, &n, reach);
-        let fixed_s: Vec<bool> = wave.iter().zip(rim).map(|(&w, &r)| w == 1 || r).collect();
-        if !(full && first) {
-            // Blend the re-propagated values into the prolonged ones over the outer half
-            // of the waves.
-            let k = reach.max(1) as f32;
-            s.par_iter_mut()
-                .zip(&sp)
-                .zip(&wave)
-                .for_each(|((s, &sp), &w)| {
-                    if w > 1 {
-                        let a = ((w as f32 - 1.0 - 0.5 * k) / (0.5 * k)).clamp(0.0, 1.0);
-                        *s += (sp - *s) * a;
-                    }
-                });
-        }
-        drop((sp, wave));
-        let relax_sweeps = if full && first {
-            Sweeps::Converge {
-                tol: 1e-3 * geom.h,
-                max: 4096,
+            seen_seeds = true;
+            let reach = if full && first {
+                (geom.dims.element_sum() * 2) as u32
+            } else {
+                p.band.ceil() as u32
+            };
+            if streamline {
+                ls.streamline_nodes = streamlines(&bricks, &mut s, &mut wave, &n, &b, 2 * reach);
             }
-        } else {
-            Sweeps::Fixed(p.iterations)
-        };
-        ls.relax_sweeps = relax(&bricks, &active, &mut s, &n, &fixed_s, relax_sweeps);
-        t.propagate += clock.elapsed();
-        let clock = Instant::now();
-        smooth(&bricks, &active, &mut s, &fixed_s, p.smoothing);
-        t.smooth += clock.elapsed();
+            ls.waves = waves(&bricks, &mut s, &mut wave, &n, reach);
+            let fixed_s: Vec<bool> = wave.iter().zip(rim).map(|(&w, &r)| w == 1 || r).collect();
+            if !(full && first) {
+                // Blend the re-propagated values into the prolonged ones over the outer half
+                // of the waves.
+                let k = reach.max(1) as f32;
+                s.par_iter_mut()
+                    .zip(&sp)
+                    .zip(&wave)
+                    .for_each(|((s, &sp), &w)| {
+                        if w > 1 {
+                            let a = ((w as f32 - 1.0 - 0.5 * k) / (0.5 * k)).clamp(0.0, 1.0);
+                            *s += (sp - *s) * a;
+                        }
+                    });
+            }
+            drop((sp, wave));
+            let relax_sweeps = if full && first {
+                Sweeps::Converge {
+                    tol: 1e-3 * geom.h,
+                    max: 4096,
+                }
+            } else {
+                Sweeps::Fixed(p.iterations)
+            };
+            ls.relax_sweeps = relax(&bricks, &active, &mut s, &n, &fixed_s, relax_sweeps);
+            t.propagate += clock.elapsed();
+            let clock = Instant::now();
+            smooth(&bricks, &active, &mut s, &fixed_s, p.smoothing);
+            t.smooth += clock.elapsed();
+        }
         kept += total as u64 * kept_bytes(streamline) + bricks.overhead_bytes();
         levels.push(bricks);
         n_ch.push(n);

@@ -134,10 +134,9 @@ pub fn relax(
         bricks,
         active,
         s,
-        &[] as &[()],
         fixed,
         sweeps,
-        |ps, _, i, g, k| {
+        |ps, i, g, k| {
             let c = coef[k];
             let sum = if g.cmpgt(IVec3::ZERO).all() && g.cmplt(dims - IVec3::ONE).all() {
                 ps[i - 1]

@@ -3,8 +3,6 @@
 //! the domain's face is left unchanged along that axis (linear extrapolation), so a
 //! linear S — a plane's distance — is preserved exactly.
 
-use glam::Vec3;
-
 use super::diffuse::{Sweeps, jacobi};
 use super::sparse::{Bricks, PAD};
 
@@ -17,10 +15,9 @@ pub fn smooth(bricks: &Bricks, active: &[bool], s: &mut Vec<f32>, fixed: &[bool]
                 bricks,
                 active,
                 s,
-                &[] as &[Vec3],
                 fixed,
                 Sweeps::Fixed(1),
-                |p, _, i, g, _| {
+                |p, i, g, _| {
                     if g[axis] == 0 || g[axis] == dims[axis] - 1 {
                         p[i]
                     } else {
@@ -37,7 +34,7 @@ pub fn smooth(bricks: &Bricks, active: &[bool], s: &mut Vec<f32>, fixed: &[bool]
 mod tests {
     use super::*;
     use crate::voxel::sparse::{BRICK_NODES, LevelGeom};
-    use glam::IVec3;
+    use glam::{IVec3, Vec3};
 
     #[test]
     fn keeps_linear_fields_and_damps_noise() {
