@@ -8,6 +8,9 @@
 //!   radius 30, falloff 6: the test scene scaled by 3), compiled by the scene loader —
 //!   the field `karstic render` traces — and its tape from `tape_from_tree`.
 //! * Plain sphere tracing with the global bound, on smaller images.
+//! * The main job's tree, `trees/jacksboro_caves.ron` (DEM heightfield, bicubic, with an
+//!   S-field tunnel carved, an S-field arch and a noisy grotto), compiled by the scene
+//!   loader, at 1280 × 720 with shadows; segment vs sphere steps reported at 320 × 180.
 //! * The Jacksboro DEM (90 m cells) with a tunnel carved through it, as a tape, at
 //!   1280 × 720, and a synthetic terrain chunk at 500 × 500.
 //!
@@ -125,6 +128,7 @@ fn bench(c: &mut Criterion) {
     let blob_tape = tapes::blobs(&blobs);
     let blob_tree = tree_file("blobs.ron");
     let blob_tree_tape = tape_from_tree(&blob_tree).unwrap();
+    let caves = tree_file("jacksboro_caves.ron");
     let terrain = Terrain::new(1000.0, 120.0, 30.0);
     let dem_tape = tapes::dem_with_cave(&dem::jacksboro());
     report("blobs", &blobs, (32, 32), Method::Sphere, false, false);
@@ -137,6 +141,17 @@ fn bench(c: &mut Criterion) {
         false,
         false,
     );
+    // The main job's tree: segment vs plain sphere tracing at the same (small) size.
+    for method in [Method::Segment, Method::Sphere] {
+        report(
+            "jacksboro_caves.ron",
+            &caves,
+            (320, 180),
+            method,
+            true,
+            true,
+        );
+    }
     report_gpu("dem with cave", &dem_tape, (480, 270));
     for (name, f, size, method, shadows) in [
         (
@@ -154,7 +169,6 @@ fn bench(c: &mut Criterion) {
         ("blobs.ron", &blob_tree, (500, 500), Method::Segment, true),
         ("blobs.ron", &blob_tree, (500, 500), Method::Segment, false),
         ("blobs.ron", &blob_tree, (100, 100), Method::Sphere, false),
-        ("blobs.ron", &blob_tree, (500, 500), Method::Sphere, false),
         (
             "blobs.ron tape",
             &blob_tree_tape,
@@ -165,6 +179,13 @@ fn bench(c: &mut Criterion) {
         (
             "dem with cave",
             &dem_tape,
+            (1280, 720),
+            Method::Segment,
+            true,
+        ),
+        (
+            "jacksboro_caves.ron",
+            &caves,
             (1280, 720),
             Method::Segment,
             true,

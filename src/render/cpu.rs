@@ -121,6 +121,9 @@ fn pruned<'f>(field: &'f dyn Field, region: Option<Aabb>) -> Option<Box<dyn Fiel
     region.and_then(|r| field.prune(&r))
 }
 
+/// A ray and the span of it to trace.
+type Segment = (Ray, (f32, f32));
+
 /// Traces and shades the rays of one tile (`(ray, its span in the support)`, row-major).
 fn tile(
     field: &dyn Field,
@@ -139,7 +142,7 @@ fn tile(
     );
     let f = primary.as_deref().unwrap_or(field);
     // Primary hits with their normals and shadow rays.
-    let hits: Vec<(Trace, Vec3, Option<(Ray, (f32, f32))>)> = rays
+    let hits: Vec<(Trace, Vec3, Option<Segment>)> = rays
         .iter()
         .map(|(ray, span)| {
             let Some(span) = span else {
