@@ -4,7 +4,13 @@
 //!   of radius 10, Wyvill blobs of radius 2 (about 8 overlap at a point), 500 × 500, the
 //!   default framing. The blob field (tests/common) answers local Lipschitz bounds from a
 //!   uniform grid; the same scene as a GPU tape (BVH of guards) is measured too.
+//! * The same scene as a real tree file, `trees/blobs.ron` (1,000 points in a ball of
+//!   radius 30, falloff 6: the test scene scaled by 3), compiled by the scene loader —
+//!   the field `karstic render` traces — and its tape from `tape_from_tree`.
 //! * Plain sphere tracing with the global bound, on smaller images.
+//! * The main job's tree, `trees/jacksboro_caves.ron` (DEM heightfield, bicubic, with an
+//!   S-field tunnel carved, an S-field arch and a noisy grotto), compiled by the scene
+//!   loader, at 1280 × 720 with shadows; segment vs sphere steps reported at 320 × 180.
 //! * The Jacksboro DEM (90 m cells) with a tunnel carved through it, as a tape, at
 //!   1280 × 720, and a synthetic terrain chunk at 500 × 500.
 //!
@@ -19,7 +25,8 @@ use common::{Blobs, Terrain, dem, tapes};
 use criterion::{Criterion, criterion_group, criterion_main};
 use indicatif::ProgressBar;
 use karstic::field::Field;
-use karstic::render::gpu::{GpuContext, Tape};
+use karstic::field::Tree;
+use karstic::render::gpu::{GpuContext, Tape, tape_from_tree};
 use karstic::render::{Camera, Method, RenderSettings, render};
 
 fn scene(
@@ -105,13 +112,46 @@ fn report_gpu(name: &str, tape: &Tape, size: (u32, u32)) {
     );
 }
 
+/// A tree file of `trees/`, compiled.
+fn tree_file(name: &str) -> Tree {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("trees")
+        .join(name);
+    karstic::scene::load(&path)
+        .and_then(|s| s.compile())
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .tree
+}
+
 fn bench(c: &mut Criterion) {
     let blobs = Blobs::in_ball(1000, 10.0, 2.0, 1.0, 2020);
     let blob_tape = tapes::blobs(&blobs);
+    let blob_tree = tree_file("blobs.ron");
+    let blob_tree_tape = tape_from_tree(&blob_tree).unwrap();
+    let caves = tree_file("jacksboro_caves.ron");
     let terrain = Terrain::new(1000.0, 120.0, 30.0);
     let dem_tape = tapes::dem_with_cave(&dem::jacksboro());
     report("blobs", &blobs, (32, 32), Method::Sphere, false, false);
     report("blobs", &blobs, (100, 100), Method::Segment, false, false);
+    report(
+        "blobs.ron",
+        &blob_tree,
+        (32, 32),
+        Method::Sphere,
+        false,
+        false,
+    );
+    // The main job's tree: segment vs plain sphere tracing at the same (small) size.
+    for method in [Method::Segment, Method::Sphere] {
+        report(
+            "jacksboro_caves.ron",
+            &caves,
+            (320, 180),
+            method,
+            true,
+            true,
+        );
+    }
     report_gpu("dem with cave", &dem_tape, (480, 270));
     for (name, f, size, method, shadows) in [
         (
@@ -126,9 +166,26 @@ fn bench(c: &mut Criterion) {
         ("blobs", &blobs, (100, 100), Method::Sphere, false),
         ("blobs", &blobs, (500, 500), Method::Sphere, false),
         ("blob tape", &blob_tape, (500, 500), Method::Segment, false),
+        ("blobs.ron", &blob_tree, (500, 500), Method::Segment, true),
+        ("blobs.ron", &blob_tree, (500, 500), Method::Segment, false),
+        ("blobs.ron", &blob_tree, (100, 100), Method::Sphere, false),
+        (
+            "blobs.ron tape",
+            &blob_tree_tape,
+            (500, 500),
+            Method::Segment,
+            false,
+        ),
         (
             "dem with cave",
             &dem_tape,
+            (1280, 720),
+            Method::Segment,
+            true,
+        ),
+        (
+            "jacksboro_caves.ron",
+            &caves,
             (1280, 720),
             Method::Segment,
             true,

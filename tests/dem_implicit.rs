@@ -379,3 +379,65 @@ fn dem_cache_shares_decoded_files() {
     let xy = Vec2::new(5000.0, 5000.0);
     assert_eq!(fa.height(xy), -fb.height(xy));
 }
+
+/// Small boxes hugging the terrain — what a tracer's candidate segments look like near the
+/// surface. Their bounds must stay sound (sampled values inside the interval, sampled slopes
+/// under the box bound) and be sharp: a box 8 to 40 m above the ground at its centre and a
+/// few metres wide must be known to lie outside the solid, even though the cells under it
+/// (90 m on the UTM DEM) span more than that in height.
+#[test]
+fn small_boxes_near_the_terrain_have_sound_and_sharp_bounds() {
+    for (name, f) in leaves() {
+        let interp = f.params().interpolation;
+        let mut rng = Rng(6);
+        let s = f.support();
+        let (mut above, mut known) = (0, 0);
+        let mut checked = 0;
+        while checked < 3000 {
+            let c = rng.point(&s);
+            let h = f.heightfield().sample(c.truncate(), interp);
+            if h.is_nan() {
+                continue;
+            }
+            checked += 1;
+            let lift = rng.range(-40.0, 40.0);
+            let c = c.truncate().extend(h + lift);
+            let half = Vec3::new(
+                rng.range(0.1, 4.0),
+                rng.range(0.1, 4.0),
+                rng.range(0.1, 4.0),
+            );
+            let b = Aabb::new(c - half, c + half);
+            let iv = f.interval(&b);
+            let lb = f.lipschitz_box(&b);
+            for _ in 0..20 {
+                let (p, q) = (rng.point(&b), rng.point(&b));
+                let (vp, vq) = (f.value(p), f.value(q));
+                assert!(
+                    iv.lo - 1e-5 <= vp && vp <= iv.hi + 1e-5,
+                    "{name}: f({p}) = {vp} not in {iv:?} for {b:?}"
+                );
+                let d = p.distance(q);
+                if d > 1e-2 {
+                    let slope = (vp - vq).abs() / d;
+                    assert!(
+                        slope <= lb * 1.001 + 1e-6,
+                        "{name}: slope {slope} > box bound {lb} in {b:?}"
+                    );
+                }
+            }
+            if lift > 8.0 && f.elevation(&b.footprint()).is_some() {
+                above += 1;
+                known += (iv.hi < T) as usize;
+            }
+        }
+        assert!(
+            above > 300,
+            "{name}: too few boxes above the ground ({above})"
+        );
+        assert!(
+            known * 10 >= above * 9,
+            "{name}: only {known} of {above} boxes above the ground are known to be air"
+        );
+    }
+}

@@ -195,6 +195,20 @@ impl Heightfield {
             Interpolation::Bicubic => {
                 let (wx, wy) = (cr_weights(t), cr_weights(s));
                 let mut v = 0.0;
+                if i >= 1 && j >= 1 && i + 2 < self.nx && j + 2 < self.ny {
+                    // Interior cell: the 4×4 stencil without clamping, same sums in the
+                    // same order as below.
+                    for (b, wyb) in wy.iter().enumerate() {
+                        let at = i - 1 + self.nx * (j - 1 + b);
+                        let z: &[f32; 4] = self.z[at..at + 4].try_into().expect("4 samples");
+                        let mut row = 0.0;
+                        for (wxa, za) in wx.iter().zip(z) {
+                            row += wxa * za;
+                        }
+                        v += wyb * row;
+                    }
+                    return v;
+                }
                 for (b, wyb) in wy.iter().enumerate() {
                     let mut row = 0.0;
                     for (a, wxa) in wx.iter().enumerate() {

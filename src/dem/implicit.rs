@@ -227,6 +227,26 @@ impl HeightfieldField {
         }
     }
 
+    /// [`Self::h_range`] sharpened for footprints inside Ω (clearance `e_lo > 0`, so `h` is
+    /// defined on all of `fp`): `h` is `s`-Lipschitz on the cells under `fp` (`s` from the
+    /// slope pyramid) and `fp` is convex, so `|h(x) − h(c)| ≤ s·|x − c|` around its centre
+    /// `c`. For a footprint smaller than a cell this is far tighter than the cells' ranges —
+    /// it is what lets a ray step close to the terrain (seed 001 §7.2: the Lipschitz bound
+    /// of `h` along the ray).
+    #[inline]
+    fn h_range_near(&self, fp: &Rect, cells: Interval, slope: f32, e_lo: f32) -> Interval {
+        if e_lo <= 0.0 || cells.is_empty() {
+            return cells;
+        }
+        let c = (fp.min + fp.max) * 0.5;
+        let hc = self.height(c);
+        if hc.is_nan() {
+            return cells;
+        }
+        let reach = slope * (fp.max - c).length() * (1.0 + 1e-5) + self.eps(hc.abs());
+        Interval::new((hc - reach).max(cells.lo), (hc + reach).min(cells.hi))
+    }
+
     /// Range of the distance to `P` over `b`, from the clearance range `e`.
     fn dist_range(&self, e: Interval, z: Interval) -> Interval {
         let dxy = Interval::new((self.r - e.hi).max(0.0), (self.r - e.lo).max(0.0));
@@ -302,10 +322,14 @@ impl Field for HeightfieldField {
     fn interval(&self, b: &Aabb) -> Interval {
         let fp = b.footprint();
         let e = self.domain.clearance_range(&fp);
-        let h = self.h_range(&fp);
+        let Some((i0, i1, j0, j1)) = self.hf.cells_overlapping(&fp) else {
+            return Interval::ZERO;
+        };
+        let h = self.heights.query_interval(i0, i1, j0, j1);
         if e.hi <= 0.0 || h.is_empty() {
             return Interval::ZERO;
         }
+        let h = self.h_range_near(&fp, h, self.slopes.query(i0, i1, j0, j1)[1], e.lo);
         let z = b.z();
         let ft = sigma_interval(Interval::new(h.lo - z.hi, h.hi - z.lo), self.r);
         let d = self.dist_range(e, z);
@@ -333,8 +357,8 @@ impl Field for HeightfieldField {
         if e.hi <= 0.0 {
             return 0.0;
         }
-        let h = self.heights.query_interval(i0, i1, j0, j1);
         let s = self.slopes.query(i0, i1, j0, j1)[1].max(0.0);
+        let h = self.h_range_near(&fp, self.heights.query_interval(i0, i1, j0, j1), s, e.lo);
         let z = b.z();
         let lt = if h.is_empty() {
             0.0

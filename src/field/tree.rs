@@ -371,4 +371,9 @@ impl Field for Tree {
     fn eval_block(&self, origin: Vec3, step: Vec3, dims: [usize; 3], out: &mut [f32]) {
         self.eval_block_at(self.root, origin, step, dims, out)
     }
+    /// The tree itself, so consumers can read its size (the renderer prunes small trees
+    /// per tile).
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
 }

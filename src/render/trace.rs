@@ -10,8 +10,10 @@
 //!   segment tracing (Galin et al. 2020): at `t`, take a candidate segment `[t, t + δ]`,
 //!   ask the field for its Lipschitz bound λ on that segment only, and step by
 //!   `s = |f(t) − T| / λ`. When `s ≥ δ` the whole candidate is safe: step `δ` and double
-//!   it; otherwise step `s` and shrink `δ` to `s`. Local bounds of compactly supported
-//!   primitives are far smaller than the global one, so steps are much longer.
+//!   it; otherwise retry with `δ/4` (the value at `t` is kept, only the bound is asked
+//!   again) while that stays above `s`, then step `s` and shrink `δ` to `s`. Local bounds
+//!   of compactly supported primitives are far smaller than the global one, so steps are
+//!   much longer.
 //!
 //! Steps are never shorter than the tolerance `ε + cone·t` (metres; the cone term is the
 //! pixel footprint): near the surface the march steps across it, and the crossing is
@@ -93,6 +95,11 @@ impl Trace {
 /// Most evaluations used to locate a bracketed crossing.
 const MAX_REFINE: u32 = 12;
 
+/// When a candidate segment is not safe, it is retried this many times shorter (its
+/// local bound is then smaller) before the march settles for the safe step: the value at
+/// `t` is reused, only the bound is asked again.
+const SHRINK: f32 = 0.25;
+
 /// First candidate segment, as a fraction of the clipped span.
 const FIRST_DELTA: f32 = 1.0 / 16.0;
 
@@ -104,7 +111,25 @@ const FIRST_DELTA: f32 = 1.0 / 16.0;
 /// locates it to a tenth of the tolerance. Stopping on a small safe step alone
 /// (classic sphere tracing) would stop short wherever the Lipschitz bound is loose —
 /// with a blend's global bound, everywhere.
-pub fn trace(field: &dyn Field, ray: &Ray, (t0, t1): (f32, f32), params: &TraceParams) -> Trace {
+pub fn trace(field: &dyn Field, ray: &Ray, span: (f32, f32), params: &TraceParams) -> Trace {
+    march(field, ray, span, params, true)
+}
+
+/// True when the ray meets the surface on `[t0, t1]`: a shadow query. Same march as
+/// [`trace`], but it stops at the first bracketed crossing without locating it.
+pub fn occluded(field: &dyn Field, ray: &Ray, span: (f32, f32), params: &TraceParams) -> bool {
+    march(field, ray, span, params, false).hit()
+}
+
+/// The march of [`trace`]; `locate` refines a bracketed crossing (else `t` is the end of
+/// the bracket).
+fn march(
+    field: &dyn Field,
+    ray: &Ray,
+    (t0, t1): (f32, f32),
+    params: &TraceParams,
+    locate: bool,
+) -> Trace {
     let miss = |steps| Trace {
         t: f32::INFINITY,
         steps,
@@ -131,6 +156,9 @@ pub fn trace(field: &dyn Field, ray: &Ray, (t0, t1): (f32, f32), params: &TraceP
         if side == 0.0 {
             side = s_now;
         } else if s_now != side {
+            if !locate {
+                return Trace { t, steps };
+            }
             let tol = params.epsilon + params.cone * prev_t;
             let (t_hit, n) = refine(field, ray, (prev_t, prev_e), (t, e), 0.1 * tol);
             return Trace {
@@ -145,12 +173,17 @@ pub fn trace(field: &dyn Field, ray: &Ray, (t0, t1): (f32, f32), params: &TraceP
         let (step, next_delta) = match params.method {
             Method::Sphere => (safe_step(e, global), delta),
             Method::Segment => {
-                let len = (t + delta).min(t1) - t;
-                let s = safe_step(e, field.lipschitz_segment(p, ray.at(t + len)));
-                if s >= len {
-                    (len, delta * params.grow)
-                } else {
-                    (s, s.max(tol))
+                let mut len = (t + delta).min(t1) - t;
+                loop {
+                    let q = ray.at(t + len);
+                    let s = safe_step(e, field.lipschitz_segment(p, q));
+                    if s >= len {
+                        break (len, len * params.grow);
+                    }
+                    if len * SHRINK <= s.max(tol) {
+                        break (s, s.max(tol));
+                    }
+                    len *= SHRINK;
                 }
             }
         };
@@ -159,12 +192,6 @@ pub fn trace(field: &dyn Field, ray: &Ray, (t0, t1): (f32, f32), params: &TraceP
         delta = next_delta;
     }
     miss(steps)
-}
-
-/// True when the ray meets the surface on `[t0, t1]`: a shadow query (same march as
-/// [`trace`]).
-pub fn occluded(field: &dyn Field, ray: &Ray, span: (f32, f32), params: &TraceParams) -> bool {
-    trace(field, ray, span, params).hit()
 }
 
 /// `|e| / λ`, infinite where the field is flat.
