@@ -202,6 +202,10 @@ proptest! {
                 prop_assert!(lhs <= lb * (p - q).length() * 1.0001 + 1e-6, "{spec:?}\nbox {b:?} bound {lb}: {lhs} over {}", (p - q).length());
                 let ls = prim.lipschitz_segment(p, q);
                 prop_assert!(lhs <= ls * (p - q).length() * 1.0001 + 1e-6);
+                // And every pair on the segment.
+                let (u, v) = (p.lerp(q, rng.f()), p.lerp(q, rng.f()));
+                let on = (prim.value(u) - prim.value(v)).abs();
+                prop_assert!(on <= ls * (u - v).length() * 1.0001 + 1e-6, "{spec:?}\nsegment bound {ls}: {on}");
             }
         }
     }

@@ -206,6 +206,19 @@ proptest! {
                 prop_assert!(df <= lb * d + 1e-4, "local: {df} > {lb}·{d}");
                 prop_assert!(df <= lg * d + 1e-4, "global: {df} > {lg}·{d}");
             }
+            // Along segments: pairs of points on [a, b] obey its segment bound.
+            for w in ps.chunks(8) {
+                let (a, b) = (w[0], w[w.len() - 1]);
+                let ls = n.lipschitz_segment(a, b);
+                let on: Vec<Vec3> = (0..=64).map(|i| a.lerp(b, i as f32 / 64.0)).collect();
+                for k in 0..on.len() {
+                    for j in (k + 1..on.len()).step_by(7) {
+                        let df = (n.value(on[k]) - n.value(on[j])).abs();
+                        let d = (on[k] - on[j]).length();
+                        prop_assert!(df <= ls * d + 1e-4, "segment: {df} > {ls}·{d}");
+                    }
+                }
+            }
         }
     }
 

@@ -1,6 +1,6 @@
 //! Bounds of the tree over a box: sound value intervals and local Lipschitz constants.
 
-use glam::Affine3A;
+use glam::{Affine3A, Vec3};
 
 use super::bounds::{Aabb, Interval};
 use super::contract::Field;
@@ -106,6 +106,48 @@ impl Tree {
             Node::Warp { child, warp } => {
                 self.lipschitz_box_at(*child, &b.dilate(warp.reach())) * warp.lipschitz()
             }
+        }
+    }
+
+    /// A Lipschitz bound of node `id` on the segment `[a, b]`: like
+    /// [`Tree::lipschitz_box_at`] on the segment's box, but leaves answer for the segment
+    /// itself ([`Field::lipschitz_segment`]) and affine nodes map its ends, so a blend sums
+    /// what its children see along the segment, not over its box.
+    pub fn lipschitz_segment_at(&self, id: NodeId, a: Vec3, b: Vec3) -> f32 {
+        let bx = Aabb::new(a, b);
+        if !self.supports[id as usize].overlaps(&bx) {
+            return 0.0;
+        }
+        let max_of = |children: &[NodeId]| {
+            children
+                .iter()
+                .map(|&c| self.lipschitz_segment_at(c, a, b))
+                .fold(0.0, f32::max)
+        };
+        match &self.nodes[id as usize] {
+            Node::Constant(_) => 0.0,
+            Node::Primitive(f) => f.lipschitz_segment(a, b),
+            Node::Leaf(f) => f.lipschitz_segment(a, b),
+            Node::Blend { children, bvh } => {
+                let mut sum = 0.0;
+                self.blend_children_in(children, bvh, &bx, |c| {
+                    sum += self.lipschitz_segment_at(c, a, b)
+                });
+                sum
+            }
+            Node::Union(children) | Node::Intersection(children) => max_of(children),
+            Node::Difference { base, carves } => {
+                max_of(carves).max(self.lipschitz_segment_at(*base, a, b))
+            }
+            Node::Affine {
+                child,
+                to_child,
+                stretch,
+            } => {
+                let (ca, cb) = (to_child.transform_point3(a), to_child.transform_point3(b));
+                self.lipschitz_segment_at(*child, ca, cb) * stretch
+            }
+            Node::Warp { .. } => self.lipschitz_box_at(id, &bx),
         }
     }
 }

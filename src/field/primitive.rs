@@ -366,6 +366,23 @@ impl Field for Primitive {
         self.energy.abs() * WYVILL_MAX_SLOPE * self.slope
     }
 
+    /// Exact along the segment for a point skeleton without noise (the distance to the
+    /// point ranges over `[dist(c, [a, b]), max(|a − c|, |b − c|)]` there, and `g` is
+    /// applied to it); the box of the segment otherwise. A long ray segment passing beside
+    /// a blob sees its true clearance, not that of the segment's box.
+    fn lipschitz_segment(&self, a: Vec3, b: Vec3) -> f32 {
+        if let (Skeleton::Point(pt), None) = (&self.skeleton, self.noise) {
+            let c = pt.center;
+            let ab = b - a;
+            let t = ((c - a).dot(ab) / ab.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
+            let lo = (a + ab * t).distance(c);
+            let hi = a.distance(c).max(b.distance(c));
+            let xs = Interval::new(lo * self.inv_radius, hi * self.inv_radius);
+            return self.energy.abs() * wyvill_slope(xs) * self.inv_radius;
+        }
+        self.lipschitz_box(&Aabb::new(a, b))
+    }
+
     fn lipschitz_box(&self, b: &Aabb) -> f32 {
         if !b.overlaps(&self.support) {
             return 0.0;

@@ -326,6 +326,9 @@ impl Field for SubTree<'_> {
     fn lipschitz_box(&self, b: &Aabb) -> f32 {
         self.tree.lipschitz_box_at(self.id, b)
     }
+    fn lipschitz_segment(&self, a: Vec3, b: Vec3) -> f32 {
+        self.tree.lipschitz_segment_at(self.id, a, b)
+    }
     fn z_bands(&self, fp: &Rect, z: Interval, out: &mut ZBands) {
         self.tree.z_bands_at(self.id, fp, z, out)
     }
@@ -358,6 +361,9 @@ impl Field for Tree {
     }
     fn lipschitz_box(&self, b: &Aabb) -> f32 {
         self.lipschitz_box_at(self.root, b)
+    }
+    fn lipschitz_segment(&self, a: Vec3, b: Vec3) -> f32 {
+        self.lipschitz_segment_at(self.root, a, b)
     }
     fn z_bands(&self, fp: &Rect, z: Interval, out: &mut ZBands) {
         self.z_bands_at(self.root, fp, z, out)
