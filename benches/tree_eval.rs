@@ -5,7 +5,7 @@
 //! * the 1,000-point blob scene of `trees/blobs.ron` over a 256³ grid;
 //!   with the naive, unpruned per-point evaluation as the baseline in the same run;
 //! * point queries one by one (`Field::value` over rayon chunks) and batched
-//!   (`Tree::values`: Morton-sorted, parallel).
+//!   (`Tree::values`, parallel chunks).
 
 use std::hint::black_box;
 
