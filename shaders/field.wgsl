@@ -9,6 +9,7 @@ const MAX_WARPS: u32 = 8u;
 const OP_CONST: u32 = 0u;
 const OP_PRIM: u32 = 1u;
 const OP_HEIGHT: u32 = 2u;
+const OP_NPRIM: u32 = 3u;
 const OP_BLEND: u32 = 16u;
 const OP_UNION: u32 = 17u;
 const OP_INTER: u32 = 18u;
@@ -16,6 +17,7 @@ const OP_DIFF: u32 = 19u;
 const OP_GUARD: u32 = 32u;
 const OP_WARP: u32 = 33u;
 const OP_UNWARP: u32 = 34u;
+const OP_TWARP: u32 = 35u;
 
 const SHAPE_SPHERE: u32 = 0u;
 const SHAPE_CAPSULE: u32 = 1u;
@@ -192,6 +194,10 @@ fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
                 stack[sp] = primitive(ins.y, o, p, c, r);
                 sp += 1u;
             }
+            case OP_NPRIM: {
+                stack[sp] = noisy_primitive(ins.y, o, p, c, r);
+                sp += 1u;
+            }
             case OP_HEIGHT: {
                 stack[sp] = heightfield(o, p, c, r);
                 sp += 1u;
@@ -231,12 +237,19 @@ fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
                 c = affine(o, c);
                 r *= params[o + 12u];
             }
+            case OP_TWARP: {
+                frames[2u * fp] = vec4<f32>(p, r);
+                frames[2u * fp + 1u] = vec4<f32>(c, 0.0);
+                fp += 1u;
+                p = twarp_apply(o, p);
+                r += params[o + 1u];
+            }
             case OP_UNWARP: {
                 fp -= 1u;
                 p = frames[2u * fp].xyz;
                 r = frames[2u * fp].w;
                 c = frames[2u * fp + 1u].xyz;
-                stack[sp - 1u].y *= params[o + 12u];
+                stack[sp - 1u].y *= params[o];
             }
             default: {}
         }

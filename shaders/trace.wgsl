@@ -118,13 +118,15 @@ fn trace_ray(o: vec3<f32>, d: vec3<f32>, t0: f32, t1: f32) -> Hit {
             break;
         }
         let p = o + d * t;
+        // One call site of eval_tape (drivers inline it at each): sphere tracing asks for
+        // the value alone (r = 0) and uses the global bound.
         var len = 0.0;
-        var ev: vec2<f32>;
         if segment {
             len = min(t + delta, t1) - t;
-            ev = eval_tape(p, p + d * (0.5 * len), 0.5 * len);
-        } else {
-            ev = vec2<f32>(eval_tape(p, p, 0.0).x, u.trace.x);
+        }
+        var ev = eval_tape(p, p + d * (0.5 * len), 0.5 * len);
+        if !segment {
+            ev.y = u.trace.x;
         }
         let e = ev.x - T;
         steps += 1u;
@@ -164,11 +166,20 @@ fn trace_ray(o: vec3<f32>, d: vec3<f32>, t0: f32, t1: f32) -> Hit {
 
 fn normal_at(p: vec3<f32>) -> vec3<f32> {
     let h = u.trace.z;
-    let k0 = vec3<f32>(1.0, -1.0, -1.0);
-    let k1 = vec3<f32>(-1.0, -1.0, 1.0);
-    let k2 = vec3<f32>(-1.0, 1.0, -1.0);
-    let k3 = vec3<f32>(1.0, 1.0, 1.0);
-    let g = (k0 * value(p + k0 * h) + k1 * value(p + k1 * h) + k2 * value(p + k2 * h) + k3 * value(p + k3 * h)) / (4.0 * h);
+    // A loop, so the tape is inlined once (same sum order as the CPU's fold).
+    var g = vec3<f32>(0.0);
+    for (var i = 0u; i < 4u; i += 1u) {
+        var k = vec3<f32>(1.0, -1.0, -1.0);
+        if i == 1u {
+            k = vec3<f32>(-1.0, -1.0, 1.0);
+        } else if i == 2u {
+            k = vec3<f32>(-1.0, 1.0, -1.0);
+        } else if i == 3u {
+            k = vec3<f32>(1.0, 1.0, 1.0);
+        }
+        g += k * value(p + k * h);
+    }
+    g = g / (4.0 * h);
     let n = -g;
     let l = length(n);
     if l > 0.0 {
@@ -256,4 +267,13 @@ fn probe(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let q = probe_in[id.x];
     probe_out[id.x] = eval_tape(q.xyz, q.xyz, q.w);
+}
+
+// fBm probes for the tests: the fBm encoded at params[0..7] at each p.xyz -> (t(p), 0).
+@compute @workgroup_size(64, 1, 1)
+fn fbm_probe(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= arrayLength(&probe_in) {
+        return;
+    }
+    probe_out[id.x] = vec2<f32>(fbm(0u, probe_in[id.x].xyz), 0.0);
 }

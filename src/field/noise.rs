@@ -258,6 +258,21 @@ impl Fbm {
         }
     }
 
+    /// The seed of the first octave (octave `k` uses `seed + k·0x9e3779b9`).
+    pub fn seed(&self) -> u32 {
+        self.seed
+    }
+
+    /// `1 / λ`: the first octave's frequency, as the evaluation uses it.
+    pub fn inv_wavelength(&self) -> f32 {
+        self.inv_wavelength
+    }
+
+    /// `1 / Σ_{k<o} ½^k`: the normalisation of the octave sum.
+    pub fn norm(&self) -> f32 {
+        self.norm
+    }
+
     /// Wavelength of the first octave, in metres.
     pub fn wavelength(&self) -> f32 {
         1.0 / self.inv_wavelength

@@ -35,6 +35,21 @@ impl Warp {
         }
     }
 
+    /// The turbulence of each axis.
+    pub fn turbulence(&self) -> &[Fbm; 3] {
+        &self.turbulence
+    }
+
+    /// The displacement amplitude `A` (metres per axis).
+    pub fn amplitude(&self) -> f32 {
+        self.amplitude
+    }
+
+    /// The region `(box, falloff)` the warp is localized to, `None` for everywhere.
+    pub fn region(&self) -> Option<(Aabb, f32)> {
+        self.region
+    }
+
     /// The farthest any point moves: `A·√3`.
     pub fn reach(&self) -> f32 {
         self.amplitude * 3f32.sqrt()

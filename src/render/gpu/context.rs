@@ -5,9 +5,10 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 use wgpu::util::DeviceExt;
 
+use super::noise::encode_fbm;
 use super::tape::Tape;
 use super::{GpuError, shader_source};
-use crate::field::Field;
+use crate::field::{Fbm, Field};
 use crate::render::camera::Camera;
 use crate::render::cpu::RenderSettings;
 use crate::render::image::Frame;
@@ -63,6 +64,7 @@ pub struct GpuContext {
     queue: wgpu::Queue,
     render: wgpu::ComputePipeline,
     probe: wgpu::ComputePipeline,
+    fbm_probe: wgpu::ComputePipeline,
     /// Name and backend of the adapter, for messages.
     pub adapter: String,
 }
@@ -103,7 +105,8 @@ impl GpuContext {
                 cache: None,
             })
         };
-        let (render, probe) = (pipeline("render"), pipeline("probe"));
+        let (render, probe, fbm_probe) =
+            (pipeline("render"), pipeline("probe"), pipeline("fbm_probe"));
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Device(format!(
                 "the tracing shader does not compile: {e}"
@@ -114,6 +117,7 @@ impl GpuContext {
             queue,
             render,
             probe,
+            fbm_probe,
             adapter: format!("{} ({:?})", info.name, info.backend),
         })
     }
@@ -149,12 +153,23 @@ impl GpuContext {
         Ok(())
     }
 
-    fn tape_buffers(&self, tape: &Tape) -> Result<[wgpu::Buffer; 3], GpuError> {
+    /// The tape's buffers, bound at 1, 2 and 3 of `shaders/`.
+    fn tape_buffers(&self, tape: &Tape) -> Result<[(u32, wgpu::Buffer); 3], GpuError> {
+        self.check_size("the tape's parameters", 4 * tape.params.len() as u64)?;
         self.check_size("the tape's heightfields", 4 * tape.heights.len() as u64)?;
         Ok([
-            self.storage("instrs", bytemuck::cast_slice(&tape.instrs)),
-            self.storage("params", bytemuck::cast_slice(&tape.params)),
-            self.storage("heights", bytemuck::cast_slice(&tape.heights)),
+            (
+                1,
+                self.storage("instrs", bytemuck::cast_slice(&tape.instrs)),
+            ),
+            (
+                2,
+                self.storage("params", bytemuck::cast_slice(&tape.params)),
+            ),
+            (
+                3,
+                self.storage("heights", bytemuck::cast_slice(&tape.heights)),
+            ),
         ])
     }
 
@@ -243,7 +258,7 @@ impl GpuContext {
         let (w, h) = (camera.width, camera.height);
         let n = w as u64 * h as u64;
         self.check_size("the image", 4 * n)?;
-        let [instrs, params, heights] = self.tape_buffers(tape)?;
+        let tape_buffers = self.tape_buffers(tape)?;
         let uniforms = self
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -254,17 +269,12 @@ impl GpuContext {
         let rgba = self.output("rgba", 4 * n);
         let depth = self.output("depth", 4 * n);
         let steps = self.output("steps", 4 * n);
+        let mut bindings: Vec<(u32, &wgpu::Buffer)> =
+            tape_buffers.iter().map(|(k, b)| (*k, b)).collect();
+        bindings.extend([(0, &uniforms), (4, &rgba), (5, &depth), (6, &steps)]);
         let out = self.run(
             &self.render,
-            &[
-                (0, &uniforms),
-                (1, &instrs),
-                (2, &params),
-                (3, &heights),
-                (4, &rgba),
-                (5, &depth),
-                (6, &steps),
-            ],
+            &bindings,
             &[&rgba, &depth, &steps],
             (w.div_ceil(8), h.div_ceil(8)),
         )?;
@@ -283,10 +293,32 @@ impl GpuContext {
 
     /// Evaluates `tape` at each `(p, r)` on the GPU: `(f(p), Lipschitz bound over B(p, r))`.
     pub fn probe(&self, tape: &Tape, points: &[(Vec3, f32)]) -> Result<Vec<(f32, f32)>, GpuError> {
+        let tape_buffers = self.tape_buffers(tape)?;
+        let bindings: Vec<(u32, &wgpu::Buffer)> =
+            tape_buffers.iter().map(|(k, b)| (*k, b)).collect();
+        self.run_probes(&self.probe, &bindings, points)
+    }
+
+    /// Evaluates the turbulence `fbm` at each point on the GPU (`shaders/noise.wgsl`), to
+    /// compare the port with [`Fbm::value`].
+    pub fn probe_fbm(&self, fbm: &Fbm, points: &[Vec3]) -> Result<Vec<f32>, GpuError> {
+        let params = self.storage("params", bytemuck::cast_slice(&encode_fbm(0, fbm)));
+        let points: Vec<(Vec3, f32)> = points.iter().map(|&p| (p, 0.0)).collect();
+        let out = self.run_probes(&self.fbm_probe, &[(2, &params)], &points)?;
+        Ok(out.into_iter().map(|v| v.0).collect())
+    }
+
+    /// Runs a probe entry point over `points` with the buffers `bound` and reads back its
+    /// `vec2` per point.
+    fn run_probes(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        bound: &[(u32, &wgpu::Buffer)],
+        points: &[(Vec3, f32)],
+    ) -> Result<Vec<(f32, f32)>, GpuError> {
         if points.is_empty() {
             return Ok(Vec::new());
         }
-        let [instrs, params, heights] = self.tape_buffers(tape)?;
         let input: Vec<[f32; 4]> = points.iter().map(|&(p, r)| v4(p, r)).collect();
         self.check_size("the probes", 16 * input.len() as u64)?;
         let input = self.storage("probe_in", bytemuck::cast_slice(&input));
@@ -299,18 +331,9 @@ impl GpuContext {
                 points.len()
             )));
         }
-        let out = self.run(
-            &self.probe,
-            &[
-                (1, &instrs),
-                (2, &params),
-                (3, &heights),
-                (7, &input),
-                (8, &output),
-            ],
-            &[&output],
-            (groups, 1),
-        )?;
+        let mut bindings = bound.to_vec();
+        bindings.extend([(7, &input), (8, &output)]);
+        let out = self.run(pipeline, &bindings, &[&output], (groups, 1))?;
         Ok(bytemuck::cast_slice::<u8, [f32; 2]>(&out[0])
             .iter()
             .map(|v| (v[0], v[1]))

@@ -5,18 +5,18 @@
 //! | tree node | tape |
 //! | --- | --- |
 //! | constant | `CONST` |
-//! | [`Primitive`] without noise on a point, segment, sphere, capsule or axis-aligned box | `PRIM` (Wyvill) |
-//! | [`Primitive`] without noise on a polyline or curve | its segments' `PRIM`s under a BVH of guards, combined by `UNION` (`E ≥ 0`: `E·g(minᵢ dᵢ/R) = maxᵢ E·g(dᵢ/R)`, `g` decreasing) or `INTER` (`E < 0`) |
+//! | [`Primitive`] on a point, segment, sphere, capsule or axis-aligned box | `PRIM` (Wyvill); `NPRIM` with noise |
+//! | [`Primitive`] on a polyline or curve | its segments' `PRIM`s (`NPRIM`s) under a BVH of guards, combined by `UNION` (`E ≥ 0`: `E·g(minᵢ d̃ᵢ) = maxᵢ E·g(d̃ᵢ)`, `g` decreasing) or `INTER` (`E < 0`) |
 //! | [`HeightfieldField`] (bilinear, square cells, no nodata, no domain polygon) | `HEIGHT` ∩ `PRIM` on its [`Shape::Prism`], energy `2T`: `min(σ(h − z), 2T·g(d_P/R))` as the leaf defines it |
 //! | blend | children chained by `BLEND`; with a BVH (many children), [`TapeBuilder::combine_bvh`] over the children's supports |
 //! | union / intersection | children chained by `UNION` / `INTER` |
 //! | difference | base, then each carve and `DIFF` |
 //! | affine transform | `WARP`, child, `UNWARP` with the tree's own `M⁻¹` |
+//! | turbulence warp | `TWARP`, child, `UNWARP` (the tree's bound: the child's over the ball grown by the warp's reach, times its Lipschitz bound) |
 //!
 //! Every emitted subtree is then told its support from the tree's cache
 //! ([`TapeBuilder::assume_support`]), so the tape's guards and support box are the tree's.
-//! A node with no encoding — a turbulence warp, a noisy primitive, another skeleton, an
-//! S-field volume or any other leaf — is a [`GpuError::NoEncoding`] naming it, and
+//! A node with no encoding — another skeleton, an S-field volume or any other leaf — is a [`GpuError::NoEncoding`] naming it, and
 //! `karstic render --gpu` falls back to the CPU with that message. An instanced subtree
 //! (one node with several parents) is emitted once per use: a tape is a tree.
 
@@ -89,13 +89,10 @@ fn emit(tree: &Tree, b: &mut TapeBuilder, id: NodeId) -> Result<(), GpuError> {
             emit(tree, b, *child)?;
             b.warp_end()?;
         }
-        Node::Warp { .. } => {
-            return Err(no_encoding(
-                tree,
-                id,
-                "turbulence warp",
-                "the GPU evaluator has no noise yet",
-            ));
+        Node::Warp { child, warp } => {
+            b.turbulence_begin(warp)?;
+            emit(tree, b, *child)?;
+            b.warp_end()?;
         }
     }
     b.assume_support(tree.info(id).support)
@@ -139,18 +136,19 @@ fn leaf(tree: &Tree, b: &mut TapeBuilder, id: NodeId, f: &dyn Field) -> Result<(
 fn primitive(tree: &Tree, b: &mut TapeBuilder, id: NodeId, p: &Primitive) -> Result<(), GpuError> {
     let skeleton = p.skeleton();
     let kind = format!("{} primitive", skeleton.kind());
-    if p.noise().is_some() {
-        return Err(no_encoding(
-            tree,
-            id,
-            &kind,
-            "noisy primitives need the turbulence, which the GPU evaluator does not have yet",
-        ));
-    }
     let profile = Profile::Wyvill {
         radius: p.radius(),
         energy: p.energy(),
     };
+    // The primitive on one convex shape, with its noise when it has one.
+    let push = |b: &mut TapeBuilder, shape: Shape| match p.noise() {
+        Some(n) => b.noisy_primitive(shape, p.radius(), p.energy(), n),
+        None => {
+            b.primitive(shape, profile);
+            Ok(())
+        }
+    };
+    let reach = p.radius() + p.noise().map_or(0.0, |n| n.amplitude);
     let shape = match skeleton {
         Skeleton::Point(s) => Shape::Point(s.center),
         Skeleton::Segment(s) => Shape::Segment(s.a(), s.b()),
@@ -172,8 +170,9 @@ fn primitive(tree: &Tree, b: &mut TapeBuilder, id: NodeId, p: &Primitive) -> Res
             )
         })?,
         Skeleton::Polyline(chain) | Skeleton::Curve(chain) => {
-            // E·g(minᵢ dᵢ/R): the max of the segments' fields for E ≥ 0 (g decreasing), the
-            // min for E < 0.
+            // E·g(minᵢ d̃ᵢ): the max of the segments' fields for E ≥ 0 (g decreasing), the
+            // min for E < 0; with noise d̃ᵢ is each segment's anisotropic distance, and the
+            // primitive's d̃ is their minimum too.
             let how = if p.energy() >= 0.0 {
                 Combine::Union
             } else {
@@ -187,12 +186,9 @@ fn primitive(tree: &Tree, b: &mut TapeBuilder, id: NodeId, p: &Primitive) -> Res
             let boxes: Vec<_> = chain
                 .segments()
                 .iter()
-                .map(|s| s.bounds().dilate(p.radius()))
+                .map(|s| s.bounds().dilate(reach * 1.000_01))
                 .collect();
-            return b.combine_bvh(how, &boxes, &mut |b, i| {
-                b.primitive(shapes[i], profile);
-                Ok(())
-            });
+            return b.combine_bvh(how, &boxes, &mut |b, i| push(b, shapes[i]));
         }
         other => {
             return Err(no_encoding(
@@ -206,8 +202,7 @@ fn primitive(tree: &Tree, b: &mut TapeBuilder, id: NodeId, p: &Primitive) -> Res
             ));
         }
     };
-    b.primitive(shape, profile);
-    Ok(())
+    push(b, shape)
 }
 
 /// The box as centre and half-size when its yaw is a multiple of 90° (it then fills its

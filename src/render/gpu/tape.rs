@@ -10,9 +10,11 @@
 //! | `CONST` | `v` | push | constant `v` (Lipschitz 0) |
 //! | `PRIM` | `R, e, shape…` | push | `e·g(max(sd, 0)/R)` (Wyvill) or `σ(−sd, R)` (σ, `flags` bit 8); `sd` = signed distance to the shape (`flags & 0xff`: sphere `c, ρ`; capsule `a, b, ρ`; box `c, half`; heightfield prism `min, max`) |
 //! | `HEIGHT` | `R, L, ox, oy, cell, nx, ny, offset` | push | `σ(h(x, y) − z, R)`, `h` bilinear in `heights[offset..]`, `L ≥ |∇h|` |
+//! | `NPRIM` | see [`super::noise`] | push | a noisy primitive `E·g(d̃)` on a convex shape |
 //! | `BLEND` / `UNION` / `INTER` / `DIFF` | – | pop 2, push 1 | `a + b`, `max`, `min`, `min(a, 2T − b)` |
 //! | `GUARD` | `min.xyz, max.xyz` | – | when neither `p` nor the ball touches the box, push `(0, 0)` and jump to `jump` (the instruction after the guarded subtree) |
-//! | `WARP` / `UNWARP` | `M⁻¹` (3 rows of 4), `k = ‖M⁻¹‖` | – | `p, c ← M⁻¹p, M⁻¹c`, `r ← k·r`; on `UNWARP` restore them and scale the top bound by `k` |
+//! | `WARP` / `UNWARP` | `M⁻¹` (3 rows of 4), `k = ‖M⁻¹‖` / `k` | – | `p, c ← M⁻¹p, M⁻¹c`, `r ← k·r`; on `UNWARP` restore them and scale the top bound by `k` |
+//! | `TWARP` | see [`super::noise`] | – | a turbulence warp: `p ← ω⁻¹(p)`, `r ← r + reach`, closed by an `UNWARP` |
 //!
 //! Every subtree pushes exactly one `(value, bound)` pair and every node is 0 outside its
 //! support box, so a guard may stand in for any subtree: a blend's BVH becomes nested
@@ -26,8 +28,9 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Affine3A, Vec2, Vec3, Vec3A};
 
 use super::GpuError;
+use super::noise::{noisy_primitive, nprim_head, twarp_apply, twarp_params};
 use crate::field::falloff::{sigma, sigma_slope, wyvill, wyvill_slope};
-use crate::field::{Aabb, Field, Interval, T};
+use crate::field::{Aabb, Fbm, Field, Interval, Noise, T, Warp};
 
 /// One tape instruction: 16 bytes, `vec4<u32>` in WGSL.
 #[repr(C)]
@@ -51,6 +54,8 @@ pub mod op {
     pub const PRIM: u32 = 1;
     /// Push a heightfield's `σ(h − z)`.
     pub const HEIGHT: u32 = 2;
+    /// Push a noisy primitive.
+    pub const NPRIM: u32 = 3;
     /// Sum of the two top entries.
     pub const BLEND: u32 = 16;
     /// Maximum.
@@ -63,8 +68,10 @@ pub mod op {
     pub const GUARD: u32 = 32;
     /// Enter an affine warp.
     pub const WARP: u32 = 33;
-    /// Leave an affine warp.
+    /// Leave an affine or turbulence warp.
     pub const UNWARP: u32 = 34;
+    /// Enter a turbulence warp.
+    pub const TWARP: u32 = 35;
 }
 
 /// Primitive shapes (`flags & 0xff`).
@@ -230,6 +237,9 @@ pub struct Tape {
     pub params: Vec<f32>,
     /// Heightfield samples of all `HEIGHT` leaves.
     pub heights: Vec<f32>,
+    /// The turbulences of `NPRIM` and `TWARP`, by the index in their parameters: the CPU
+    /// evaluates them with these, the GPU from their encoding.
+    pub noises: Vec<Fbm>,
     support: Aabb,
     lipschitz: f32,
     grad_step: f32,
@@ -255,16 +265,26 @@ const EVERYWHERE_BOX: Aabb = Aabb {
     max: Vec3::splat(f32::INFINITY),
 };
 
+/// A warp opened by the builder.
+#[derive(Debug)]
+enum OpenWarp {
+    /// Affine: `M` and `M⁻¹`.
+    Affine(Affine3A, Affine3A),
+    /// Turbulence: how far it moves points, and its Lipschitz bound.
+    Turbulence { reach: f32, lipschitz: f32 },
+}
+
 /// Builds a [`Tape`] in evaluation order (post-order: children, then the combining op).
 #[derive(Debug, Default)]
 pub struct TapeBuilder {
     instrs: Vec<Instr>,
     params: Vec<f32>,
     heights: Vec<f32>,
+    noises: Vec<Fbm>,
     stack: Vec<Entry>,
     max_stack: usize,
-    /// Open warps: stack depth at entry, `M`, `M⁻¹`.
-    warps: Vec<(usize, Affine3A, Affine3A)>,
+    /// Open warps: stack depth at entry, and the warp.
+    warps: Vec<(usize, OpenWarp)>,
     max_warps: usize,
     guards: usize,
 }
@@ -324,6 +344,29 @@ impl TapeBuilder {
             support: shape.bounds(r),
             range,
         });
+    }
+
+    /// Pushes the noisy primitive `energy · g(d̃)` of seed 002 §5.2 around a convex shape
+    /// (not a prism), with [`crate::field::Primitive`]'s anisotropic distance `d̃`.
+    pub fn noisy_primitive(
+        &mut self,
+        shape: Shape,
+        radius: f32,
+        energy: f32,
+        noise: &Noise,
+    ) -> Result<(), GpuError> {
+        if matches!(shape, Shape::Prism { .. }) {
+            return Err(GpuError::Tape("a prism cannot carry noise".into()));
+        }
+        let mut p = nprim_head(radius, energy, noise, self.noises.len()).to_vec();
+        self.noises.push(noise.fbm);
+        let kind = shape.encode(&mut p);
+        self.emit(op::NPRIM, kind, &p);
+        self.push(Entry {
+            support: shape.bounds((radius + noise.amplitude) * 1.000_01),
+            range: Interval::new(0.0, energy),
+        });
+        Ok(())
     }
 
     /// Pushes `σ(h(x, y) − z, falloff)` for a bilinear heightfield (clamped at its edges).
@@ -509,14 +552,37 @@ impl TapeBuilder {
             )));
         }
         self.emit(op::WARP, 0, &warp_params(&inv));
-        self.warps.push((self.stack.len(), m, inv));
+        self.open_warp(OpenWarp::Affine(m, inv));
+        Ok(())
+    }
+
+    fn open_warp(&mut self, w: OpenWarp) {
+        self.warps.push((self.stack.len(), w));
         self.max_warps = self.max_warps.max(self.warps.len());
+    }
+
+    /// Enters the turbulence warp `w` (seed 002 §5.3) of the subtree emitted until
+    /// [`TapeBuilder::warp_end`]: the subtree is evaluated at `ω⁻¹(p)`.
+    pub fn turbulence_begin(&mut self, w: &Warp) -> Result<(), GpuError> {
+        if !(w.reach().is_finite() && w.lipschitz().is_finite()) {
+            return Err(GpuError::Tape(format!(
+                "turbulence warp of amplitude {} is not finite",
+                w.amplitude()
+            )));
+        }
+        let q = twarp_params(w, self.noises.len());
+        self.noises.extend_from_slice(w.turbulence());
+        self.emit(op::TWARP, 0, &q);
+        self.open_warp(OpenWarp::Turbulence {
+            reach: w.reach(),
+            lipschitz: w.lipschitz(),
+        });
         Ok(())
     }
 
     /// Leaves the innermost warp; it must enclose exactly one subtree.
     pub fn warp_end(&mut self) -> Result<(), GpuError> {
-        let (depth, m, inv) = self
+        let (depth, w) = self
             .warps
             .pop()
             .ok_or_else(|| GpuError::Tape("warp_end without warp_begin".into()))?;
@@ -525,10 +591,19 @@ impl TapeBuilder {
                 "a warp must enclose exactly one subtree".into(),
             ));
         }
-        self.emit(op::UNWARP, 0, &warp_params(&inv));
+        let k = match &w {
+            OpenWarp::Affine(_, inv) => warp_params(inv)[12],
+            OpenWarp::Turbulence { lipschitz, .. } => *lipschitz,
+        };
+        self.emit(op::UNWARP, 0, &[k]);
         let top = self.stack.last_mut().expect("checked above");
         if !top.support.is_empty() && top.support.min.is_finite() && top.support.max.is_finite() {
-            top.support = Aabb::from_points(top.support.corners().map(|c| m.transform_point3(c)));
+            top.support = match w {
+                OpenWarp::Affine(m, _) => {
+                    Aabb::from_points(top.support.corners().map(|c| m.transform_point3(c)))
+                }
+                OpenWarp::Turbulence { reach, .. } => top.support.dilate(reach),
+            };
         }
         Ok(())
     }
@@ -602,6 +677,7 @@ impl TapeBuilder {
             instrs: self.instrs,
             params: self.params,
             heights: self.heights,
+            noises: self.noises,
             support,
             lipschitz: 0.0,
             grad_step: 0.0,
@@ -641,16 +717,12 @@ impl Tape {
     /// `(f(p), λ)` with `λ` a Lipschitz bound of `f` over the ball `B(c, r)`: the CPU twin
     /// of `eval_tape` in `shaders/field.wgsl`.
     pub fn eval(&self, p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
-        if p == c {
-            self.run::<true, true>(p, c, r)
-        } else {
-            self.run::<false, true>(p, c, r)
-        }
+        self.run::<true>(p, c, r)
     }
 
-    /// The tape run; `SAME`: `p = c` (distances shared); `BOUND`: compute the bound (else
-    /// the second component is meaningless).
-    fn run<const SAME: bool, const BOUND: bool>(&self, p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
+    /// The tape run; `BOUND`: compute the bound (else the second component is
+    /// meaningless). Where `p = c` the primitives share their distances.
+    fn run<const BOUND: bool>(&self, p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
         let mut stack = [(0.0f32, 0.0f32); MAX_STACK];
         let mut sp = 0usize;
         let mut frames = [(Vec3::ZERO, Vec3::ZERO, 0.0f32); MAX_WARPS];
@@ -667,11 +739,16 @@ impl Tape {
                     sp += 1;
                 }
                 op::PRIM => {
-                    stack[sp] = primitive::<SAME, BOUND>(ins.flags, &prm[o..], p, c, r);
+                    stack[sp] = primitive::<BOUND>(ins.flags, &prm[o..], p, c, r);
+                    sp += 1;
+                }
+                op::NPRIM => {
+                    stack[sp] =
+                        noisy_primitive(ins.flags, &prm[o..], &self.noises, (p, c, r), BOUND);
                     sp += 1;
                 }
                 op::HEIGHT => {
-                    stack[sp] = self.height::<SAME, BOUND>(&prm[o..], p, c, r);
+                    stack[sp] = self.height::<BOUND>(&prm[o..], p, c, r);
                     sp += 1;
                 }
                 op::BLEND | op::UNION | op::INTER | op::DIFF => {
@@ -702,10 +779,16 @@ impl Tape {
                     c = affine(&prm[o..], c);
                     r *= prm[o + 12];
                 }
+                op::TWARP => {
+                    frames[fp] = (p, c, r);
+                    fp += 1;
+                    p = twarp_apply(&prm[o..], &self.noises, p);
+                    r += prm[o + 1];
+                }
                 op::UNWARP => {
                     fp -= 1;
                     (p, c, r) = frames[fp];
-                    stack[sp - 1].1 *= prm[o + 12];
+                    stack[sp - 1].1 *= prm[o];
                 }
                 _ => unreachable!("the builder emits only known ops"),
             }
@@ -714,13 +797,7 @@ impl Tape {
         stack[0]
     }
 
-    fn height<const SAME: bool, const BOUND: bool>(
-        &self,
-        q: &[f32],
-        p: Vec3,
-        c: Vec3,
-        r: f32,
-    ) -> (f32, f32) {
+    fn height<const BOUND: bool>(&self, q: &[f32], p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
         let (fall, slope) = (q[0], q[1]);
         let h = |x: f32, y: f32| bilinear(&self.heights, q, x, y);
         let hp = h(p.x, p.y);
@@ -728,7 +805,7 @@ impl Tape {
         if !BOUND {
             return (value, 0.0);
         }
-        let hc = if SAME { hp } else { h(c.x, c.y) };
+        let hc = if p == c { hp } else { h(c.x, c.y) };
         let v = Interval::new(hc - slope * r - c.z - r, hc + slope * r - c.z + r);
         (value, sigma_slope(v, fall) * (1.0 + slope * slope).sqrt())
     }
@@ -754,7 +831,7 @@ fn affine(m: &[f32], p: Vec3) -> Vec3 {
 }
 
 /// Signed distance to the shape in `q` (after `R, e`).
-fn signed_distance(kind: u32, q: &[f32], p: Vec3) -> f32 {
+pub(super) fn signed_distance(kind: u32, q: &[f32], p: Vec3) -> f32 {
     match kind {
         shape::SPHERE => p.distance(Vec3::new(q[0], q[1], q[2])) - q[3],
         shape::CAPSULE => {
@@ -786,14 +863,39 @@ fn signed_distance(kind: u32, q: &[f32], p: Vec3) -> f32 {
     }
 }
 
+/// The closest point to `p` of the convex shape `kind` with parameters `q` (`p` inside
+/// it): the projection the noisy primitives read their turbulence through.
+pub(super) fn closest(kind: u32, q: &[f32], p: Vec3) -> Vec3 {
+    match kind {
+        shape::SPHERE => {
+            let c = Vec3::new(q[0], q[1], q[2]);
+            let w = p - c;
+            let d = w.length();
+            if d <= q[3] { p } else { c + w * (q[3] / d) }
+        }
+        shape::CAPSULE => {
+            let a = Vec3::new(q[0], q[1], q[2]);
+            let ab = Vec3::new(q[3], q[4], q[5]) - a;
+            let l2 = ab.length_squared();
+            let h = if l2 > 0.0 {
+                ((p - a).dot(ab) / l2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let s = a + ab * h;
+            let w = p - s;
+            let d = w.length();
+            if d <= q[6] { p } else { s + w * (q[6] / d) }
+        }
+        _ => {
+            let (c, half) = (Vec3::new(q[0], q[1], q[2]), Vec3::new(q[3], q[4], q[5]));
+            c + (p - c).clamp(-half, half)
+        }
+    }
+}
+
 /// `(value at p, Lipschitz bound over B(c, r))` of a primitive with params `q`.
-fn primitive<const SAME: bool, const BOUND: bool>(
-    flags: u32,
-    q: &[f32],
-    p: Vec3,
-    c: Vec3,
-    r: f32,
-) -> (f32, f32) {
+fn primitive<const BOUND: bool>(flags: u32, q: &[f32], p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
     let (rad, energy) = (q[0], q[1]);
     let kind = flags & 0xff;
     let sd_p = signed_distance(kind, &q[2..], p);
@@ -805,7 +907,7 @@ fn primitive<const SAME: bool, const BOUND: bool>(
         };
         return (v, 0.0);
     }
-    let sd_c = if SAME {
+    let sd_c = if p == c {
         sd_p
     } else {
         signed_distance(kind, &q[2..], c)
@@ -822,7 +924,7 @@ fn primitive<const SAME: bool, const BOUND: bool>(
 
 impl Field for Tape {
     fn value(&self, p: Vec3) -> f32 {
-        self.run::<true, false>(p, p, 0.0).0
+        self.run::<false>(p, p, 0.0).0
     }
 
     /// Tetrahedral finite differences with step [`Tape::grad_step`], as on the GPU.

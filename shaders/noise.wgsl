@@ -1,0 +1,228 @@
+// Seeded 3D simplex noise and fBm: the GPU twin of src/field/noise.rs (same hash, same
+// gradients, same corner order, f32), and the noisy primitive and turbulence warp of the
+// tape (src/render/gpu/noise.rs). An encoded fBm at `o` in `params` is
+// [index, seed & 0xffff, seed >> 16, 1/λ, octaves, norm, Lipschitz].
+
+const F3: f32 = 1.0 / 3.0;
+const G3: f32 = 1.0 / 6.0;
+const R2: f32 = 0.5;
+const SIMPLEX_SCALE: f32 = 76.0;
+const OCTAVE_SHIFT: vec3<f32> = vec3<f32>(0.5477, 0.3127, 0.7531);
+const FBM_PARAMS: u32 = 7u;
+const NPRIM_HEAD: u32 = 11u;
+
+// Gradient `n` of noise.rs GRADIENTS (the 12 cube-edge midpoints, `|g| = √2`; 12..15
+// repeat 0, 9, 1 and 11), computed rather than indexed: pair of axes `n >> 2` (xy, xz,
+// yz), signs from bits 0 and 1.
+fn gradient_of(index: u32) -> vec3<f32> {
+    var n = index;
+    switch n {
+        case 12u: { n = 0u; }
+        case 13u: { n = 9u; }
+        case 14u: { n = 1u; }
+        case 15u: { n = 11u; }
+        default: {}
+    }
+    let a = select(1.0, -1.0, (n & 1u) != 0u);
+    let b = select(1.0, -1.0, (n & 2u) != 0u);
+    switch n >> 2u {
+        case 0u: { return vec3<f32>(a, b, 0.0); }
+        case 1u: { return vec3<f32>(a, 0.0, b); }
+        default: { return vec3<f32>(0.0, a, b); }
+    }
+}
+
+// The "lowbias32" finaliser (noise.rs mix32); u32 arithmetic wraps in WGSL.
+fn mix32(x: u32) -> u32 {
+    var h = x;
+    h ^= h >> 16u;
+    h *= 0x7feb352du;
+    h ^= h >> 15u;
+    h *= 0x846ca68bu;
+    return h ^ (h >> 16u);
+}
+
+fn lattice_gradient(seed: u32, i: i32, j: i32, k: i32) -> vec3<f32> {
+    let h = mix32(seed ^ (bitcast<u32>(i) * 0x8da6b343u) ^ (bitcast<u32>(j) * 0xd8163841u) ^ (bitcast<u32>(k) * 0xcb1ab31fu));
+    return gradient_of(h >> 28u);
+}
+
+// One corner's term (r² − |d|²)⁴ (g · d), 0 beyond the kernel.
+fn corner(seed: u32, base: vec3<i32>, off: vec3<i32>, d0: vec3<f32>, c: f32) -> f32 {
+    let d = d0 - vec3<f32>(off) + vec3<f32>(c * G3);
+    let a = R2 - dot(d, d);
+    if a <= 0.0 {
+        return 0.0;
+    }
+    let v = base + off;
+    let a2 = a * a;
+    return a2 * a2 * dot(lattice_gradient(seed, v.x, v.y, v.z), d);
+}
+
+// Simplex noise n(p) in [-1, 1] (noise.rs simplex).
+fn simplex(seed: u32, p: vec3<f32>) -> f32 {
+    let s = (p.x + p.y + p.z) * F3;
+    let i = floor(p.x + s);
+    let j = floor(p.y + s);
+    let k = floor(p.z + s);
+    let t = (i + j + k) * G3;
+    let d0 = p - vec3<f32>(i - t, j - t, k - t);
+    var o1: vec3<i32>;
+    var o2: vec3<i32>;
+    if d0.x >= d0.y {
+        if d0.y >= d0.z {
+            o1 = vec3<i32>(1, 0, 0);
+            o2 = vec3<i32>(1, 1, 0);
+        } else if d0.x >= d0.z {
+            o1 = vec3<i32>(1, 0, 0);
+            o2 = vec3<i32>(1, 0, 1);
+        } else {
+            o1 = vec3<i32>(0, 0, 1);
+            o2 = vec3<i32>(1, 0, 1);
+        }
+    } else if d0.y < d0.z {
+        o1 = vec3<i32>(0, 0, 1);
+        o2 = vec3<i32>(0, 1, 1);
+    } else if d0.x < d0.z {
+        o1 = vec3<i32>(0, 1, 0);
+        o2 = vec3<i32>(0, 1, 1);
+    } else {
+        o1 = vec3<i32>(0, 1, 0);
+        o2 = vec3<i32>(1, 1, 0);
+    }
+    let base = vec3<i32>(i32(i), i32(j), i32(k));
+    var value = 0.0;
+    value += corner(seed, base, vec3<i32>(0), d0, 0.0);
+    value += corner(seed, base, o1, d0, 1.0);
+    value += corner(seed, base, o2, d0, 2.0);
+    value += corner(seed, base, vec3<i32>(1), d0, 3.0);
+    return SIMPLEX_SCALE * value;
+}
+
+// fBm t(p) in [-1, 1] of the fBm encoded at `o` (noise.rs Fbm::value).
+fn fbm(o: u32, p: vec3<f32>) -> f32 {
+    let seed = u32(params[o + 1u]) | (u32(params[o + 2u]) << 16u);
+    let octaves = u32(params[o + 4u]);
+    var q = p * params[o + 3u];
+    var amp = 1.0;
+    var value = 0.0;
+    for (var k = 0u; k < octaves; k += 1u) {
+        value += amp * simplex(seed + k * 0x9e3779b9u, q + f32(k) * OCTAVE_SHIFT);
+        amp *= 0.5;
+        q *= 2.0;
+    }
+    return value * params[o + 5u];
+}
+
+// The closest point of a convex shape (tape.rs closest): sphere, capsule or box.
+fn closest_point(kind: u32, o: u32, p: vec3<f32>) -> vec3<f32> {
+    if kind == SHAPE_SPHERE {
+        let c = param3(o);
+        let w = p - c;
+        let d = length(w);
+        if d <= params[o + 3u] {
+            return p;
+        }
+        return c + w * (params[o + 3u] / d);
+    }
+    if kind == SHAPE_CAPSULE {
+        let a = param3(o);
+        let ab = param3(o + 3u) - a;
+        let l2 = dot(ab, ab);
+        var h = 0.0;
+        if l2 > 0.0 {
+            h = clamp(dot(p - a, ab) / l2, 0.0, 1.0);
+        }
+        let s = a + ab * h;
+        let w = p - s;
+        let d = length(w);
+        if d <= params[o + 6u] {
+            return p;
+        }
+        return s + w * (params[o + 6u] / d);
+    }
+    let c = param3(o);
+    let half = param3(o + 3u);
+    return c + clamp(p - c, -half, half);
+}
+
+// d̃(p) of the noisy primitive at `o`, capped at 1 (noise.rs noisy_distance).
+fn noisy_distance(kind: u32, o: u32, p: vec3<f32>) -> f32 {
+    let r = params[o];
+    let a = params[o + 2u];
+    let rho = max(signed_distance(kind, o + NPRIM_HEAD, p), 0.0);
+    if rho >= r + a {
+        return 1.0;
+    }
+    if rho <= 0.0 {
+        return 0.0;
+    }
+    let s = closest_point(kind, o + NPRIM_HEAD, p);
+    let u = (p - s) / rho;
+    return min(rho / (r + a * fbm(o + 4u, s + u * r)), 1.0);
+}
+
+// (value at p, Lipschitz bound over B(c, rb)) of the noisy primitive at `o`
+// (noise.rs noisy_primitive).
+fn noisy_primitive(kind: u32, o: u32, p: vec3<f32>, c: vec3<f32>, rb: f32) -> vec2<f32> {
+    let r = params[o];
+    let e = params[o + 1u];
+    let a = params[o + 2u];
+    let slope = params[o + 3u];
+    let lt = params[o + 4u + 6u];
+    let dp = noisy_distance(kind, o, p);
+    let v = e * wyvill(dp);
+    let reach = r + a;
+    let dc = max(signed_distance(kind, o + NPRIM_HEAD, c), 0.0);
+    let rho_lo = max(dc - rb, 0.0);
+    let rho_hi = dc + rb;
+    var den_lo = r - a;
+    var den_hi = r + a;
+    var x0 = rho_lo / den_hi;
+    var x1 = rho_hi / den_lo;
+    if rho_lo < reach {
+        var xc = 1.0;
+        if rho_lo > 0.0 {
+            let s = closest_point(kind, o + NPRIM_HEAD, c);
+            let tc = fbm(o + 4u, s + (c - s) * (r / dc));
+            let spread = lt * (1.0 + r / rho_lo) * rb;
+            den_lo = max(den_lo, r + a * (tc - spread));
+            den_hi = min(den_hi, r + a * (tc + spread));
+            x0 = min(rho_lo / den_hi, rho_hi / den_lo);
+            x1 = max(rho_lo / den_hi, rho_hi / den_lo);
+            if dc < reach {
+                xc = dc / (r + a * tc);
+            }
+        } else {
+            xc = noisy_distance(kind, o, c);
+        }
+        let m = min(xc, 1.0);
+        let lo = max(x0, m - rb * slope);
+        let hi = min(x1, m + rb * slope);
+        if lo <= hi {
+            x0 = lo;
+            x1 = hi;
+        }
+    }
+    x0 = clamp(x0, 0.0, 1.0);
+    x1 = clamp(x1, 0.0, 1.0);
+    let dt = (1.0 + a * lt * (min(x1, 1.0) + r / den_lo)) / den_lo;
+    return vec2<f32>(v, abs(e) * wyvill_slope(x0, x1) * dt);
+}
+
+// ω⁻¹(p) of the turbulence warp at `o` (warp.rs Warp::apply).
+fn twarp_apply(o: u32, p: vec3<f32>) -> vec3<f32> {
+    var fd = 1.0;
+    if params[o + 3u] != 0.0 {
+        let q = clamp(p, param3(o + 4u), param3(o + 7u));
+        let d = length(p - q);
+        if d != 0.0 {
+            fd = wyvill(d / params[o + 10u]);
+        }
+    }
+    if fd == 0.0 {
+        return p;
+    }
+    let t = vec3<f32>(fbm(o + 11u, p), fbm(o + 11u + FBM_PARAMS, p), fbm(o + 11u + 2u * FBM_PARAMS, p));
+    return p + t * (params[o] * fd);
+}
