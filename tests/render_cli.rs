@@ -110,7 +110,7 @@ fn tree_files_load_with_their_tape_or_the_reason_they_have_none() {
     let spire = load_tree(&dir.join("rock_spire.ron")).unwrap();
     let e = spire.tape.as_ref().unwrap_err().to_string();
     assert!(
-        e.contains("\"ground\"") && e.contains("no GPU encoding"),
+        e.contains("\"spire\"") && e.contains("no GPU encoding"),
         "{e}"
     );
     // --gpu without an encoding still renders, on the CPU.
