@@ -4,7 +4,8 @@
 mod common;
 
 use common::{
-    Blobs, Rng, SigmaSphere, Terrain, assert_frames_match, check_segment_lipschitz, dem, gpu, tapes,
+    Blobs, Rng, SigmaSphere, Terrain, assert_frames_match, assert_probes_match,
+    check_segment_lipschitz, dem, gpu, tapes,
 };
 use glam::{Affine3A, Quat, Vec3};
 use indicatif::ProgressBar;
@@ -259,18 +260,7 @@ fn gpu_probes_match_the_cpu_tape() {
                 )
             })
             .collect();
-        let got = ctx.probe(t, &pts).unwrap();
-        for (&(p, r), &(v, l)) in pts.iter().zip(&got) {
-            let (cv, cl) = t.eval(p, p, r);
-            assert!(
-                (v - cv).abs() <= 1e-4 * (1.0 + cv.abs()),
-                "value at {p}: GPU {v}, CPU {cv}"
-            );
-            assert!(
-                (l - cl).abs() <= 1e-3 * (1.0 + cl.abs()),
-                "bound at {p}, r {r}: GPU {l}, CPU {cl}"
-            );
-        }
+        assert_probes_match(ctx, t, &pts);
     }
 }
 

@@ -6,7 +6,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{Rng, assert_frames_match, depth_agreement, gpu};
+use common::{Rng, assert_frames_match, assert_probes_match, depth_agreement, gpu};
 use glam::Vec3;
 use indicatif::ProgressBar;
 use karstic::dem::{Heightfield, HeightfieldField, ImplicitParams, Interpolation};
@@ -490,18 +490,7 @@ fn noisy_primitives_and_turbulence_warps_equal_their_nodes() {
             (point_in(&mut rng, &s), r)
         })
         .collect();
-    let got = ctx.probe(&tape, &pts).unwrap();
-    for (&(p, r), &(v, l)) in pts.iter().zip(&got) {
-        let (cv, cl) = tape.eval(p, p, r);
-        assert!(
-            (v - cv).abs() <= 1e-4 * (1.0 + cv.abs()),
-            "value at {p}: GPU {v}, CPU {cv}"
-        );
-        assert!(
-            (l - cl).abs() <= 1e-3 * (1.0 + cl.abs()),
-            "bound at {p}, r {r}: GPU {l}, CPU {cl}"
-        );
-    }
+    assert_probes_match(ctx, &tape, &pts);
     let (cam, settings) = view(&tree);
     let a = render(&tree, &cam, &settings, &ProgressBar::hidden());
     let g = ctx.render(&tape, &cam, &settings).unwrap();

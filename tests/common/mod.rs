@@ -715,6 +715,27 @@ pub fn gpu() -> Option<&'static karstic::render::gpu::GpuContext> {
     .as_ref()
 }
 
+/// Asserts that the GPU's probes of `tape` (value and Lipschitz bound over a ball of
+/// radius `r` at each point) equal the CPU tape's within float rounding.
+pub fn assert_probes_match(
+    ctx: &karstic::render::gpu::GpuContext,
+    tape: &karstic::render::gpu::Tape,
+    pts: &[(Vec3, f32)],
+) {
+    let got = ctx.probe(tape, pts).unwrap();
+    for (&(p, r), &(v, l)) in pts.iter().zip(&got) {
+        let (cv, cl) = tape.eval(p, p, r);
+        assert!(
+            (v - cv).abs() <= 1e-4 * (1.0 + cv.abs()),
+            "value at {p}: GPU {v}, CPU {cv}"
+        );
+        assert!(
+            (l - cl).abs() <= 1e-3 * (1.0 + cl.abs()),
+            "bound at {p}, r {r}: GPU {l}, CPU {cl}"
+        );
+    }
+}
+
 /// Asserts that two renders of the same scene agree: on ≥ 99 % of pixels every colour
 /// channel within 6 levels, and on ≥ 99 % of pixels the same hit/miss.
 pub fn assert_frames_match(name: &str, a: &karstic::render::Frame, b: &karstic::render::Frame) {
