@@ -7,27 +7,32 @@ fn karstic() -> Command {
     Command::new(env!("CARGO_BIN_EXE_karstic"))
 }
 
-#[test]
-fn builds_a_field_and_prints_stats() {
-    let dir = tempfile::tempdir().unwrap();
-    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/curves/cliff.ron");
-    let (npy, obj) = (dir.path().join("cliff.npy"), dir.path().join("ribbons.obj"));
-    let out = karstic()
-        .args(["curves", "build"])
-        .arg(&scene)
-        .arg("-o")
-        .arg(&npy)
-        .arg("--ribbons")
-        .arg(&obj)
-        .arg("--stats")
-        .output()
-        .unwrap();
+/// Runs `cmd`, asserts it succeeded (showing its stderr otherwise), returns its stdout.
+fn stdout_of(cmd: &mut Command) -> String {
+    let out = cmd.output().unwrap();
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let text = String::from_utf8_lossy(&out.stdout);
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+#[test]
+fn builds_a_field_and_prints_stats() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/curves/cliff.ron");
+    let (npy, obj) = (dir.path().join("cliff.npy"), dir.path().join("ribbons.obj"));
+    let text = stdout_of(
+        karstic()
+            .args(["curves", "build"])
+            .arg(&scene)
+            .arg("-o")
+            .arg(&npy)
+            .arg("--ribbons")
+            .arg(&obj)
+            .arg("--stats"),
+    );
     for row in [
         "voxelization",
         "guidance diffusion",
@@ -92,20 +97,14 @@ fn meshes_tree_files_and_bare_volumes() {
     let dir = tempfile::tempdir().unwrap();
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/curves/tunnel.ron");
     let glb = dir.path().join("tunnel.glb");
-    let out = karstic()
-        .args(["curves", "build"])
-        .arg(&scene)
-        .arg("-o")
-        .arg(&glb)
-        .arg("--stats")
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let text = stdout_of(
+        karstic()
+            .args(["curves", "build"])
+            .arg(&scene)
+            .arg("-o")
+            .arg(&glb)
+            .arg("--stats"),
     );
-    let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("surface propagation") && text.contains("cells visited"));
     let bytes = std::fs::read(&glb).unwrap();
     assert_eq!(&bytes[..4], b"glTF");
@@ -121,17 +120,12 @@ fn meshes_tree_files_and_bare_volumes() {
     };
     std::fs::write(&bare, volume("edge", 36)).unwrap();
     let obj = dir.path().join("bare.obj");
-    let out = karstic()
-        .args(["curves", "build"])
-        .arg(&bare)
-        .arg("-o")
-        .arg(&obj)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    stdout_of(
+        karstic()
+            .args(["curves", "build"])
+            .arg(&bare)
+            .arg("-o")
+            .arg(&obj),
     );
     assert!(
         std::fs::read_to_string(&obj)
