@@ -205,7 +205,8 @@ proptest! {
                 // And every pair on the segment.
                 let (u, v) = (p.lerp(q, rng.f()), p.lerp(q, rng.f()));
                 let on = (prim.value(u) - prim.value(v)).abs();
-                prop_assert!(on <= ls * (u - v).length() * 1.0001 + 1e-6, "{spec:?}\nsegment bound {ls}: {on}");
+                // (Absolute slack for the rounding of two nearly equal values.)
+                prop_assert!(on <= ls * (u - v).length() * 1.0001 + 2e-5, "{spec:?}\nsegment bound {ls}: {on}");
             }
         }
     }
