@@ -8,9 +8,10 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Quat, Vec3};
 use karstic::field::falloff::{WYVILL_MAX_SLOPE, wyvill, wyvill_d, wyvill_interval, wyvill_slope};
+use karstic::field::skeleton::Point;
 use karstic::field::{
-    Aabb, Fbm, Field, Grid, Interval, NodeId, Rect, T, Tree, TreeBuilder, Warp, ZBands, eval_grid,
-    eval_grid_naive,
+    Aabb, Fbm, Field, Grid, Interval, Line, NodeId, Primitive, Rect, Skeleton, T, Tree,
+    TreeBuilder, Warp, ZBands, eval_grid, eval_grid_naive,
 };
 use proptest::prelude::*;
 
@@ -61,18 +62,33 @@ impl Field for Ball {
 #[derive(Clone, Debug)]
 enum Shape {
     Ball(Vec3, f32, f32),
+    /// A point-skeleton primitive (the leaf a line evaluates from its profile).
+    Blob(Vec3, f32, f32),
     Blend(Vec<Shape>),
     Union(Vec<Shape>),
     Inter(Vec<Shape>),
     Diff(Box<Shape>, Vec<Shape>),
     Move(Box<Shape>, Vec3, f32, f32),
     Warp(Box<Shape>, f32, u32),
+    /// One subtree used twice (a union of it and a moved copy): the tree is a DAG.
+    Shared(Box<Shape>, Vec3),
 }
 
 fn shape() -> impl Strategy<Value = Shape> {
     let v = || (-6.0f32..6.0, -6.0f32..6.0, -6.0f32..6.0).prop_map(|(x, y, z)| Vec3::new(x, y, z));
-    let leaf = (v(), 1.0f32..5.0, prop_oneof![0.6f32..1.6, -1.0f32..-0.3])
-        .prop_map(|(c, r, e)| Shape::Ball(c, r, e));
+    let leaf = (
+        v(),
+        1.0f32..5.0,
+        prop_oneof![0.6f32..1.6, -1.0f32..-0.3],
+        any::<bool>(),
+    )
+        .prop_map(|(c, r, e, blob)| {
+            if blob {
+                Shape::Blob(c, r, e)
+            } else {
+                Shape::Ball(c, r, e)
+            }
+        });
     leaf.prop_recursive(3, 24, 4, move |inner| {
         prop_oneof![
             prop::collection::vec(inner.clone(), 1..20).prop_map(Shape::Blend),
@@ -86,11 +102,12 @@ fn shape() -> impl Strategy<Value = Shape> {
                 s,
                 r
             )),
-            (inner, 0.1f32..1.0, 0u32..100).prop_map(|(a, amp, seed)| Shape::Warp(
+            (inner.clone(), 0.1f32..1.0, 0u32..100).prop_map(|(a, amp, seed)| Shape::Warp(
                 Box::new(a),
                 amp,
                 seed
             )),
+            (inner, v()).prop_map(|(a, t)| Shape::Shared(Box::new(a), t)),
         ]
     })
 }
@@ -106,6 +123,15 @@ fn build(s: &Shape, b: &mut TreeBuilder) -> NodeId {
             }),
             None,
         ),
+        Shape::Blob(c, r, e) => b.primitive(
+            Primitive::new(Skeleton::Point(Point { center: *c }), *r, *e, None).unwrap(),
+            None,
+        ),
+        Shape::Shared(a, t) => {
+            let a = build(a, b);
+            let moved = b.transform(a, Affine3A::from_translation(*t), None);
+            b.union(vec![a, moved], None)
+        }
         Shape::Blend(v) => {
             let cs = all(v, b);
             b.blend(cs, None)
@@ -296,6 +322,63 @@ proptest! {
         let naive = eval_grid_naive(&t, &grid);
         for (a, b) in fast.iter().zip(&naive) {
             prop_assert!((a - b).abs() < 1e-5, "{a} vs {b}");
+        }
+    }
+}
+
+/// A blend large enough for a BVH, of random subtrees and blobs.
+fn crowd() -> impl Strategy<Value = Shape> {
+    let v = || (-8.0f32..8.0, -8.0f32..8.0, -8.0f32..8.0).prop_map(|(x, y, z)| Vec3::new(x, y, z));
+    let blob = (v(), 0.5f32..3.0, 0.4f32..1.2).prop_map(|(c, r, e)| Shape::Blob(c, r, e));
+    (
+        prop::collection::vec(shape(), 1..4),
+        prop::collection::vec(blob, 16..40),
+    )
+        .prop_map(|(mut a, b)| {
+            a.extend(b);
+            Shape::Blend(a)
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 150, .. ProptestConfig::default() })]
+
+    /// A line's values and segment bounds are the tree's along the ray, asked in the
+    /// order a march asks them (mostly forward, stepping back to refine), and its bounds
+    /// hold for pairs on the segment and are never looser than the tree's.
+    #[test]
+    fn lines_answer_like_the_tree(
+        s in crowd(),
+        o in (-14.0f32..14.0, -14.0f32..14.0, -14.0f32..14.0),
+        to in (-5.0f32..5.0, -5.0f32..5.0, -5.0f32..5.0),
+    ) {
+        let t = tree(&s);
+        let o = Vec3::new(o.0, o.1, o.2);
+        let d = (Vec3::new(to.0, to.1, to.2) - o).normalize_or(Vec3::X);
+        let span = (0.0, 40.0);
+        let mut line = Line::new(&t);
+        line.restrict(o, d, span);
+        let mut at = 0.0f32;
+        let mut k = 0u32;
+        while at < span.1 {
+            k += 1;
+            let len = [0.05f32, 0.7, 3.0, 9.0][k as usize % 4];
+            let end = (at + len).min(span.1);
+            let (a, b) = (o + d * at, o + d * end);
+            let lam = line.lipschitz(at, end);
+            prop_assert!(
+                lam <= t.lipschitz_segment(a, b) * 1.001 + 1e-5,
+                "line bound {lam} above the tree's {}", t.lipschitz_segment(a, b)
+            );
+            for i in 0..=12 {
+                let ti = at + (end - at) * i as f32 / 12.0;
+                let (v, w) = (line.value(ti), t.value(o + d * ti));
+                prop_assert!((v - w).abs() < 1e-5, "value at t = {ti}: line {v}, tree {w}");
+                let df = (v - line.value(at)).abs();
+                prop_assert!(df <= lam * (ti - at) * 1.001 + 1e-4, "bound {lam} on [{at}, {end}]: {df}");
+            }
+            // Step back now and then, as a refinement does.
+            at = if k.is_multiple_of(5) { end - 0.5 * (end - at) } else { end };
         }
     }
 }

@@ -5,6 +5,7 @@ use glam::{Affine3A, Vec3};
 use super::bounds::{Aabb, Interval};
 use super::contract::Field;
 use super::falloff::T;
+use super::line::{Anywhere, Candidates};
 use super::node::{Node, NodeId};
 use super::tree::Tree;
 
@@ -114,6 +115,17 @@ impl Tree {
     /// itself ([`Field::lipschitz_segment`]) and affine nodes map its ends, so a blend sums
     /// what its children see along the segment, not over its box.
     pub fn lipschitz_segment_at(&self, id: NodeId, a: Vec3, b: Vec3) -> f32 {
+        self.lipschitz_segment_with(id, a, b, Anywhere)
+    }
+
+    /// [`Tree::lipschitz_segment_at`], its blends finding their children through `at`.
+    pub(super) fn lipschitz_segment_with(
+        &self,
+        id: NodeId,
+        a: Vec3,
+        b: Vec3,
+        at: impl Candidates,
+    ) -> f32 {
         let bx = Aabb::new(a, b);
         if !self.supports[id as usize].overlaps(&bx) {
             return 0.0;
@@ -121,7 +133,7 @@ impl Tree {
         let max_of = |children: &[NodeId]| {
             children
                 .iter()
-                .map(|&c| self.lipschitz_segment_at(c, a, b))
+                .map(|&c| self.lipschitz_segment_with(c, a, b, at))
                 .fold(0.0, f32::max)
         };
         match &self.nodes[id as usize] {
@@ -129,15 +141,13 @@ impl Tree {
             Node::Primitive(f) => f.lipschitz_segment(a, b),
             Node::Leaf(f) => f.lipschitz_segment(a, b),
             Node::Blend { children, bvh } => {
-                let mut sum = 0.0;
-                self.blend_children_in(children, bvh, &bx, |c| {
-                    sum += self.lipschitz_segment_at(c, a, b)
-                });
-                sum
+                at.sum_overlapping(self, id, children, bvh, &bx, |c| {
+                    self.lipschitz_segment_with(c, a, b, at)
+                })
             }
             Node::Union(children) | Node::Intersection(children) => max_of(children),
             Node::Difference { base, carves } => {
-                max_of(carves).max(self.lipschitz_segment_at(*base, a, b))
+                max_of(carves).max(self.lipschitz_segment_with(*base, a, b, at))
             }
             Node::Affine {
                 child,
@@ -145,7 +155,7 @@ impl Tree {
                 stretch,
             } => {
                 let (ca, cb) = (to_child.transform_point3(a), to_child.transform_point3(b));
-                self.lipschitz_segment_at(*child, ca, cb) * stretch
+                self.lipschitz_segment_with(*child, ca, cb, at) * stretch
             }
             Node::Warp { .. } => self.lipschitz_box_at(id, &bx),
         }

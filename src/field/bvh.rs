@@ -11,6 +11,8 @@
 //!   a query tests an item's box before the caller ever touches the item, and the items of
 //!   a leaf are contiguous.
 
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
 use std::time::Duration;
 
 use glam::{Vec3, Vec3A, Vec4};
@@ -97,6 +99,68 @@ impl Wide {
             mask |= m.bitmask() << (4 * g);
         }
         mask
+    }
+
+    /// The slots whose (non-empty) box the ray crosses within its span, as a bit mask,
+    /// with the parameters where it enters (at least the span's start) and leaves them.
+    #[inline(always)]
+    fn slabs(&self, r: &SlabRay) -> (u32, [f32; WIDTH], [f32; WIDTH]) {
+        let (mut mask, mut enters, mut leaves) = (0, [0.0; WIDTH], [0.0; WIDTH]);
+        for g in 0..GROUPS {
+            let mut enter = r.t0;
+            let mut leave = r.t1;
+            for a in 0..3 {
+                let p = (self.lo[a][g] - r.o[a]) * r.inv[a];
+                let q = (self.hi[a][g] - r.o[a]) * r.inv[a];
+                enter = enter.max(p.min(q));
+                leave = leave.min(p.max(q));
+            }
+            let m = enter.cmple(leave + r.pad) & self.lo[0][g].cmple(self.hi[0][g]);
+            mask |= m.bitmask() << (4 * g);
+            enters[4 * g..4 * g + 4].copy_from_slice(&enter.to_array());
+            leaves[4 * g..4 * g + 4].copy_from_slice(&leave.to_array());
+        }
+        (mask, enters, leaves)
+    }
+}
+
+/// A ray for slab tests against [`Wide`] nodes: origin and reciprocal direction splatted
+/// over the lanes, the parameter range to test, and a slack: a box counts as crossed when
+/// the ray's entry is at most `pad` after its exit, so rounding never loses a box the ray
+/// grazes.
+pub struct SlabRay {
+    o: [Vec4; 3],
+    inv: [Vec4; 3],
+    t0: Vec4,
+    t1: Vec4,
+    pad: Vec4,
+}
+
+impl SlabRay {
+    /// The ray `origin + t·dir` over `t ∈ [t0, t1]`, with slack `pad`. A zero direction
+    /// component gets a huge finite reciprocal, so a ray in a slab's plane is inside it
+    /// (never `0·∞`).
+    pub fn new(origin: Vec3, dir: Vec3, (t0, t1): (f32, f32), pad: f32) -> Self {
+        let inv = dir.recip().clamp(Vec3::splat(-1e30), Vec3::splat(1e30));
+        SlabRay {
+            o: [origin.x, origin.y, origin.z].map(Vec4::splat),
+            inv: [inv.x, inv.y, inv.z].map(Vec4::splat),
+            t0: Vec4::splat(t0),
+            t1: Vec4::splat(t1),
+            pad: Vec4::splat(pad),
+        }
+    }
+
+    /// The parameter range where the ray is inside `b` (empty when `lo > hi`), over all
+    /// `t`; [`SlabRay::new`]'s span is not applied.
+    pub fn clip(&self, b: &Aabb) -> (f32, f32) {
+        if b.is_empty() {
+            return (f32::INFINITY, f32::NEG_INFINITY);
+        }
+        let inv = Vec3::new(self.inv[0].x, self.inv[1].x, self.inv[2].x);
+        let o = Vec3::new(self.o[0].x, self.o[1].x, self.o[2].x);
+        let (a, c) = ((b.min - o) * inv, (b.max - o) * inv);
+        (a.min(c).max_element(), a.max(c).min_element())
     }
 }
 
@@ -310,6 +374,119 @@ impl ChildBvh {
                 visit(*payload);
             }
         }
+    }
+
+    /// Starts a front-to-back traversal along `ray` ([`ChildBvh::advance`]).
+    pub fn start(&self, ray: &SlabRay, cursor: &mut RayCursor) {
+        cursor.heap.clear();
+        if !self.nodes.is_empty() {
+            cursor.heap.push(Pending {
+                key: ray.t0.x,
+                leave: ray.t1.x,
+                index: 0,
+                kind: Kind::Inner,
+            });
+        }
+        for (b, payload) in &self.huge {
+            let (enter, leave) = ray.clip(b);
+            let enter = enter.max(ray.t0.x);
+            if enter <= leave.min(ray.t1.x) + ray.pad.x {
+                cursor.heap.push(Pending {
+                    key: enter,
+                    leave,
+                    index: *payload,
+                    kind: Kind::Item,
+                });
+            }
+        }
+    }
+
+    /// Continues the traversal started by [`ChildBvh::start`]: calls
+    /// `visit(payload, enter, leave)` for the items whose boxes the ray enters at or before
+    /// `upto` and that were not visited yet, in order of entry (`enter` is at least the
+    /// ray's start). Nodes are opened only when the ray reaches them.
+    pub fn advance(
+        &self,
+        ray: &SlabRay,
+        cursor: &mut RayCursor,
+        upto: f32,
+        mut visit: impl FnMut(u32, f32, f32),
+    ) {
+        while let Some(&top) = cursor.heap.peek()
+            && top.key <= upto
+        {
+            cursor.heap.pop();
+            let (node, kind) = match top.kind {
+                Kind::Item => {
+                    visit(top.index, top.key, top.leave);
+                    continue;
+                }
+                Kind::Inner => (&self.nodes[top.index as usize], None),
+                Kind::Leaf => (&self.leaves[top.index as usize], Some(Kind::Item)),
+            };
+            let (mut mask, enters, leaves) = node.slabs(ray);
+            while mask != 0 {
+                let i = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let kind = kind.unwrap_or(if node.leaves & (1 << i) != 0 {
+                    Kind::Leaf
+                } else {
+                    Kind::Inner
+                });
+                cursor.heap.push(Pending {
+                    key: enters[i],
+                    leave: leaves[i],
+                    index: node.slot[i],
+                    kind,
+                });
+            }
+        }
+    }
+}
+
+/// The state of a front-to-back traversal along a ray: the nodes and items reached but
+/// not opened or visited, nearest entry first. Reuse one: [`ChildBvh::start`] clears it.
+#[derive(Debug, Default)]
+pub struct RayCursor {
+    heap: BinaryHeap<Pending>,
+}
+
+/// What a [`Pending`] entry is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Inner,
+    Leaf,
+    Item,
+}
+
+/// A node, leaf or item the ray enters at `key` and leaves at `leave`.
+#[derive(Clone, Copy, Debug)]
+struct Pending {
+    key: f32,
+    leave: f32,
+    /// The inner node's or leaf's index, or the item's payload.
+    index: u32,
+    kind: Kind,
+}
+
+impl PartialEq for Pending {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other).is_eq()
+    }
+}
+
+impl Eq for Pending {}
+
+impl PartialOrd for Pending {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+/// Reversed on `key`: the heap's top is the nearest entry.
+impl Ord for Pending {
+    fn cmp(&self, other: &Self) -> Ordering {
+        other.key.total_cmp(&self.key)
     }
 }
 

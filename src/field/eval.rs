@@ -5,6 +5,7 @@ use glam::Vec3;
 use super::contract::Field;
 
 use super::falloff::T;
+use super::line::{Anywhere, Candidates};
 use super::node::{Node, NodeId};
 use super::tree::Tree;
 
@@ -12,44 +13,47 @@ impl Tree {
     /// `f(p)` of node `id`.
     #[inline]
     pub fn value_at(&self, id: NodeId, p: Vec3) -> f32 {
+        self.value_at_with(id, p, Anywhere)
+    }
+
+    /// `f(p)` of node `id`, its blends finding their children through `at`.
+    #[inline]
+    pub(super) fn value_at_with(&self, id: NodeId, p: Vec3, at: impl Candidates) -> f32 {
         if self.supports[id as usize].contains(p) {
-            self.value_inside(id, p)
+            self.value_inside(id, p, at)
         } else {
             0.0
         }
     }
 
     /// `f(p)` of node `id`, for `p` known to lie in its support.
-    fn value_inside(&self, id: NodeId, p: Vec3) -> f32 {
+    fn value_inside(&self, id: NodeId, p: Vec3, at: impl Candidates) -> f32 {
         match &self.nodes[id as usize] {
             Node::Constant(v) => *v,
             Node::Primitive(f) => f.value(p),
             Node::Leaf(f) => f.value(p),
-            Node::Blend { children, bvh } => match bvh {
-                // The BVH tests each child's support itself.
-                Some(bvh) => {
-                    let mut sum = 0.0;
-                    bvh.at_point(p, |c| sum += self.value_inside(c, p));
-                    sum
-                }
-                None => children.iter().map(|&c| self.value_at(c, p)).sum(),
-            },
+            // The candidates are children whose supports contain `p`.
+            Node::Blend { children, bvh } => {
+                at.sum_containing(self, id, children, bvh, p, |c| self.value_inside(c, p, at))
+            }
             Node::Union(children) => children
                 .iter()
-                .map(|&c| self.value_at(c, p))
+                .map(|&c| self.value_at_with(c, p, at))
                 .fold(f32::NEG_INFINITY, f32::max),
             Node::Intersection(children) => children
                 .iter()
-                .map(|&c| self.value_at(c, p))
+                .map(|&c| self.value_at_with(c, p, at))
                 .fold(f32::INFINITY, f32::min),
-            Node::Difference { base, carves } => {
-                carves.iter().fold(self.value_at(*base, p), |v, &c| {
-                    v.min(2.0 * T - self.value_at(c, p))
-                })
-            }
+            Node::Difference { base, carves } => carves
+                .iter()
+                .fold(self.value_at_with(*base, p, at), |v, &c| {
+                    v.min(2.0 * T - self.value_at_with(c, p, at))
+                }),
+            // An affine map keeps the line's parameter: the child's lists still apply.
             Node::Affine {
                 child, to_child, ..
-            } => self.value_at(*child, to_child.transform_point3(p)),
+            } => self.value_at_with(*child, to_child.transform_point3(p), at),
+            // A warp bends it: below one, blends use their BVHs.
             Node::Warp { child, warp } => self.value_at(*child, warp.apply(p)),
         }
     }

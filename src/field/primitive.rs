@@ -32,6 +32,7 @@ use super::bounds::{Aabb, Interval, Rect, ZBands};
 use super::contract::{Field, z_bands_by_interval};
 use super::falloff::{T, WYVILL_MAX_SLOPE, wyvill, wyvill_d, wyvill_interval, wyvill_slope};
 use super::noise::{Fbm, NoiseSpec};
+use super::profile::LineProfile;
 use super::skeleton::{Project, Skeleton, SkeletonSpec};
 use crate::scene::{Finite, Positive};
 
@@ -155,6 +156,18 @@ impl Primitive {
     /// Energy `E`: the value on the skeleton (inside a volumetric one).
     pub fn energy(&self) -> f32 {
         self.energy
+    }
+
+    /// The primitive along the line `o + t·d` (`d ≠ 0`) as a polynomial in `t`, when it
+    /// has one: a point skeleton without noise.
+    #[inline]
+    pub fn along_line(&self, o: Vec3, d: Vec3) -> Option<LineProfile> {
+        match (&self.skeleton, self.noise) {
+            (Skeleton::Point(pt), None) => {
+                Some(LineProfile::new(pt.center, self.radius, self.energy, o, d))
+            }
+            _ => None,
+        }
     }
 
     /// The anisotropic noise, if any.
@@ -366,21 +379,19 @@ impl Field for Primitive {
         self.energy.abs() * WYVILL_MAX_SLOPE * self.slope
     }
 
-    /// Exact along the segment for a point skeleton without noise (the distance to the
-    /// point ranges over `[dist(c, [a, b]), max(|a − c|, |b − c|)]` there, and `g` is
-    /// applied to it); the box of the segment otherwise. A long ray segment passing beside
-    /// a blob sees its true clearance, not that of the segment's box.
+    /// For a point skeleton without noise, the exact bound of the directional derivative
+    /// along the segment ([`LineProfile::lipschitz`]): a long ray segment passing beside a
+    /// blob sees the slope of the blob along it, which is zero at the foot of the
+    /// perpendicular and smaller the farther the line passes. The box of the segment
+    /// otherwise.
     fn lipschitz_segment(&self, a: Vec3, b: Vec3) -> f32 {
-        if let (Skeleton::Point(pt), None) = (&self.skeleton, self.noise) {
-            let c = pt.center;
-            let ab = b - a;
-            let t = ((c - a).dot(ab) / ab.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
-            let lo = (a + ab * t).distance(c);
-            let hi = a.distance(c).max(b.distance(c));
-            let xs = Interval::new(lo * self.inv_radius, hi * self.inv_radius);
-            return self.energy.abs() * wyvill_slope(xs) * self.inv_radius;
+        if a == b {
+            return 0.0;
         }
-        self.lipschitz_box(&Aabb::new(a, b))
+        match self.along_line(a, b - a) {
+            Some(profile) => profile.lipschitz(0.0, 1.0),
+            None => self.lipschitz_box(&Aabb::new(a, b)),
+        }
     }
 
     fn lipschitz_box(&self, b: &Aabb) -> f32 {

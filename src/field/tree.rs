@@ -36,6 +36,9 @@ pub struct Tree {
     pub(super) supports: Vec<Aabb>,
     pub(super) info: Vec<NodeInfo>,
     pub(super) root: NodeId,
+    /// Some node has several parents (the builder made a DAG): then a node can be reached
+    /// along several paths with different maps, and [`super::Line`]s keep no lists.
+    pub(super) shares_nodes: bool,
 }
 
 /// Builds a [`Tree`] bottom-up: children first, then their parents.
@@ -149,7 +152,12 @@ impl TreeBuilder {
 
     /// Finishes the tree with `root` as its root.
     pub fn build(self, root: NodeId) -> Tree {
+        let mut parents = vec![0u8; self.nodes.len()];
+        for c in self.nodes.iter().flat_map(Node::children) {
+            parents[c as usize] = parents[c as usize].saturating_add(1);
+        }
         Tree {
+            shares_nodes: parents.iter().any(|&n| n > 1),
             nodes: self.nodes,
             supports: self.info.iter().map(|i| i.support).collect(),
             info: self.info,

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use super::camera::{Camera, Ray};
 use super::image::Frame;
 use super::shade::{Shading, to_srgb8};
-use super::trace::{Method, Trace, TraceParams, normal, occluded, trace};
+use super::trace::{Method, Trace, TraceParams, Tracer, normal};
 use glam::Vec3;
 
 use crate::field::{Aabb, Field, Tree};
@@ -141,6 +141,7 @@ fn tile(
         segments_box(rays.iter().filter_map(|(r, sp)| sp.map(|sp| (r, sp)))),
     );
     let f = primary.as_deref().unwrap_or(field);
+    let mut tracer = Tracer::new(f);
     // Primary hits with their normals and shadow rays.
     let hits: Vec<(Trace, Vec3, Option<Segment>)> = rays
         .iter()
@@ -148,7 +149,7 @@ fn tile(
             let Some(span) = span else {
                 return (miss, Vec3::ZERO, None);
             };
-            let tr = trace(f, ray, *span, &s.trace);
+            let tr = tracer.trace(ray, *span, &s.trace);
             if !tr.hit() {
                 return (tr, Vec3::ZERO, None);
             }
@@ -175,6 +176,7 @@ fn tile(
         ),
     );
     let fs = shadow_field.as_deref().unwrap_or(field);
+    let mut shadows = Tracer::new(fs);
     rays.iter()
         .zip(hits)
         .map(|((ray, _), (tr, n, shadow))| {
@@ -185,7 +187,7 @@ fn tile(
                 };
             }
             let lit = match shadow {
-                Some((r, span)) if occluded(fs, &r, span, &s.trace) => 0.0,
+                Some((r, span)) if shadows.occluded(&r, span, &s.trace) => 0.0,
                 _ => 1.0,
             };
             let p = ray.at(tr.t);
@@ -204,15 +206,18 @@ pub fn depth(field: &dyn Field, camera: &Camera, params: &TraceParams) -> (Vec<f
     let w = camera.width;
     (0..w * camera.height)
         .into_par_iter()
-        .map(|k| {
-            let ray = camera.pixel_ray(k % w, k / w);
-            match ray.clip(&support) {
-                Some(span) => {
-                    let tr = trace(field, &ray, span, params);
-                    (tr.t, tr.steps)
+        .map_init(
+            || Tracer::new(field),
+            |tracer, k| {
+                let ray = camera.pixel_ray(k % w, k / w);
+                match ray.clip(&support) {
+                    Some(span) => {
+                        let tr = tracer.trace(&ray, span, params);
+                        (tr.t, tr.steps)
+                    }
+                    None => (f32::INFINITY, 0),
                 }
-                None => (f32::INFINITY, 0),
-            }
-        })
+            },
+        )
         .unzip()
 }

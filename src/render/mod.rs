@@ -21,7 +21,7 @@ pub use camera::{Camera, Ray};
 pub use cpu::{RenderSettings, render};
 pub use image::Frame;
 pub use shade::Shading;
-pub use trace::{Method, Trace, TraceParams};
+pub use trace::{Method, Trace, TraceParams, Tracer};
 
 /// Errors of the renderer.
 #[derive(Debug, thiserror::Error)]

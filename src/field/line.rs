@@ -1,0 +1,383 @@
+//! The tree restricted to a line: per-ray lists of the children of its large blends.
+//!
+//! A tracer asks the same tree for values and segment bounds many times along one ray, and
+//! each ask of a blend with thousands of children descends the blend's BVH. A [`Line`]
+//! walks those BVHs once per ray instead (a slab traversal, [`Line::restrict`]) and keeps,
+//! for every blend with a BVH that the ray reaches through blends, unions, differences and
+//! affine maps, the children whose support the ray crosses, with the ray parameters where
+//! it is inside, sorted by entry. [`Tree::value_on_line`] and [`Tree::lipschitz_on_line`]
+//! then scan these short lists: the per-ray preprocessing of segment tracing (Galin et
+//! al. 2020 §5, which gathers the primitives along the ray before marching).
+//!
+//! Affine maps send lines to lines with the same parameter, so the lists of blends below
+//! them are indexed by the root ray's `t`. Warps bend the line: what lies below one is
+//! evaluated as usual. The answers are those of the whole tree: a list only drops
+//! children whose supports the ray does not reach, and every listed child is still tested
+//! against its support.
+
+use glam::Vec3;
+
+use super::bounds::Aabb;
+use super::bvh::{ChildBvh, RayCursor, SlabRay};
+use super::node::{Node, NodeId};
+use super::profile::LineProfile;
+use super::tree::Tree;
+
+/// Where a blend finds the children that can be non-zero at a query.
+pub(super) trait Candidates: Copy {
+    /// `Σ value(c)` over the children `c` of blend `id` whose supports contain `p`.
+    fn sum_containing(
+        self,
+        tree: &Tree,
+        id: NodeId,
+        children: &[NodeId],
+        bvh: &Option<ChildBvh>,
+        p: Vec3,
+        value: impl FnMut(NodeId) -> f32,
+    ) -> f32;
+
+    /// `Σ bound(c)` over the children `c` of blend `id` whose supports overlap `b`.
+    fn sum_overlapping(
+        self,
+        tree: &Tree,
+        id: NodeId,
+        children: &[NodeId],
+        bvh: &Option<ChildBvh>,
+        b: &Aabb,
+        bound: impl FnMut(NodeId) -> f32,
+    ) -> f32;
+}
+
+/// Queries anywhere: the blends' BVHs (or a scan of small blends' children).
+#[derive(Clone, Copy)]
+pub(super) struct Anywhere;
+
+impl Candidates for Anywhere {
+    #[inline(always)]
+    fn sum_containing(
+        self,
+        tree: &Tree,
+        _: NodeId,
+        children: &[NodeId],
+        bvh: &Option<ChildBvh>,
+        p: Vec3,
+        mut value: impl FnMut(NodeId) -> f32,
+    ) -> f32 {
+        let mut sum = 0.0;
+        match bvh {
+            Some(bvh) => bvh.at_point(p, |c| sum += value(c)),
+            None => children
+                .iter()
+                .filter(|&&c| tree.supports[c as usize].contains(p))
+                .for_each(|&c| sum += value(c)),
+        }
+        sum
+    }
+
+    #[inline(always)]
+    fn sum_overlapping(
+        self,
+        tree: &Tree,
+        _: NodeId,
+        children: &[NodeId],
+        bvh: &Option<ChildBvh>,
+        b: &Aabb,
+        mut bound: impl FnMut(NodeId) -> f32,
+    ) -> f32 {
+        let mut sum = 0.0;
+        tree.blend_children_in(children, bvh, b, |c| sum += bound(c));
+        sum
+    }
+}
+
+/// Queries at ray parameters `t0..=t1` of a restricted [`Line`].
+#[derive(Clone, Copy)]
+pub(super) struct OnLine<'a> {
+    line: &'a Line<'a>,
+    t0: f32,
+    t1: f32,
+}
+
+impl OnLine<'_> {
+    /// Sums over the listed children of blend `id` whose parameter ranges meet `t0..=t1`:
+    /// `profiled(profile)` for those with a [`LineProfile`], `each(c)` for the others
+    /// that pass `keep`. `None` when `id` has no list.
+    #[inline(always)]
+    fn sum_listed(
+        self,
+        id: NodeId,
+        profiled: impl Fn(&LineProfile) -> f32,
+        keep: impl Fn(NodeId) -> bool,
+        mut each: impl FnMut(NodeId) -> f32,
+    ) -> Option<f32> {
+        let at = self.line.slot.get(id as usize).copied().unwrap_or(NONE);
+        if at == NONE {
+            return None;
+        }
+        let mut sum = 0.0;
+        for c in &self.line.fronts[at as usize].items {
+            if c.enter > self.t1 {
+                break;
+            }
+            if c.leave < self.t0 {
+                continue;
+            }
+            match &c.profile {
+                Some(profile) => sum += profiled(profile),
+                None if keep(c.child) => sum += each(c.child),
+                None => {}
+            }
+        }
+        Some(sum)
+    }
+}
+
+impl Candidates for OnLine<'_> {
+    #[inline(always)]
+    fn sum_containing(
+        self,
+        tree: &Tree,
+        id: NodeId,
+        children: &[NodeId],
+        bvh: &Option<ChildBvh>,
+        p: Vec3,
+        mut value: impl FnMut(NodeId) -> f32,
+    ) -> f32 {
+        let t = self.t0;
+        let inside = |c: NodeId| tree.supports[c as usize].contains(p);
+        self.sum_listed(id, |pr| pr.value(t), inside, &mut value)
+            .unwrap_or_else(|| Anywhere.sum_containing(tree, id, children, bvh, p, value))
+    }
+
+    #[inline(always)]
+    fn sum_overlapping(
+        self,
+        tree: &Tree,
+        id: NodeId,
+        children: &[NodeId],
+        bvh: &Option<ChildBvh>,
+        b: &Aabb,
+        mut bound: impl FnMut(NodeId) -> f32,
+    ) -> f32 {
+        let (t0, t1) = (self.t0, self.t1);
+        let meets = |c: NodeId| tree.supports[c as usize].overlaps(b);
+        self.sum_listed(id, |pr| pr.lipschitz(t0, t1), meets, &mut bound)
+            .unwrap_or_else(|| Anywhere.sum_overlapping(tree, id, children, bvh, b, bound))
+    }
+}
+
+/// `Line::slot` of a node without a list.
+const NONE: u32 = u32::MAX;
+
+/// A child of a blend that the ray crosses, where, and the child along the ray when it
+/// is a point blob (then it is evaluated and bounded from the profile alone).
+#[derive(Clone, Copy, Debug)]
+struct Crossing {
+    child: NodeId,
+    enter: f32,
+    leave: f32,
+    profile: Option<LineProfile>,
+}
+
+/// A ray through a [`Tree`], with the lists of the children of its BVH blends that the
+/// ray crosses. Reuse one per thread: [`Line::restrict`] keeps its buffers.
+///
+/// The lists grow as the queries go down the ray: each blend traverses its BVH front to
+/// back ([`ChildBvh::advance`]) only as far as asked, so a ray that meets the surface
+/// early never opens what lies behind, and the lists come out sorted by entry.
+pub struct Line<'t> {
+    tree: &'t Tree,
+    origin: Vec3,
+    dir: Vec3,
+    /// Slack for rounding, in parameter units.
+    pad: f32,
+    /// Every child the ray enters before `reach` is listed.
+    reach: f32,
+    /// Per node: the index of its front in `fronts`, or [`NONE`].
+    slot: Vec<u32>,
+    /// The blends' traversals; the first `used` are in use.
+    fronts: Vec<Front>,
+    used: usize,
+    /// Children below which the tree is still to be walked (they hold BVH blends).
+    pending: Vec<(NodeId, Vec3, Vec3, (f32, f32))>,
+}
+
+/// One blend's traversal along the line, in the blend's space.
+struct Front {
+    blend: NodeId,
+    ray: SlabRay,
+    o: Vec3,
+    d: Vec3,
+    /// The blend's range on the line.
+    span: (f32, f32),
+    cursor: RayCursor,
+    /// The children listed so far, by entry.
+    items: Vec<Crossing>,
+}
+
+impl<'t> Line<'t> {
+    /// A line through `tree`, not yet restricted to a ray.
+    pub fn new(tree: &'t Tree) -> Self {
+        Line {
+            tree,
+            origin: Vec3::ZERO,
+            dir: Vec3::ZERO,
+            pad: 0.0,
+            reach: f32::INFINITY,
+            slot: vec![NONE; tree.nodes.len()],
+            fronts: Vec::new(),
+            used: 0,
+            pending: Vec::new(),
+        }
+    }
+
+    /// Restricts the tree to the ray `origin + t·dir`, `t ∈ span`. Each blend with a BVH
+    /// that the ray reaches without crossing a warp will list the children whose supports
+    /// it crosses, as far as the queries go.
+    pub fn restrict(&mut self, origin: Vec3, dir: Vec3, span: (f32, f32)) {
+        for f in &self.fronts[..self.used] {
+            self.slot[f.blend as usize] = NONE;
+        }
+        self.used = 0;
+        (self.origin, self.dir) = (origin, dir);
+        // A ten-thousandth of the span: metres along a unit ray.
+        self.pad = 1e-4 * (span.1 - span.0).abs().max(1e-3);
+        self.reach = f32::NEG_INFINITY;
+        // A tree with shared nodes keeps no lists: its queries use the BVHs.
+        if !self.tree.shares_nodes && !(span.0 > span.1) {
+            self.walk(self.tree.root, origin, dir, span);
+        }
+    }
+
+    /// `f` at parameter `t`: the value of the whole tree at the point [`Line::at`]`(t)`.
+    pub fn value(&mut self, t: f32) -> f32 {
+        self.reach_to(t);
+        let on = OnLine {
+            line: self,
+            t0: t,
+            t1: t,
+        };
+        self.tree.value_at_with(self.tree.root, self.at(t), on)
+    }
+
+    /// A Lipschitz bound on the segment between parameters `t0 ≤ t1`: the whole tree's
+    /// [`Tree::lipschitz_segment_at`] there (per metre of the segment).
+    pub fn lipschitz(&mut self, t0: f32, t1: f32) -> f32 {
+        self.reach_to(t1);
+        let on = OnLine { line: self, t0, t1 };
+        let tree = self.tree;
+        tree.lipschitz_segment_with(tree.root, self.at(t0), self.at(t1), on)
+    }
+
+    /// The point at parameter `t`.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + self.dir * t
+    }
+
+    /// Lists every child the ray enters up to `t` (and the rounding slack).
+    fn reach_to(&mut self, t: f32) {
+        let upto = t + self.pad;
+        if upto <= self.reach {
+            return;
+        }
+        let tree = self.tree;
+        // Fronts opened on the way (blends below listed children) are advanced too.
+        let mut k = 0;
+        while k < self.used {
+            let f = &mut self.fronts[k];
+            let Node::Blend { bvh: Some(bvh), .. } = &tree.nodes[f.blend as usize] else {
+                unreachable!("fronts are opened on blends with a BVH")
+            };
+            let (pad, span, items, pending) = (self.pad, f.span, &mut f.items, &mut self.pending);
+            let (o, d) = (f.o, f.d);
+            bvh.advance(&f.ray, &mut f.cursor, upto, |c, enter, leave| {
+                let (enter, leave) = (enter - pad, leave.min(span.1) + pad);
+                let profile = match &tree.nodes[c as usize] {
+                    Node::Primitive(p) => p.along_line(o, d),
+                    node if !is_leaf(node) => {
+                        pending.push((c, o, d, (enter, leave)));
+                        None
+                    }
+                    _ => None,
+                };
+                items.push(Crossing {
+                    child: c,
+                    enter,
+                    leave,
+                    profile,
+                });
+            });
+            while let Some((c, o, d, span)) = self.pending.pop() {
+                self.walk(c, o, d, span);
+            }
+            k += 1;
+        }
+        self.reach = upto;
+    }
+
+    /// Opens a front for each BVH blend of the subtree `id` that the line `o + t·d`
+    /// reaches over `span` through blends, unions, differences and affine maps.
+    fn walk(&mut self, id: NodeId, o: Vec3, d: Vec3, span: (f32, f32)) {
+        let tree = self.tree;
+        let pad = self.pad;
+        let ray = SlabRay::new(o, d, span, pad);
+        let (enter, leave) = ray.clip(&tree.supports[id as usize]);
+        let span = (enter.max(span.0), leave.min(span.1));
+        if span.0 > span.1 + pad {
+            return;
+        }
+        match &tree.nodes[id as usize] {
+            Node::Constant(_) | Node::Primitive(_) | Node::Leaf(_) | Node::Warp { .. } => {}
+            Node::Blend {
+                bvh: Some(bvh),
+                children: _,
+            } => {
+                if self.used == self.fronts.len() {
+                    self.fronts.push(Front {
+                        blend: id,
+                        ray: SlabRay::new(o, d, span, pad),
+                        o,
+                        d,
+                        span,
+                        cursor: RayCursor::default(),
+                        items: Vec::new(),
+                    });
+                }
+                let f = &mut self.fronts[self.used];
+                (f.blend, f.o, f.d, f.span) = (id, o, d, span);
+                f.ray = SlabRay::new(o, d, span, pad);
+                f.items.clear();
+                bvh.start(&f.ray, &mut f.cursor);
+                self.slot[id as usize] = self.used as u32;
+                self.used += 1;
+            }
+            Node::Blend {
+                children,
+                bvh: None,
+            }
+            | Node::Union(children)
+            | Node::Intersection(children) => {
+                for &c in children.iter() {
+                    self.walk(c, o, d, span);
+                }
+            }
+            Node::Difference { base, carves } => {
+                self.walk(*base, o, d, span);
+                for &c in carves.iter() {
+                    self.walk(c, o, d, span);
+                }
+            }
+            Node::Affine {
+                child, to_child, ..
+            } => {
+                let (co, cd) = (to_child.transform_point3(o), to_child.transform_vector3(d));
+                self.walk(*child, co, cd, span);
+            }
+        }
+    }
+}
+
+fn is_leaf(n: &Node) -> bool {
+    matches!(n, Node::Constant(_) | Node::Primitive(_) | Node::Leaf(_))
+}
