@@ -376,35 +376,31 @@ impl ChildBvh {
         }
     }
 
-    /// Starts a front-to-back traversal along `ray` ([`ChildBvh::advance`]).
-    pub fn start(&self, ray: &SlabRay, cursor: &mut RayCursor) {
+    /// Starts a traversal along `ray` ([`ChildBvh::advance`]); visits the items too large
+    /// for the tree that the ray crosses, as `visit(payload, enter, leave)`.
+    pub fn start(&self, ray: &SlabRay, cursor: &mut RayCursor, mut visit: impl FnMut(u32, f32, f32)) {
         cursor.heap.clear();
         if !self.nodes.is_empty() {
             cursor.heap.push(Pending {
                 key: ray.t0.x,
-                leave: ray.t1.x,
-                index: 0,
-                kind: Kind::Inner,
+                node: 0,
             });
         }
         for (b, payload) in &self.huge {
             let (enter, leave) = ray.clip(b);
             let enter = enter.max(ray.t0.x);
             if enter <= leave.min(ray.t1.x) + ray.pad.x {
-                cursor.heap.push(Pending {
-                    key: enter,
-                    leave,
-                    index: *payload,
-                    kind: Kind::Item,
-                });
+                visit(*payload, enter, leave);
             }
         }
     }
 
-    /// Continues the traversal started by [`ChildBvh::start`]: calls
-    /// `visit(payload, enter, leave)` for the items whose boxes the ray enters at or before
-    /// `upto` and that were not visited yet, in order of entry (`enter` is at least the
-    /// ray's start). Nodes are opened only when the ray reaches them.
+    /// Continues the traversal started by [`ChildBvh::start`]: opens every node the ray
+    /// enters at or before `upto` that was not opened yet, and visits the items of the
+    /// leaves among them that the ray crosses, as `visit(payload, enter, leave)` (`enter`
+    /// at least the ray's start; an item may be entered after `upto`). Nodes entered later
+    /// wait in the cursor, nearest first, so every item the ray enters by `upto` has been
+    /// visited, each once, and nothing far beyond is opened.
     pub fn advance(
         &self,
         ray: &SlabRay,
@@ -416,57 +412,56 @@ impl ChildBvh {
             && top.key <= upto
         {
             cursor.heap.pop();
-            let (node, kind) = match top.kind {
-                Kind::Item => {
-                    visit(top.index, top.key, top.leave);
+            // The nodes reached by `upto` are opened depth first, without the heap.
+            cursor.open.push(top.node);
+            while let Some(n) = cursor.open.pop() {
+                if n & LEAF != 0 {
+                    let leaf = &self.leaves[(n & !LEAF) as usize];
+                    let (mut mask, enters, leaves) = leaf.slabs(ray);
+                    while mask != 0 {
+                        let i = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        visit(leaf.slot[i], enters[i], leaves[i]);
+                    }
                     continue;
                 }
-                Kind::Inner => (&self.nodes[top.index as usize], None),
-                Kind::Leaf => (&self.leaves[top.index as usize], Some(Kind::Item)),
-            };
-            let (mut mask, enters, leaves) = node.slabs(ray);
-            while mask != 0 {
-                let i = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                let kind = kind.unwrap_or(if node.leaves & (1 << i) != 0 {
-                    Kind::Leaf
-                } else {
-                    Kind::Inner
-                });
-                cursor.heap.push(Pending {
-                    key: enters[i],
-                    leave: leaves[i],
-                    index: node.slot[i],
-                    kind,
-                });
+                let node = &self.nodes[n as usize];
+                let (mut mask, enters, _) = node.slabs(ray);
+                while mask != 0 {
+                    let i = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let child = node.slot[i] | if node.leaves & (1 << i) != 0 { LEAF } else { 0 };
+                    if enters[i] <= upto {
+                        cursor.open.push(child);
+                    } else {
+                        cursor.heap.push(Pending {
+                            key: enters[i],
+                            node: child,
+                        });
+                    }
+                }
             }
         }
     }
 }
 
-/// The state of a front-to-back traversal along a ray: the nodes and items reached but
-/// not opened or visited, nearest entry first. Reuse one: [`ChildBvh::start`] clears it.
+/// In a [`RayCursor`], the bit marking a leaf's index.
+const LEAF: u32 = 1 << 31;
+
+/// The state of a traversal along a ray: the nodes reached but not opened, nearest entry
+/// first. Reuse one: [`ChildBvh::start`] clears it.
 #[derive(Debug, Default)]
 pub struct RayCursor {
     heap: BinaryHeap<Pending>,
+    /// Scratch for [`ChildBvh::advance`]'s depth-first opening.
+    open: Vec<u32>,
 }
 
-/// What a [`Pending`] entry is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Kind {
-    Inner,
-    Leaf,
-    Item,
-}
-
-/// A node, leaf or item the ray enters at `key` and leaves at `leave`.
+/// A node (an inner node's index, or a leaf's with [`LEAF`] set) the ray enters at `key`.
 #[derive(Clone, Copy, Debug)]
 struct Pending {
     key: f32,
-    leave: f32,
-    /// The inner node's or leaf's index, or the item's payload.
-    index: u32,
-    kind: Kind,
+    node: u32,
 }
 
 impl PartialEq for Pending {

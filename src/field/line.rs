@@ -116,10 +116,7 @@ impl OnLine<'_> {
         }
         let mut sum = 0.0;
         for c in &self.line.fronts[at as usize].items {
-            if c.enter > self.t1 {
-                break;
-            }
-            if c.leave < self.t0 {
+            if c.enter > self.t1 || c.leave < self.t0 {
                 continue;
             }
             match &c.profile {
@@ -246,6 +243,7 @@ impl<'t> Line<'t> {
         // A tree with shared nodes keeps no lists: its queries use the BVHs.
         if !self.tree.shares_nodes && !(span.0 > span.1) {
             self.walk(self.tree.root, origin, dir, span);
+            self.walk_pending();
         }
     }
 
@@ -289,31 +287,19 @@ impl<'t> Line<'t> {
             let Node::Blend { bvh: Some(bvh), .. } = &tree.nodes[f.blend as usize] else {
                 unreachable!("fronts are opened on blends with a BVH")
             };
-            let (pad, span, items, pending) = (self.pad, f.span, &mut f.items, &mut self.pending);
-            let (o, d) = (f.o, f.d);
-            bvh.advance(&f.ray, &mut f.cursor, upto, |c, enter, leave| {
-                let (enter, leave) = (enter - pad, leave.min(span.1) + pad);
-                let profile = match &tree.nodes[c as usize] {
-                    Node::Primitive(p) => p.along_line(o, d),
-                    node if !is_leaf(node) => {
-                        pending.push((c, o, d, (enter, leave)));
-                        None
-                    }
-                    _ => None,
-                };
-                items.push(Crossing {
-                    child: c,
-                    enter,
-                    leave,
-                    profile,
-                });
-            });
-            while let Some((c, o, d, span)) = self.pending.pop() {
-                self.walk(c, o, d, span);
-            }
+            let visit = lister(tree, f.o, f.d, f.span, self.pad, &mut f.items, &mut self.pending);
+            bvh.advance(&f.ray, &mut f.cursor, upto, visit);
+            self.walk_pending();
             k += 1;
         }
         self.reach = upto;
+    }
+
+    /// Walks the subtrees below the children listed since the last call.
+    fn walk_pending(&mut self) {
+        while let Some((c, o, d, span)) = self.pending.pop() {
+            self.walk(c, o, d, span);
+        }
     }
 
     /// Opens a front for each BVH blend of the subtree `id` that the line `o + t·d`
@@ -348,7 +334,8 @@ impl<'t> Line<'t> {
                 (f.blend, f.o, f.d, f.span) = (id, o, d, span);
                 f.ray = SlabRay::new(o, d, span, pad);
                 f.items.clear();
-                bvh.start(&f.ray, &mut f.cursor);
+                let visit = lister(tree, o, d, span, pad, &mut f.items, &mut self.pending);
+                bvh.start(&f.ray, &mut f.cursor, visit);
                 self.slot[id as usize] = self.used as u32;
                 self.used += 1;
             }
@@ -375,6 +362,37 @@ impl<'t> Line<'t> {
                 self.walk(*child, co, cd, span);
             }
         }
+    }
+}
+
+/// What lists a front's crossings, given a child's payload and where the ray enters and
+/// leaves its support: its profile when it is a point blob, and, when it is not a leaf, a
+/// walk of the subtree below it for later ([`Line::walk_pending`]).
+fn lister<'a>(
+    tree: &'a Tree,
+    o: Vec3,
+    d: Vec3,
+    span: (f32, f32),
+    pad: f32,
+    items: &'a mut Vec<Crossing>,
+    pending: &'a mut Vec<(NodeId, Vec3, Vec3, (f32, f32))>,
+) -> impl FnMut(u32, f32, f32) + 'a {
+    move |c, enter, leave| {
+        let (enter, leave) = (enter - pad, leave.min(span.1) + pad);
+        let profile = match &tree.nodes[c as usize] {
+            Node::Primitive(p) => p.along_line(o, d),
+            node if !is_leaf(node) => {
+                pending.push((c, o, d, (enter, leave)));
+                None
+            }
+            _ => None,
+        };
+        items.push(Crossing {
+            child: c,
+            enter,
+            leave,
+            profile,
+        });
     }
 }
 
