@@ -5,9 +5,9 @@
 //! | tree node | tape |
 //! | --- | --- |
 //! | constant | `CONST` |
-//! | [`Primitive`] on a point, segment, sphere, capsule or axis-aligned box | `PRIM` (Wyvill); `NPRIM` with noise |
+//! | [`Primitive`] on a point, segment, sphere, capsule, axis-aligned box, cone or ellipsoid | `PRIM` (Wyvill); `NPRIM` with noise |
 //! | [`Primitive`] on a polyline or curve | its segments' `PRIM`s (`NPRIM`s) under a BVH of guards, combined by `UNION` (`E ≥ 0`: `E·g(minᵢ d̃ᵢ) = maxᵢ E·g(d̃ᵢ)`, `g` decreasing) or `INTER` (`E < 0`) |
-//! | [`HeightfieldField`] (bilinear, square cells, no nodata, no domain polygon) | `HEIGHT` ∩ `PRIM` on its [`Shape::Prism`], energy `2T`: `min(σ(h − z), 2T·g(d_P/R))` as the leaf defines it |
+//! | [`HeightfieldField`] (bilinear or bicubic, square cells, no nodata, no domain polygon) | `HEIGHT` ∩ `PRIM` on its [`Shape::Prism`], energy `2T`: `min(σ(h − z), 2T·g(d_P/R))` as the leaf defines it |
 //! | blend | children chained by `BLEND`; with a BVH (many children), [`TapeBuilder::combine_bvh`] over the children's supports |
 //! | union / intersection | children chained by `UNION` / `INTER` |
 //! | difference | base, then each carve and `DIFF` |
@@ -24,7 +24,7 @@ use glam::Vec3;
 
 use super::GpuError;
 use super::tape::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder};
-use crate::dem::{HeightfieldField, Interpolation};
+use crate::dem::HeightfieldField;
 use crate::field::skeleton::Project;
 use crate::field::{Field, Node, NodeId, Primitive, Skeleton, T, Tree};
 
@@ -161,6 +161,16 @@ fn primitive(tree: &Tree, b: &mut TapeBuilder, id: NodeId, p: &Primitive) -> Res
             b: s.inner().b(),
             radius: s.radius(),
         },
+        Skeleton::Cone(c) => Shape::Cone {
+            base: c.base(),
+            axis: c.axis(),
+            height: c.height(),
+            radius: c.radius(),
+        },
+        Skeleton::Ellipsoid(e) => Shape::Ellipsoid {
+            center: e.center(),
+            radii: e.radii(),
+        },
         Skeleton::Box(c) => axis_aligned_box(c).ok_or_else(|| {
             no_encoding(
                 tree,
@@ -196,7 +206,7 @@ fn primitive(tree: &Tree, b: &mut TapeBuilder, id: NodeId, p: &Primitive) -> Res
                 id,
                 &kind,
                 &format!(
-                    "the GPU evaluator knows point, segment, polyline, curve, sphere, capsule and box skeletons, not {}",
+                    "the GPU evaluator knows point, segment, polyline, curve, sphere, capsule, box, cone and ellipsoid skeletons, not {}",
                     other.kind()
                 ),
             ));
@@ -237,9 +247,6 @@ fn heightfield(
     let grid = h.heightfield();
     let cell = grid.cell();
     let refuse = |why: &str| Err(no_encoding(tree, id, "heightfield", why));
-    if params.interpolation != Interpolation::Bilinear {
-        return refuse("only bilinear interpolation is encoded, not bicubic");
-    }
     if params.domain.is_some() {
         return refuse("a domain polygon is not encoded");
     }
@@ -257,6 +264,7 @@ fn heightfield(
             nx: grid.nx(),
             ny: grid.ny(),
             z: grid.samples(),
+            interpolation: params.interpolation,
         },
         r,
     )?;
