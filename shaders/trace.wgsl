@@ -19,6 +19,7 @@ struct Uniforms {
     grass: vec4<f32>,
     snow: vec4<f32>,
     dims: vec4<u32>,      // width, height, max steps, unused
+    pass_: vec4<u32>,     // first row of the tile, pass (0: start), 2 (the canary's count), evaluations per pass (0: no limit)
 }
 
 @group(0) @binding(0) var<uniform> u: Uniforms;
@@ -27,6 +28,9 @@ struct Uniforms {
 @group(0) @binding(6) var<storage, read_write> out_steps: array<u32>;
 @group(0) @binding(7) var<storage, read> probe_in: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> probe_out: array<vec2<f32>>;
+@group(0) @binding(9) var<storage, read_write> saved: array<Saved>;
+// [pixels left unfinished by this pass, pixels that made no progress in it]
+@group(0) @binding(10) var<storage, read_write> progress: array<atomic<u32>, 2>;
 
 const MAX_REFINE: u32 = 12u;
 const FIRST_DELTA: f32 = 0.0625;
@@ -230,39 +234,92 @@ fn srgb8(c: vec3<f32>) -> u32 {
     return e.x | (e.y << 8u) | (e.z << 16u) | (255u << 24u);
 }
 
+// What a pixel interrupted by lavapipe's loop budget keeps for the next pass (see
+// `budget_left`): its ray, phase and normal sum.
+struct Saved {
+    o: vec4<f32>,       // ray.o, ray.t
+    d: vec4<f32>,       // ray.d, ray.t1
+    march: vec4<f32>,   // delta, side, prev_t, prev_e
+    bracket: vec4<f32>, // a, ea, b, eb
+    refine: vec4<f32>,  // m, last, width, hit_t
+    g: vec4<f32>,       // the normal's sum, unused
+    counts: vec4<u32>,  // phase | shadow << 8 | corner << 16 | (kept + 1) << 24, ray.steps, ray.n, hit steps
+}
+
+// False once the loops of this SIMD group have used up llvmpipe's budget of 65,535
+// iterations per invocation (LP_MAX_TGSI_LOOP_ITERATIONS, shared by every loop; from then
+// on each loop ends after one iteration): a loop asked for 2 iterations (a uniform, so the
+// compiler cannot unroll it) then gets 1. The evaluation before it may have been cut
+// short, so its result is dropped. Always true on other drivers.
+fn budget_left() -> bool {
+    var k = 0u;
+    loop {
+        k += 1u;
+        if k >= u.pass_.z {
+            break;
+        }
+    }
+    return k >= u.pass_.z;
+}
+
 // One primary ray: march, refine, normal, shadow ray (march, refine), shade. The phases
 // are states of one loop whose body evaluates the tape once, so `eval_tape` has a single
-// call site here: drivers inline every call site, and a shader with one copy per phase
-// grew past what lavapipe compiled correctly (wrong images, right probes) and compiled
-// for minutes. It also keeps diverging invocations of a SIMD group on the same code.
+// call site: drivers inline every call site (the shader's size drives lavapipe's compile
+// time), and diverging invocations of a SIMD group stay on the same code. A pixel whose
+// loop budget runs out (lavapipe) saves its state and is resumed by the next dispatch
+// (pass) of its tile; `progress` tells the host how many are left.
 @compute @workgroup_size(8, 8, 1)
 fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     let w = u.dims.x;
     let h = u.dims.y;
-    if id.x >= w || id.y >= h {
+    let row = id.y + u.pass_.x;
+    if id.x >= w || row >= h {
         return;
     }
-    let at = id.x + id.y * w;
+    let at = id.x + row * w;
+    let slot = id.x + id.y * w;
     let x = f32(id.x) + 0.5;
-    let y = f32(id.y) + 0.5;
+    let y = f32(row) + 0.5;
     let su = (2.0 * x / u.up.w - 1.0) * u.eye.w * u.right.w;
     let sv = (1.0 - 2.0 * y / u.forward.w) * u.eye.w;
     let o = u.eye.xyz;
     let d = normalize(u.forward.xyz + u.right.xyz * su + u.up.xyz * sv);
-    let span = clip(o, d);
     var phase = PH_DONE;
-    var ray = start_ray(o, d, span.x, span.y);
-    if span.x <= span.y {
-        phase = PH_MARCH;
-    }
+    var ray: Ray;
     var shadow = false;
     var hit_t = MISS;
     var hit_steps = 0u;
-    var p = vec3<f32>(0.0);
     var g = vec3<f32>(0.0);
     var corner = 0u;
+    if u.pass_.y == 0u {
+        let span = clip(o, d);
+        ray = start_ray(o, d, span.x, span.y);
+        if span.x <= span.y {
+            phase = PH_MARCH;
+        }
+    } else {
+        let sv = saved[slot];
+        phase = sv.counts.x & 255u;
+        if phase == PH_DONE {
+            return;
+        }
+        shadow = ((sv.counts.x >> 8u) & 1u) != 0u;
+        corner = (sv.counts.x >> 16u) & 255u;
+        ray = Ray(sv.o.xyz, sv.d.xyz, sv.o.w, sv.d.w, sv.march.x, sv.march.y, sv.march.z, sv.march.w, sv.counts.y,
+            sv.bracket.x, sv.bracket.y, sv.bracket.z, sv.bracket.w, sv.refine.x, sv.refine.y, sv.refine.z,
+            i32(sv.counts.x >> 24u) - 1, sv.counts.z);
+        hit_t = sv.refine.w;
+        hit_steps = sv.counts.w;
+        g = sv.g.xyz;
+    }
+    var p = o + d * hit_t;
     var n = vec3<f32>(0.0, 0.0, 1.0);
+    let grad_sum = g / (4.0 * u.trace.z);
+    if corner == 4u && length(grad_sum) > 0.0 {
+        n = -grad_sum / length(grad_sum);
+    }
     var lit = 1.0;
+    var evals = 0u;
     loop {
         // Transitions that need no evaluation.
         if phase == PH_MARCH && ray.steps >= u.dims.z {
@@ -287,7 +344,7 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
                 }
             }
         }
-        if phase == PH_DONE {
+        if phase == PH_DONE || (u.pass_.w != 0u && evals == u.pass_.w) {
             break;
         }
         // The one evaluation of this step.
@@ -306,6 +363,10 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
             qr = 0.5 * len;
         }
         let ev = eval_tape(qp, qc, qr);
+        if !budget_left() {
+            break;
+        }
+        evals += 1u;
         if phase == PH_MARCH {
             phase = march_step(&ray, ev);
         } else if phase == PH_REFINE {
@@ -335,6 +396,19 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
             }
         }
     }
+    if phase != PH_DONE {
+        let flags = phase | (u32(shadow) << 8u) | (corner << 16u) | (u32(ray.kept + 1) << 24u);
+        saved[slot] = Saved(vec4<f32>(ray.o, ray.t), vec4<f32>(ray.d, ray.t1),
+            vec4<f32>(ray.delta, ray.side, ray.prev_t, ray.prev_e), vec4<f32>(ray.a, ray.ea, ray.b, ray.eb),
+            vec4<f32>(ray.m, ray.last, ray.width, hit_t), vec4<f32>(g, 0.0),
+            vec4<u32>(flags, ray.steps, ray.n, hit_steps));
+        atomicAdd(&progress[0], 1u);
+        if evals == 0u {
+            atomicAdd(&progress[1], 1u);
+        }
+        return;
+    }
+    saved[slot].counts.x = PH_DONE;
     out_steps[at] = hit_steps;
     out_depth[at] = hit_t;
     if hit_t == MISS {

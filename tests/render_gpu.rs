@@ -288,6 +288,36 @@ fn compare(
     assert_frames_match(name, &cpu, &gpu);
 }
 
+/// Rendering in passes of a few evaluations per pixel (each pixel saving its state and
+/// resuming in the next dispatch, as on lavapipe when its loop budget runs out) gives the
+/// image of one pass, bit for bit, with and without shadows.
+#[test]
+fn renders_in_passes_equal_one_pass() {
+    let Some(ctx) = gpu() else { return };
+    let tape = mixed().0;
+    for shadows in [false, true] {
+        let cam = Camera::frame(&tape.support(), 40.0, 40, 28).unwrap();
+        let mut settings = RenderSettings::for_scene(&tape.support(), &cam, Method::Segment);
+        settings.shading.shadows = shadows;
+        let one = ctx.render(&tape, &cam, &settings).unwrap();
+        assert!(one.hits() > 40, "{} hits", one.hits());
+        for per_pass in [1, 3, 17] {
+            let split = ctx
+                .render_in_passes(&tape, &cam, &settings, per_pass)
+                .unwrap();
+            assert_eq!(one.rgba, split.rgba, "{per_pass} evaluations per pass");
+            assert_eq!(one.steps, split.steps, "{per_pass} evaluations per pass");
+            assert!(
+                one.depth
+                    .iter()
+                    .zip(&split.depth)
+                    .all(|(a, b)| a == b || (a.is_infinite() && b.is_infinite())),
+                "{per_pass} evaluations per pass"
+            );
+        }
+    }
+}
+
 #[test]
 fn gpu_renders_match_the_cpu() {
     let Some(ctx) = gpu() else { return };

@@ -20,7 +20,17 @@ use crate::render::trace::Method;
 struct Uniforms {
     v: [[f32; 4]; 15],
     dims: [u32; 4],
+    /// First row of the tile, pass, the budget canary's count (2), evaluations per pass
+    /// (0: no limit).
+    pass: [u32; 4],
 }
+
+/// Bytes of one pixel's saved state (`struct Saved` of `trace.wgsl`).
+const SAVED_BYTES: u64 = 7 * 16;
+/// Pixels per tile: the saved states of a tile fit one 56 MiB buffer.
+const TILE_PIXELS: u64 = 1 << 19;
+/// Passes over a tile before giving up (each resumes every unfinished pixel).
+const MAX_PASSES: u32 = 100_000;
 
 fn v4(v: Vec3, w: f32) -> [f32; 4] {
     Vec4::new(v.x, v.y, v.z, w).to_array()
@@ -54,6 +64,7 @@ impl Uniforms {
                 v4(sh.snow, 0.0),
             ],
             dims: [cam.width, cam.height, s.trace.max_steps, 0],
+            pass: [0, 0, 2, 0],
         }
     }
 }
@@ -78,9 +89,9 @@ impl GpuContext {
                 .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
         let info = adapter.get_info();
         let limits = adapter.limits();
-        if limits.max_storage_buffers_per_shader_stage < 6 {
+        if limits.max_storage_buffers_per_shader_stage < 10 {
             return Err(GpuError::Device(format!(
-                "{} binds {} storage buffers per stage; the tracer needs 6",
+                "{} binds {} storage buffers per stage; the tracer needs 10",
                 info.name, limits.max_storage_buffers_per_shader_stage
             )));
         }
@@ -173,15 +184,12 @@ impl GpuContext {
         ])
     }
 
-    /// Runs one dispatch of `pipeline` and reads `outputs` back (in order).
-    fn run(
+    /// The bind group of `pipeline` with `bindings`.
+    fn bind_group(
         &self,
         pipeline: &wgpu::ComputePipeline,
         bindings: &[(u32, &wgpu::Buffer)],
-        outputs: &[&wgpu::Buffer],
-        groups: (u32, u32),
-    ) -> Result<Vec<Vec<u8>>, GpuError> {
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    ) -> wgpu::BindGroup {
         let layout = pipeline.get_bind_group_layout(0);
         let entries: Vec<_> = bindings
             .iter()
@@ -190,12 +198,42 @@ impl GpuContext {
                 resource: b.as_entire_binding(),
             })
             .collect();
-        let group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,
             layout: &layout,
             entries: &entries,
-        });
-        let reads: Vec<_> = outputs
+        })
+    }
+
+    /// Runs one dispatch of `pipeline` after zeroing `counters` (a `u32` array it counts
+    /// into) and returns the counters.
+    fn dispatch(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        group: &wgpu::BindGroup,
+        groups: (u32, u32),
+        counters: &wgpu::Buffer,
+    ) -> Result<Vec<u32>, GpuError> {
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        enc.clear_buffer(counters, 0, None);
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(groups.0, groups.1, 1);
+        }
+        self.queue.submit([enc.finish()]);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Run(e.to_string()));
+        }
+        let out = self.read_back(&[counters])?;
+        Ok(bytemuck::cast_slice::<u8, u32>(&out[0]).to_vec())
+    }
+
+    /// Copies `buffers` into mappable ones and reads them (after the work submitted).
+    fn read_back(&self, buffers: &[&wgpu::Buffer]) -> Result<Vec<Vec<u8>>, GpuError> {
+        let reads: Vec<_> = buffers
             .iter()
             .map(|b| {
                 self.device.create_buffer(&wgpu::BufferDescriptor {
@@ -207,19 +245,10 @@ impl GpuContext {
             })
             .collect();
         let mut enc = self.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = enc.begin_compute_pass(&Default::default());
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(groups.0, groups.1, 1);
-        }
-        for (src, dst) in outputs.iter().zip(&reads) {
+        for (src, dst) in buffers.iter().zip(&reads) {
             enc.copy_buffer_to_buffer(src, 0, dst, 0, src.size());
         }
         self.queue.submit([enc.finish()]);
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Run(e.to_string()));
-        }
         let (tx, rx) = std::sync::mpsc::channel();
         for r in &reads {
             let tx = tx.clone();
@@ -248,36 +277,120 @@ impl GpuContext {
             .collect()
     }
 
+    /// Runs one dispatch of `pipeline` and reads `outputs` back (in order).
+    fn run(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        bindings: &[(u32, &wgpu::Buffer)],
+        outputs: &[&wgpu::Buffer],
+        groups: (u32, u32),
+    ) -> Result<Vec<Vec<u8>>, GpuError> {
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let group = self.bind_group(pipeline, bindings);
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(groups.0, groups.1, 1);
+        }
+        self.queue.submit([enc.finish()]);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Run(e.to_string()));
+        }
+        self.read_back(outputs)
+    }
+
     /// Renders `tape` through `camera` as [`crate::render::cpu::render`] does on the CPU.
+    ///
+    /// The image goes in tiles of rows; each tile is dispatched until every pixel is done.
+    /// One dispatch finishes them all except on lavapipe, whose invocations stop their
+    /// loops after 65,535 iterations: there an interrupted pixel saves its state and the
+    /// next dispatch (pass) resumes it (see `budget_left` in `shaders/trace.wgsl`).
     pub fn render(
         &self,
         tape: &Tape,
         camera: &Camera,
         settings: &RenderSettings,
     ) -> Result<Frame, GpuError> {
+        self.render_in_passes(tape, camera, settings, 0)
+    }
+
+    /// [`GpuContext::render`] with at most `evals_per_pass` field evaluations per pixel
+    /// and dispatch (0: no limit), the pixels resuming where they stopped: the same image,
+    /// in shorter dispatches (a bound on dispatch time, as OS watchdogs on real GPUs want).
+    pub fn render_in_passes(
+        &self,
+        tape: &Tape,
+        camera: &Camera,
+        settings: &RenderSettings,
+        evals_per_pass: u32,
+    ) -> Result<Frame, GpuError> {
         let (w, h) = (camera.width, camera.height);
         let n = w as u64 * h as u64;
         self.check_size("the image", 4 * n)?;
         let tape_buffers = self.tape_buffers(tape)?;
-        let uniforms = self
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("uniforms"),
-                contents: bytemuck::bytes_of(&Uniforms::new(tape, camera, settings)),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+        let mut uniforms = Uniforms::new(tape, camera, settings);
+        let uniform_buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("uniforms"),
+            size: std::mem::size_of::<Uniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let tile_rows = ((TILE_PIXELS / w as u64).max(8) as u32 / 8 * 8).min(h.next_multiple_of(8));
+        let saved = self.output("saved", SAVED_BYTES * w as u64 * tile_rows as u64);
+        let progress = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("progress"),
+            size: 8,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let rgba = self.output("rgba", 4 * n);
         let depth = self.output("depth", 4 * n);
         let steps = self.output("steps", 4 * n);
         let mut bindings: Vec<(u32, &wgpu::Buffer)> =
             tape_buffers.iter().map(|(k, b)| (*k, b)).collect();
-        bindings.extend([(0, &uniforms), (4, &rgba), (5, &depth), (6, &steps)]);
-        let out = self.run(
-            &self.render,
-            &bindings,
-            &[&rgba, &depth, &steps],
-            (w.div_ceil(8), h.div_ceil(8)),
-        )?;
+        bindings.extend([
+            (0, &uniform_buffer),
+            (4, &rgba),
+            (5, &depth),
+            (6, &steps),
+            (9, &saved),
+            (10, &progress),
+        ]);
+        let group = self.bind_group(&self.render, &bindings);
+        for row0 in (0..h).step_by(tile_rows as usize) {
+            let rows = tile_rows.min(h - row0);
+            for pass in 0.. {
+                if pass == MAX_PASSES {
+                    return Err(GpuError::Run(format!(
+                        "rows {row0}.. still unfinished after {MAX_PASSES} passes"
+                    )));
+                }
+                uniforms.pass = [row0, pass, 2, evals_per_pass];
+                self.queue
+                    .write_buffer(&uniform_buffer, 0, bytemuck::bytes_of(&uniforms));
+                let left = self.dispatch(
+                    &self.render,
+                    &group,
+                    (w.div_ceil(8), rows.div_ceil(8)),
+                    &progress,
+                )?;
+                if left[1] > 0 {
+                    return Err(GpuError::Limits(format!(
+                        "{} pixels cannot evaluate the tape once within this adapter's loop budget ({} instructions)",
+                        left[1],
+                        tape.instrs.len()
+                    )));
+                }
+                if left[0] == 0 {
+                    break;
+                }
+            }
+        }
+        let out = self.read_back(&[&rgba, &depth, &steps])?;
         let depth = bytemuck::cast_slice::<u8, f32>(&out[1])
             .iter()
             .map(|&t| if t < 0.0 { f32::INFINITY } else { t })
