@@ -10,6 +10,7 @@ const OP_CONST: u32 = 0u;
 const OP_PRIM: u32 = 1u;
 const OP_HEIGHT: u32 = 2u;
 const OP_NPRIM: u32 = 3u;
+const OP_SFIELD: u32 = 4u;
 const OP_BLEND: u32 = 16u;
 const OP_UNION: u32 = 17u;
 const OP_INTER: u32 = 18u;
@@ -368,6 +369,10 @@ fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
                 } else {
                     stack[sp] = noisy_primitive(o, p, pp, c, pc, r);
                 }
+                sp += 1u;
+            }
+            case OP_SFIELD: {
+                stack[sp] = sfield(o, p, c, r);
                 sp += 1u;
             }
             case OP_HEIGHT: {

@@ -19,18 +19,21 @@ struct Uniforms {
     grass: vec4<f32>,
     snow: vec4<f32>,
     dims: vec4<u32>,      // width, height, max steps, unused
-    pass_: vec4<u32>,     // first row of the tile, pass (0: start), 2 (the canary's count), evaluations per pass (0: no limit)
 }
 
-@group(0) @binding(0) var<uniform> u: Uniforms;
+// A storage buffer, not a uniform one: llvmpipe compiles a variant of the shader for
+// each set of values of the uniforms it inlines (seconds each).
+@group(0) @binding(0) var<storage, read> u: Uniforms;
 @group(0) @binding(4) var<storage, read_write> out_rgba: array<u32>;
 @group(0) @binding(5) var<storage, read_write> out_depth: array<f32>;
 @group(0) @binding(6) var<storage, read_write> out_steps: array<u32>;
 @group(0) @binding(7) var<storage, read> probe_in: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> probe_out: array<vec2<f32>>;
 @group(0) @binding(9) var<storage, read_write> saved: array<Saved>;
-// [pixels left unfinished by this pass, pixels that made no progress in it]
-@group(0) @binding(10) var<storage, read_write> progress: array<atomic<u32>, 2>;
+// Written by the host before each pass: [0, 0, 2 (the canary's count), first row of the
+// tile, pass (0: start), evaluations per pass (0: no limit), 0, 0]; the pass counts the
+// pixels it leaves unfinished into [0] and those that made no progress into [1].
+@group(0) @binding(10) var<storage, read_write> progress: array<atomic<u32>, 8>;
 
 const MAX_REFINE: u32 = 12u;
 const FIRST_DELTA: f32 = 0.0625;
@@ -248,18 +251,18 @@ struct Saved {
 
 // False once the loops of this SIMD group have used up llvmpipe's budget of 65,535
 // iterations per invocation (LP_MAX_TGSI_LOOP_ITERATIONS, shared by every loop; from then
-// on each loop ends after one iteration): a loop asked for 2 iterations (a uniform, so the
-// compiler cannot unroll it) then gets 1. The evaluation before it may have been cut
+// on each loop ends after one iteration): a loop asked for 2 iterations (read from a
+// buffer, so the compiler cannot unroll it) then gets 1. The evaluation before it may have been cut
 // short, so its result is dropped. Always true on other drivers.
 fn budget_left() -> bool {
     var k = 0u;
     loop {
         k += 1u;
-        if k >= u.pass_.z {
+        if k >= atomicLoad(&progress[2]) {
             break;
         }
     }
-    return k >= u.pass_.z;
+    return k >= 2u;
 }
 
 // One primary ray: march, refine, normal, shadow ray (march, refine), shade. The phases
@@ -272,7 +275,7 @@ fn budget_left() -> bool {
 fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     let w = u.dims.x;
     let h = u.dims.y;
-    let row = id.y + u.pass_.x;
+    let row = id.y + atomicLoad(&progress[3]);
     if id.x >= w || row >= h {
         return;
     }
@@ -291,7 +294,8 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     var hit_steps = 0u;
     var g = vec3<f32>(0.0);
     var corner = 0u;
-    if u.pass_.y == 0u {
+    let per_pass = atomicLoad(&progress[5]);
+    if atomicLoad(&progress[4]) == 0u {
         let span = clip(o, d);
         ray = start_ray(o, d, span.x, span.y);
         if span.x <= span.y {
@@ -344,7 +348,7 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
                 }
             }
         }
-        if phase == PH_DONE || (u.pass_.w != 0u && evals == u.pass_.w) {
+        if phase == PH_DONE || (per_pass != 0u && evals == per_pass) {
             break;
         }
         // The one evaluation of this step.

@@ -17,16 +17,17 @@ use karstic::render::raycast::MeshRaycaster;
 use karstic::render::trace::TraceParams;
 use karstic::render::{Camera, Method, RenderSettings, cpu, render};
 
-/// The scenes `trees/*.ron`, sorted.
+/// The scenes `trees/*.ron` and `trees/curves/*.ron`, sorted.
 fn tree_files() -> Vec<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap()
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
+    let mut files: Vec<PathBuf> = [root.clone(), root.join("curves")]
+        .iter()
+        .flat_map(|dir| std::fs::read_dir(dir).unwrap())
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|x| x == "ron"))
         .collect();
     files.sort();
-    assert!(files.len() >= 5, "{files:?}");
+    assert!(files.len() >= 18, "{files:?}");
     files
 }
 
@@ -37,22 +38,34 @@ fn compile(path: &Path) -> Tree {
         .tree
 }
 
+/// The scene's path under `trees/`, without the extension (`curves/arch`).
 fn name(path: &Path) -> String {
-    path.file_stem().unwrap().to_string_lossy().into_owned()
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
+    let rel = path.strip_prefix(&root).unwrap_or(path).with_extension("");
+    rel.to_string_lossy().into_owned()
 }
 
-/// `(name, tree, tape)` of the scenes that encode; prints why the others do not.
-fn encodable() -> Vec<(String, Tree, Tape)> {
-    let mut out = Vec::new();
-    for path in tree_files() {
-        let tree = compile(&path);
-        match tape_from_tree(&tree) {
-            Ok(tape) => out.push((name(&path), tree, tape)),
-            Err(e @ GpuError::NoEncoding { .. }) => eprintln!("{}: {e}", name(&path)),
-            Err(e) => panic!("{}: the encoder failed: {e}", name(&path)),
-        }
-    }
-    out
+/// `(name, tree, tape)` of every scene: each must encode (compiled once per test binary,
+/// the Feature Curve scenes run the voxel pipeline).
+fn scenes() -> &'static [(String, Tree, Tape)] {
+    static SCENES: std::sync::OnceLock<Vec<(String, Tree, Tape)>> = std::sync::OnceLock::new();
+    SCENES.get_or_init(|| {
+        let encoded: Vec<_> = tree_files()
+            .into_iter()
+            .map(|path| {
+                let tree = compile(&path);
+                let tape = tape_from_tree(&tree)
+                    .unwrap_or_else(|e| panic!("{}: no GPU tape: {e}", name(&path)));
+                (name(&path), tree, tape)
+            })
+            .collect();
+        encoded
+    })
+}
+
+/// The scenes with a surface (all but an empty Feature Curve volume).
+fn solid_scenes() -> impl Iterator<Item = &'static (String, Tree, Tape)> {
+    scenes().iter().filter(|s| !s.1.support().is_empty())
 }
 
 /// The box of the solid `f > T`, from the grid points of a 64³ lattice over the support
@@ -103,7 +116,7 @@ fn sample_points(tree: &Tree, n: usize, seed: u64) -> (Vec<Vec3>, usize) {
         .filter(finite)
         .collect();
     let root = tree.support();
-    assert!(finite(&root));
+    assert!(finite(&root), "support {root:?}");
     let mut pts = Vec::with_capacity(n);
     let mut surface = 0;
     while pts.len() < n {
@@ -134,12 +147,15 @@ fn sample_points(tree: &Tree, n: usize, seed: u64) -> (Vec<Vec3>, usize) {
 
 #[test]
 fn tapes_of_the_scenes_equal_their_trees() {
-    let scenes = encodable();
-    let names: Vec<&str> = scenes.iter().map(|s| s.0.as_str()).collect();
-    for expected in ["arch", "blobs", "floating_island"] {
-        assert!(names.contains(&expected), "{expected} encodes: {names:?}");
-    }
-    for (name, tree, tape) in &scenes {
+    for (name, tree, tape) in scenes() {
+        if tree.support().is_empty() {
+            // A Feature Curve volume without a surface (guidance curves alone): 0.
+            assert!(
+                tape.instrs.len() == 1 && tape.value(Vec3::ZERO) == 0.0,
+                "{name}: an empty field is the constant 0"
+            );
+            continue;
+        }
         let (pts, surface) = sample_points(tree, 20_000, 7);
         assert!(surface >= 500, "{name}: only {surface} surface points");
         let mut between = 0;
@@ -175,7 +191,7 @@ fn tapes_of_the_scenes_equal_their_trees() {
 /// rounding make the only differences.
 #[test]
 fn tape_images_match_tree_images_on_the_cpu() {
-    for (name, tree, tape) in &encodable() {
+    for (name, tree, tape) in solid_scenes() {
         let (cam, settings) = view(tree);
         let a = render(tree, &cam, &settings, &ProgressBar::hidden());
         let b = render(tape, &cam, &settings, &ProgressBar::hidden());
@@ -184,12 +200,41 @@ fn tape_images_match_tree_images_on_the_cpu() {
     }
 }
 
-/// With an adapter (lavapipe in CI): the GPU render of each encodable scene's tape against
+/// With an adapter: the GPU evaluates every scene's tape (values and ball bounds, with
+/// and without a ball) as the CPU does, at points spread over the scene and on its
+/// surface.
+#[test]
+fn gpu_probes_of_the_scenes_match_the_cpu() {
+    let Some(ctx) = gpu() else { return };
+    for (name, tree, tape) in solid_scenes() {
+        let (pts, _) = sample_points(tree, 3000, 21);
+        let mut rng = Rng(4);
+        let scale = tree.support().radius() * 0.05;
+        let probes: Vec<(Vec3, f32)> = pts
+            .into_iter()
+            .enumerate()
+            .map(|(i, p)| {
+                (
+                    p,
+                    if i % 3 == 0 {
+                        0.0
+                    } else {
+                        rng.range(0.0, scale)
+                    },
+                )
+            })
+            .collect();
+        eprintln!("{name}");
+        assert_probes_match(ctx, tape, &probes);
+    }
+}
+
+/// With an adapter (lavapipe in CI): the GPU render of every scene's tape against
 /// the CPU render of the tree itself.
 #[test]
 fn gpu_renders_of_the_scenes_match_the_cpu() {
     let Some(ctx) = gpu() else { return };
-    for (name, tree, tape) in &encodable() {
+    for (name, tree, tape) in solid_scenes() {
         let (cam, settings) = view(tree);
         let start = std::time::Instant::now();
         let a = render(tree, &cam, &settings, &ProgressBar::hidden());

@@ -20,9 +20,6 @@ use crate::render::trace::Method;
 struct Uniforms {
     v: [[f32; 4]; 15],
     dims: [u32; 4],
-    /// First row of the tile, pass, the budget canary's count (2), evaluations per pass
-    /// (0: no limit).
-    pass: [u32; 4],
 }
 
 /// Bytes of one pixel's saved state (`struct Saved` of `trace.wgsl`).
@@ -64,7 +61,6 @@ impl Uniforms {
                 v4(sh.snow, 0.0),
             ],
             dims: [cam.width, cam.height, s.trace.max_steps, 0],
-            pass: [0, 0, 2, 0],
         }
     }
 }
@@ -164,10 +160,12 @@ impl GpuContext {
         Ok(())
     }
 
-    /// The tape's buffers, bound at 1, 2 and 3 of `shaders/`.
-    fn tape_buffers(&self, tape: &Tape) -> Result<[(u32, wgpu::Buffer); 3], GpuError> {
+    /// The tape's buffers, bound at 1, 2, 3, 11 and 12 of `shaders/`.
+    fn tape_buffers(&self, tape: &Tape) -> Result<[(u32, wgpu::Buffer); 5], GpuError> {
         self.check_size("the tape's parameters", 4 * tape.params.len() as u64)?;
         self.check_size("the tape's heightfields", 4 * tape.heights.len() as u64)?;
+        self.check_size("the S-field brick tables", 4 * tape.sf_table.len() as u64)?;
+        self.check_size("the S-field samples", 4 * tape.sf_data.len() as u64)?;
         Ok([
             (
                 1,
@@ -180,6 +178,14 @@ impl GpuContext {
             (
                 3,
                 self.storage("heights", bytemuck::cast_slice(&tape.heights)),
+            ),
+            (
+                11,
+                self.storage("sf_table", bytemuck::cast_slice(&tape.sf_table)),
+            ),
+            (
+                12,
+                self.storage("sf_data", bytemuck::cast_slice(&tape.sf_data)),
             ),
         ])
     }
@@ -205,18 +211,17 @@ impl GpuContext {
         })
     }
 
-    /// Runs one dispatch of `pipeline` after zeroing `counters` (a `u32` array it counts
-    /// into) and returns the counters.
+    /// Runs one dispatch of `pipeline` and returns the first two words of `counters`
+    /// (a `u32` array it counts into).
     fn dispatch(
         &self,
         pipeline: &wgpu::ComputePipeline,
         group: &wgpu::BindGroup,
         groups: (u32, u32),
         counters: &wgpu::Buffer,
-    ) -> Result<Vec<u32>, GpuError> {
+    ) -> Result<[u32; 2], GpuError> {
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut enc = self.device.create_command_encoder(&Default::default());
-        enc.clear_buffer(counters, 0, None);
         {
             let mut pass = enc.begin_compute_pass(&Default::default());
             pass.set_pipeline(pipeline);
@@ -228,7 +233,8 @@ impl GpuContext {
             return Err(GpuError::Run(e.to_string()));
         }
         let out = self.read_back(&[counters])?;
-        Ok(bytemuck::cast_slice::<u8, u32>(&out[0]).to_vec())
+        let words = bytemuck::cast_slice::<u8, u32>(&out[0]);
+        Ok([words[0], words[1]])
     }
 
     /// Copies `buffers` into mappable ones and reads them (after the work submitted).
@@ -330,18 +336,15 @@ impl GpuContext {
         let n = w as u64 * h as u64;
         self.check_size("the image", 4 * n)?;
         let tape_buffers = self.tape_buffers(tape)?;
-        let mut uniforms = Uniforms::new(tape, camera, settings);
-        let uniform_buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("uniforms"),
-            size: std::mem::size_of::<Uniforms>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let uniforms = self.storage(
+            "uniforms",
+            bytemuck::bytes_of(&Uniforms::new(tape, camera, settings)),
+        );
         let tile_rows = ((TILE_PIXELS / w as u64).max(8) as u32 / 8 * 8).min(h.next_multiple_of(8));
         let saved = self.output("saved", SAVED_BYTES * w as u64 * tile_rows as u64);
         let progress = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("progress"),
-            size: 8,
+            size: 32,
             usage: wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::COPY_SRC
                 | wgpu::BufferUsages::COPY_DST,
@@ -353,7 +356,7 @@ impl GpuContext {
         let mut bindings: Vec<(u32, &wgpu::Buffer)> =
             tape_buffers.iter().map(|(k, b)| (*k, b)).collect();
         bindings.extend([
-            (0, &uniform_buffer),
+            (0, &uniforms),
             (4, &rgba),
             (5, &depth),
             (6, &steps),
@@ -369,9 +372,9 @@ impl GpuContext {
                         "rows {row0}.. still unfinished after {MAX_PASSES} passes"
                     )));
                 }
-                uniforms.pass = [row0, pass, 2, evals_per_pass];
+                let info = [0, 0, 2, row0, pass, evals_per_pass, 0, 0u32];
                 self.queue
-                    .write_buffer(&uniform_buffer, 0, bytemuck::bytes_of(&uniforms));
+                    .write_buffer(&progress, 0, bytemuck::cast_slice(&info));
                 let left = self.dispatch(
                     &self.render,
                     &group,

@@ -8,6 +8,7 @@
 //! | [`Primitive`] on a point, segment, sphere, capsule, axis-aligned box, cone or ellipsoid | `PRIM` (Wyvill); `NPRIM` with noise |
 //! | [`Primitive`] on a polyline or curve | its segments' `PRIM`s (`NPRIM`s) under a BVH of guards, combined by `UNION` (`E ≥ 0`: `E·g(minᵢ d̃ᵢ) = maxᵢ E·g(d̃ᵢ)`, `g` decreasing) or `INTER` (`E < 0`) |
 //! | [`HeightfieldField`] (bilinear or bicubic, square cells, no nodata, no domain polygon) | `HEIGHT` ∩ `PRIM` on its [`Shape::Prism`], energy `2T`: `min(σ(h − z), 2T·g(d_P/R))` as the leaf defines it |
+//! | [`SField`] (a `FeatureVolume`) | `SFIELD` over its bricks ([`super::sfield`]) |
 //! | blend | children chained by `BLEND`; with a BVH (many children), [`TapeBuilder::combine_bvh`] over the children's supports |
 //! | union / intersection | children chained by `UNION` / `INTER` |
 //! | difference | base, then each carve and `DIFF` |
@@ -16,7 +17,8 @@
 //!
 //! Every emitted subtree is then told its support from the tree's cache
 //! ([`TapeBuilder::assume_support`]), so the tape's guards and support box are the tree's.
-//! A node with no encoding — another skeleton, an S-field volume or any other leaf — is a [`GpuError::NoEncoding`] naming it, and
+//! A node with no encoding — a disc, plane or prism skeleton, a turned box, a
+//! heightfield with nodata or a domain polygon, any other leaf — is a [`GpuError::NoEncoding`] naming it, and
 //! `karstic render --gpu` falls back to the CPU with that message. An instanced subtree
 //! (one node with several parents) is emitted once per use: a tape is a tree.
 
@@ -27,6 +29,7 @@ use super::tape::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder};
 use crate::dem::HeightfieldField;
 use crate::field::skeleton::Project;
 use crate::field::{Field, Node, NodeId, Primitive, Skeleton, T, Tree};
+use crate::voxel::SField;
 
 /// The GPU tape of a compiled tree, or the first node without an encoding.
 pub fn tape_from_tree(tree: &Tree) -> Result<Tape, GpuError> {
@@ -125,11 +128,14 @@ fn leaf(tree: &Tree, b: &mut TapeBuilder, id: NodeId, f: &dyn Field) -> Result<(
     if let Some(h) = any.and_then(|a| a.downcast_ref::<HeightfieldField>()) {
         return heightfield(tree, b, id, h);
     }
+    if let Some(s) = any.and_then(|a| a.downcast_ref::<SField>()) {
+        return b.sfield(s, &describe(tree, id, "S-field volume"));
+    }
     Err(no_encoding(
         tree,
         id,
         "leaf",
-        "only skeletal primitives and heightfields are encoded; S-field volumes (FeatureVolume) are not yet",
+        "only skeletal primitives, heightfields and S-field volumes are encoded",
     ))
 }
 

@@ -11,6 +11,7 @@
 //! | `PRIM` | `R, e, shape…` | push | `e·g(max(sd, 0)/R)` (Wyvill) or `σ(−sd, R)` (σ, `flags` bit 8); `sd` = signed distance to the shape (`flags & 0xff`: sphere `c, ρ`; capsule `a, b, ρ`; box `c, half`; heightfield prism `min, max`) |
 //! | `HEIGHT` | `R, L, ox, oy, cell, nx, ny, offset` | push | `σ(h(x, y) − z, R)`, `h` bilinear (Catmull-Rom bicubic with `flags` bit 0) in `heights[offset..]`, `L ≥ |∇h|` |
 //! | `NPRIM` | see [`super::noise`] | push | a noisy primitive `E·g(d̃)` on a convex shape |
+//! | `SFIELD` | see [`super::sfield`] | push | an S-field leaf (`flags`: its index in [`Tape::sfields`]) |
 //! | `BLEND` / `UNION` / `INTER` / `DIFF` | – | pop 2, push 1 | `a + b`, `max`, `min`, `min(a, 2T − b)` |
 //! | `GUARD` | `min.xyz, max.xyz` | – | when neither `p` nor the ball touches the box, push `(0, 0)` and jump to `jump` (the instruction after the guarded subtree) |
 //! | `WARP` / `UNWARP` | `M⁻¹` (3 rows of 4), `k = ‖M⁻¹‖` / `k` | – | `p, c ← M⁻¹p, M⁻¹c`, `r ← k·r`; on `UNWARP` restore them and scale the top bound by `k` |
@@ -24,6 +25,8 @@
 //! [`Tape`] implements [`Field`] with the same arithmetic as `shaders/field.wgsl`, so the
 //! CPU tracer renders exactly what the GPU renders; the tests compare the two.
 
+use std::sync::Arc;
+
 use bytemuck::{Pod, Zeroable};
 use glam::{Affine3A, Vec2, Vec3, Vec3A};
 
@@ -32,6 +35,7 @@ use super::noise::{noisy_primitive, nprim_head, twarp_apply, twarp_params};
 use crate::dem::{Heightfield, Interpolation};
 use crate::field::falloff::{sigma, sigma_slope, wyvill, wyvill_slope};
 use crate::field::{Aabb, Fbm, Field, Interval, Noise, T, Warp};
+use crate::voxel::SField;
 
 /// One tape instruction: 16 bytes, `vec4<u32>` in WGSL.
 #[repr(C)]
@@ -57,6 +61,8 @@ pub mod op {
     pub const HEIGHT: u32 = 2;
     /// Push a noisy primitive.
     pub const NPRIM: u32 = 3;
+    /// Push an S-field leaf.
+    pub const SFIELD: u32 = 4;
     /// Sum of the two top entries.
     pub const BLEND: u32 = 16;
     /// Maximum.
@@ -289,7 +295,7 @@ pub struct HeightGrid<'a> {
 }
 
 /// A compiled tape: what the GPU uploads, and a [`Field`] on the CPU.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct Tape {
     /// Instructions in evaluation order.
     pub instrs: Vec<Instr>,
@@ -300,6 +306,12 @@ pub struct Tape {
     /// The turbulences of `NPRIM` and `TWARP`, by the index in their parameters: the CPU
     /// evaluates them with these, the GPU from their encoding.
     pub noises: Vec<Fbm>,
+    /// The brick tables of all `SFIELD` leaves ([`super::sfield`]).
+    pub sf_table: Vec<u32>,
+    /// The samples of all `SFIELD` leaves.
+    pub sf_data: Vec<f32>,
+    /// The `SFIELD` leaves themselves, by index: the CPU evaluates them.
+    pub sfields: Vec<Arc<SField>>,
     support: Aabb,
     lipschitz: f32,
     grad_step: f32,
@@ -341,6 +353,9 @@ pub struct TapeBuilder {
     params: Vec<f32>,
     heights: Vec<f32>,
     noises: Vec<Fbm>,
+    sf_table: Vec<u32>,
+    sf_data: Vec<f32>,
+    sfields: Vec<Arc<SField>>,
     stack: Vec<Entry>,
     max_stack: usize,
     /// Open warps: stack depth at entry, and the warp.
@@ -475,6 +490,24 @@ impl TapeBuilder {
         self.emit(op::HEIGHT, flags, &p);
         self.push(Entry {
             support: EVERYWHERE_BOX,
+            range: Interval::new(0.0, 2.0 * T),
+        });
+        Ok(())
+    }
+
+    /// Pushes the S-field leaf `sf` (its grids go to [`Tape::sf_table`] and
+    /// [`Tape::sf_data`]); `what` names it in errors. An empty field is the constant 0.
+    pub fn sfield(&mut self, sf: &SField, what: &str) -> Result<(), GpuError> {
+        if sf.is_empty() {
+            self.constant(0.0);
+            return Ok(());
+        }
+        let q = super::sfield::encode(sf, &mut self.sf_table, &mut self.sf_data, what)?;
+        let index = self.sfields.len() as u32;
+        self.sfields.push(Arc::new(sf.clone()));
+        self.emit(op::SFIELD, index, &q);
+        self.push(Entry {
+            support: sf.support(),
             range: Interval::new(0.0, 2.0 * T),
         });
         Ok(())
@@ -733,6 +766,9 @@ impl TapeBuilder {
             params: self.params,
             heights: self.heights,
             noises: self.noises,
+            sf_table: self.sf_table,
+            sf_data: self.sf_data,
+            sfields: self.sfields,
             support,
             lipschitz: 0.0,
             grad_step: 0.0,
@@ -804,6 +840,11 @@ impl Tape {
                 }
                 op::HEIGHT => {
                     stack[sp] = self.height::<BOUND>(ins.flags, &prm[o..], p, c, r);
+                    sp += 1;
+                }
+                op::SFIELD => {
+                    let sf = &self.sfields[ins.flags as usize];
+                    stack[sp] = super::sfield::eval(sf, (p, c, r), BOUND);
                     sp += 1;
                 }
                 op::BLEND | op::UNION | op::INTER | op::DIFF => {
