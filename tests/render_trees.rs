@@ -145,6 +145,8 @@ fn sample_points(tree: &Tree, n: usize, seed: u64) -> (Vec<Vec3>, usize) {
     (pts, surface)
 }
 
+/// Every scene of `trees/` and `trees/curves/` encodes; its tape equals its tree at
+/// points spread over it and on its surface, and the tape's ball bounds are sound.
 #[test]
 fn tapes_of_the_scenes_equal_their_trees() {
     for (name, tree, tape) in scenes() {
@@ -171,6 +173,9 @@ fn tapes_of_the_scenes_equal_their_trees() {
             between * 20 >= pts.len(),
             "{name}: only {between} points where the value is not saturated"
         );
+        // Its ball bounds are sound on random segments (the S-field leaves' bound from the
+        // value at the centre included).
+        common::check_segment_lipschitz(tape, &tree.support(), 4000, 17);
         // The tape's support is the tree's (the encoder passes the cached supports on).
         let (a, b) = (tape.support(), tree.support());
         assert!(b.contains_box(&a), "{name}: tape support {a:?} ⊄ {b:?}");
