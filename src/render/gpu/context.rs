@@ -74,6 +74,8 @@ pub struct GpuContext {
     fbm_probe: wgpu::ComputePipeline,
     /// Name and backend of the adapter, for messages.
     pub adapter: String,
+    /// True on a software adapter (lavapipe, which runs the shader on the CPU's cores).
+    pub software: bool,
 }
 
 impl GpuContext {
@@ -126,6 +128,7 @@ impl GpuContext {
             probe,
             fbm_probe,
             adapter: format!("{} ({:?})", info.name, info.backend),
+            software: info.device_type == wgpu::DeviceType::Cpu,
         })
     }
 
