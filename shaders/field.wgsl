@@ -29,6 +29,20 @@ const ELLIPSOID_NEWTON: u32 = 64u;
 const SIGMA_FLAG: u32 = 256u;
 const BICUBIC_FLAG: u32 = 1u;
 
+// What the tape uses, set per pipeline (tape.rs Tape::features): code behind a false one
+// is dropped at compile time. llvmpipe runs every branch of the interpreter with masks,
+// so each tape instruction would otherwise pay for the code of every op. All true (the
+// defaults) is the full evaluator.
+override USE_NPRIM: bool = true;
+override USE_HEIGHT: bool = true;
+override USE_BICUBIC: bool = true;
+override USE_SFIELD: bool = true;
+override USE_SF_CUBIC: bool = true;
+override USE_SF_NOISE: bool = true;
+override USE_TWARP: bool = true;
+override USE_CONE: bool = true;
+override USE_ELLIPSOID: bool = true;
+
 const WYVILL_MAX_SLOPE: f32 = 1.7173008;
 const WYVILL_PEAK_X: f32 = 0.4472136;
 
@@ -202,10 +216,16 @@ fn project(kind: u32, o: u32, p: vec3<f32>) -> Projection {
             return Projection(c + clamp(p - c, -half, half), sd);
         }
         case SHAPE_CONE: {
-            return cone_projection(o, p);
+            if USE_CONE {
+                return cone_projection(o, p);
+            }
+            return Projection(p, 0.0);
         }
         case SHAPE_ELLIPSOID: {
-            return ellipsoid_projection(o, p);
+            if USE_ELLIPSOID {
+                return ellipsoid_projection(o, p);
+            }
+            return Projection(p, 0.0);
         }
         default: {
             // SHAPE_PRISM: a heightfield's prism, the largest horizontal excess over
@@ -307,7 +327,7 @@ fn bicubic(o: u32, x: f32, y: f32) -> f32 {
 }
 
 fn elevation(flags: u32, o: u32, x: f32, y: f32) -> f32 {
-    if (flags & BICUBIC_FLAG) != 0u {
+    if USE_BICUBIC && (flags & BICUBIC_FLAG) != 0u {
         return bicubic(o, x, y);
     }
     return bilinear(o, x, y);
@@ -366,17 +386,21 @@ fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
                 let pc = project(kind, shape_at, c);
                 if ins.x == OP_PRIM {
                     stack[sp] = primitive(ins.y, o, pp.d, pc.d, r);
-                } else {
+                } else if USE_NPRIM {
                     stack[sp] = noisy_primitive(o, p, pp, c, pc, r);
                 }
                 sp += 1u;
             }
             case OP_SFIELD: {
-                stack[sp] = sfield(o, p, c, r);
+                if USE_SFIELD {
+                    stack[sp] = sfield(o, p, c, r);
+                }
                 sp += 1u;
             }
             case OP_HEIGHT: {
-                stack[sp] = heightfield(ins.y, o, p, c, r);
+                if USE_HEIGHT {
+                    stack[sp] = heightfield(ins.y, o, p, c, r);
+                }
                 sp += 1u;
             }
             case OP_BLEND, OP_UNION, OP_INTER, OP_DIFF: {
@@ -418,7 +442,9 @@ fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
                 frames[2u * fp] = vec4<f32>(p, r);
                 frames[2u * fp + 1u] = vec4<f32>(c, 0.0);
                 fp += 1u;
-                p = twarp_apply(o, p);
+                if USE_TWARP {
+                    p = twarp_apply(o, p);
+                }
                 r += params[o + 1u];
             }
             case OP_UNWARP: {

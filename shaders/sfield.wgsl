@@ -95,7 +95,7 @@ fn sf_s(o: u32, q_in: vec3<f32>) -> f32 {
     }
     let s_at = u32(params[lv + 8u]);
     var s = sf_trilinear(s_at, idx, f);
-    if params[o + 12u] != 0.0 && level + 1u == levels {
+    if USE_SF_CUBIC && params[o + 12u] != 0.0 && level + 1u == levels {
         // The blend L + w·(C − L) (tricubic.rs Cubic::eval), where a corner's weight (0 or
         // 1) is set.
         let w_at = u32(params[o + 13u]);
@@ -127,7 +127,7 @@ fn sf_s(o: u32, q_in: vec3<f32>) -> f32 {
             }
         }
     }
-    if params[o + 9u] != 0.0 {
+    if USE_SF_NOISE && params[o + 9u] != 0.0 {
         let a = sf_trilinear(u32(params[lv + 9u]), idx, f);
         let b = sf_trilinear(u32(params[lv + 10u]), idx, f);
         s -= a * fbm(o + 14u, (q - param3(o)) * b);

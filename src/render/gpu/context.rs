@@ -1,6 +1,9 @@
 //! wgpu plumbing: adapter and device, the compute pipelines of `shaders/trace.wgsl`,
 //! buffer upload, dispatch and read-back.
 
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 use wgpu::util::DeviceExt;
@@ -65,12 +68,19 @@ impl Uniforms {
     }
 }
 
+/// The `render` and `probe` pipelines compiled for one set of [`Tape::features`].
+struct TapePipelines {
+    render: wgpu::ComputePipeline,
+    probe: wgpu::ComputePipeline,
+}
+
 /// An open GPU device with the tracing pipelines, reusable across frames.
 pub struct GpuContext {
     device: wgpu::Device,
     queue: wgpu::Queue,
-    render: wgpu::ComputePipeline,
-    probe: wgpu::ComputePipeline,
+    module: wgpu::ShaderModule,
+    /// By [`Tape::features`]: compiled on first use.
+    pipelines: Mutex<HashMap<u32, Arc<TapePipelines>>>,
     fbm_probe: wgpu::ComputePipeline,
     /// Name and backend of the adapter, for messages.
     pub adapter: String,
@@ -104,18 +114,7 @@ impl GpuContext {
             label: Some("trace.wgsl"),
             source: wgpu::ShaderSource::Wgsl(shader_source().into()),
         });
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let (render, probe, fbm_probe) =
-            (pipeline("render"), pipeline("probe"), pipeline("fbm_probe"));
+        let fbm_probe = pipeline(&device, &module, "fbm_probe", &[]);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Device(format!(
                 "the tracing shader does not compile: {e}"
@@ -124,12 +123,34 @@ impl GpuContext {
         Ok(GpuContext {
             device,
             queue,
-            render,
-            probe,
+            module,
+            pipelines: Mutex::new(HashMap::new()),
             fbm_probe,
             adapter: format!("{} ({:?})", info.name, info.backend),
             software: info.device_type == wgpu::DeviceType::Cpu,
         })
+    }
+
+    /// The pipelines for `tape`'s features, compiled on first use.
+    fn pipelines(&self, tape: &Tape) -> Result<Arc<TapePipelines>, GpuError> {
+        let key = tape.features();
+        let mut map = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = map.get(&key) {
+            return Ok(p.clone());
+        }
+        let constants = Tape::feature_constants(key);
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let p = Arc::new(TapePipelines {
+            render: pipeline(&self.device, &self.module, "render", &constants),
+            probe: pipeline(&self.device, &self.module, "probe", &constants),
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Device(format!(
+                "the tracing shader does not compile: {e}"
+            )));
+        }
+        map.insert(key, p.clone());
+        Ok(p)
     }
 
     fn storage(&self, label: &str, bytes: &[u8]) -> wgpu::Buffer {
@@ -366,7 +387,8 @@ impl GpuContext {
             (9, &saved),
             (10, &progress),
         ]);
-        let group = self.bind_group(&self.render, &bindings);
+        let pipelines = self.pipelines(tape)?;
+        let group = self.bind_group(&pipelines.render, &bindings);
         for row0 in (0..h).step_by(tile_rows as usize) {
             let rows = tile_rows.min(h - row0);
             for pass in 0.. {
@@ -379,7 +401,7 @@ impl GpuContext {
                 self.queue
                     .write_buffer(&progress, 0, bytemuck::cast_slice(&info));
                 let left = self.dispatch(
-                    &self.render,
+                    &pipelines.render,
                     &group,
                     (w.div_ceil(8), rows.div_ceil(8)),
                     &progress,
@@ -415,7 +437,7 @@ impl GpuContext {
         let tape_buffers = self.tape_buffers(tape)?;
         let bindings: Vec<(u32, &wgpu::Buffer)> =
             tape_buffers.iter().map(|(k, b)| (*k, b)).collect();
-        self.run_probes(&self.probe, &bindings, points)
+        self.run_probes(&self.pipelines(tape)?.probe, &bindings, points)
     }
 
     /// Evaluates the turbulence `fbm` at each point on the GPU (`shaders/noise.wgsl`), to
@@ -458,6 +480,26 @@ impl GpuContext {
             .map(|v| (v[0], v[1]))
             .collect())
     }
+}
+
+/// The compute pipeline of `entry` with the overridable `constants`.
+fn pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: None,
+        module,
+        entry_point: Some(entry),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            ..Default::default()
+        },
+        cache: None,
+    })
 }
 
 /// Opens a device and renders one frame (see [`GpuContext::render`]).
