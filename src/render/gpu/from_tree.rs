@@ -16,7 +16,9 @@
 //! | turbulence warp | `TWARP`, child, `UNWARP` (the tree's bound: the child's over the ball grown by the warp's reach, times its Lipschitz bound) |
 //!
 //! Every emitted subtree is then told its support from the tree's cache
-//! ([`TapeBuilder::assume_support`]), so the tape's guards and support box are the tree's.
+//! ([`TapeBuilder::assume_support`]), so the tape's guards and support box are the tree's;
+//! S-field volumes and noisy primitives get a guard of their own (their evaluation is
+//! long, and rays away from them jump over it).
 //! A node with no encoding — a disc, plane or prism skeleton, a turned box, a
 //! heightfield with nodata or a domain polygon, any other leaf — is a [`GpuError::NoEncoding`] naming it, and
 //! `karstic render --gpu` falls back to the CPU with that message. An instanced subtree
@@ -60,9 +62,40 @@ fn no_encoding(tree: &Tree, id: NodeId, kind: &str, why: &str) -> GpuError {
     }
 }
 
+/// True for the leaves worth a guard of their own: S-field volumes and noisy primitives,
+/// whose evaluation is long (on lavapipe, every lane of a SIMD group pays for a leaf any
+/// lane evaluates; a guard lets rays away from the leaf jump over it).
+fn costly(node: &Node) -> bool {
+    let leaf = match node {
+        Node::Primitive(p) => return p.noise().is_some(),
+        Node::Leaf(f) => f.as_any(),
+        _ => return false,
+    };
+    leaf.is_some_and(|a| {
+        a.is::<SField>()
+            || a.downcast_ref::<Primitive>()
+                .is_some_and(|p| p.noise().is_some())
+    })
+}
+
 /// Emits node `id`, leaving one entry on the builder's stack.
 fn emit(tree: &Tree, b: &mut TapeBuilder, id: NodeId) -> Result<(), GpuError> {
-    match &tree.nodes()[id as usize] {
+    let node = &tree.nodes()[id as usize];
+    let support = tree.info(id).support;
+    if costly(node) && !support.is_empty() && support.size().is_finite() {
+        // Every node is 0 outside its support box, so a guard may stand before it.
+        let g = b.guard_begin(support);
+        emit_node(tree, b, id, node)?;
+        b.guard_end(g)?;
+        return b.assume_support(support);
+    }
+    emit_node(tree, b, id, node)?;
+    b.assume_support(support)
+}
+
+/// Emits `node` (node `id`) without a guard of its own.
+fn emit_node(tree: &Tree, b: &mut TapeBuilder, id: NodeId, node: &Node) -> Result<(), GpuError> {
+    match node {
         Node::Constant(v) => b.constant(*v),
         Node::Primitive(p) => primitive(tree, b, id, p)?,
         Node::Leaf(f) => leaf(tree, b, id, f.as_ref())?,
@@ -98,7 +131,7 @@ fn emit(tree: &Tree, b: &mut TapeBuilder, id: NodeId) -> Result<(), GpuError> {
             b.warp_end()?;
         }
     }
-    b.assume_support(tree.info(id).support)
+    Ok(())
 }
 
 /// `c₀ ∘ c₁ ∘ …` as a chain of binary ops (an empty list is the constant 0).
