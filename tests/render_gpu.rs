@@ -12,7 +12,7 @@ use indicatif::ProgressBar;
 use karstic::field::falloff::{sigma, wyvill};
 use karstic::field::{Aabb, Fbm, Field, T};
 use karstic::render::gpu::{
-    Combine, GpuContext, Profile, SHADER_MODULES, Shape, Tape, TapeBuilder, shader_source,
+    Combine, FEATURES, GpuContext, Profile, SHADER_MODULES, Shape, Tape, TapeBuilder, shader_source,
 };
 use karstic::render::{Camera, Method, RenderSettings, render};
 
@@ -47,12 +47,22 @@ fn every_shader_parses_and_validates_with_naga() {
         }
         let module = naga::front::wgsl::parse_str(&src)
             .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&src)));
-        naga::valid::Validator::new(
+        let info = naga::valid::Validator::new(
             naga::valid::ValidationFlags::all(),
             naga::valid::Capabilities::default(),
         )
         .validate(&module)
         .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&src)));
+        // The pipelines a tape compiles (Tape::features): every feature alone, none, all.
+        let n = FEATURES.len() as u32;
+        for bits in (0..n).map(|k| 1 << k).chain([0, (1 << n) - 1]) {
+            let mut constants = naga::back::PipelineConstants::default();
+            for (k, v) in Tape::feature_constants(bits) {
+                constants.insert(k.to_string(), v);
+            }
+            naga::back::pipeline_constants::process_overrides(&module, &info, None, &constants)
+                .unwrap_or_else(|e| panic!("{name} with features {bits:b}: {e}"));
+        }
         for entry in ["render", "probe", "fbm_probe"] {
             assert!(
                 module.entry_points.iter().any(|e| e.name == entry),

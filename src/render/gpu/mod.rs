@@ -18,7 +18,7 @@ pub mod tape;
 
 pub use context::{GpuContext, render};
 pub use from_tree::tape_from_tree;
-pub use tape::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder};
+pub use tape::{Combine, FEATURES, HeightGrid, Profile, Shape, Tape, TapeBuilder};
 
 /// Errors of the GPU path.
 #[derive(Debug, thiserror::Error)]
