@@ -10,7 +10,9 @@
 //! * Plain sphere tracing with the global bound, on smaller images.
 //! * The main job's tree, `trees/jacksboro_caves.ron` (DEM heightfield, bicubic, with an
 //!   S-field tunnel carved, an S-field arch and a noisy grotto), compiled by the scene
-//!   loader, at 1280 × 720 with shadows; segment vs sphere steps reported at 320 × 180.
+//!   loader, at 1280 × 720 and 1920 × 1080 with shadows; segment vs sphere steps reported
+//!   at 320 × 180; its GPU tape's ms per frame at 320 × 180 and 1920 × 1080 (on a
+//!   software adapter the latter only with `KARSTIC_BENCH_SOFTWARE_GPU=1`).
 //! * The Jacksboro DEM (90 m cells) with a tunnel carved through it, as a tape, at
 //!   1280 × 720, and a synthetic terrain chunk at 500 × 500.
 //!
@@ -89,7 +91,9 @@ fn report(name: &str, f: &dyn Field, size: (u32, u32), method: Method, shadows: 
     );
 }
 
-/// Milliseconds per frame on the GPU adapter, if there is one (after a warm-up frame).
+/// Milliseconds per frame on the GPU adapter, if there is one: one frame, after a small
+/// one that compiles the pipeline. On a software adapter (lavapipe) frames larger than
+/// 500 × 500 take minutes and run only with `KARSTIC_BENCH_SOFTWARE_GPU=1`.
 fn report_gpu(name: &str, tape: &Tape, size: (u32, u32)) {
     let ctx = match GpuContext::new() {
         Ok(c) => c,
@@ -98,17 +102,29 @@ fn report_gpu(name: &str, tape: &Tape, size: (u32, u32)) {
             return;
         }
     };
-    let (cam, s) = scene(tape, size, Method::Segment, true);
+    if ctx.software
+        && size.0 * size.1 > 500 * 500
+        && std::env::var_os("KARSTIC_BENCH_SOFTWARE_GPU").is_none()
+    {
+        eprintln!(
+            "{name}: {}x{} on {} skipped (software adapter; KARSTIC_BENCH_SOFTWARE_GPU=1 runs it)",
+            size.0, size.1, ctx.adapter
+        );
+        return;
+    }
+    let (cam, s) = scene(tape, (32, 18), Method::Segment, true);
     ctx.render(tape, &cam, &s).unwrap();
+    let (cam, s) = scene(tape, size, Method::Segment, true);
     let start = std::time::Instant::now();
     let frame = ctx.render(tape, &cam, &s).unwrap();
     eprintln!(
-        "{name}: {}x{} on {}: {:.0} ms per frame, {:.1} steps per ray",
+        "{name}: {}x{} on {}: {:.0} ms per frame, {:.1} steps per ray, {} hits",
         size.0,
         size.1,
         ctx.adapter,
         start.elapsed().as_secs_f64() * 1e3,
-        frame.mean_steps()
+        frame.mean_steps(),
+        frame.hits()
     );
 }
 
@@ -153,6 +169,11 @@ fn bench(c: &mut Criterion) {
         );
     }
     report_gpu("dem with cave", &dem_tape, (480, 270));
+    // The main job's tree on the GPU (every node encodes): the CLI's framing and size of
+    // `karstic render trees/jacksboro_caves.ron --gpu --size 1920 1080`.
+    let caves_tape = tape_from_tree(&caves).unwrap();
+    report_gpu("jacksboro_caves.ron", &caves_tape, (320, 180));
+    report_gpu("jacksboro_caves.ron", &caves_tape, (1920, 1080));
     for (name, f, size, method, shadows) in [
         (
             "blobs",
@@ -187,6 +208,13 @@ fn bench(c: &mut Criterion) {
             "jacksboro_caves.ron",
             &caves,
             (1280, 720),
+            Method::Segment,
+            true,
+        ),
+        (
+            "jacksboro_caves.ron",
+            &caves,
+            (1920, 1080),
             Method::Segment,
             true,
         ),

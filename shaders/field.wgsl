@@ -10,6 +10,7 @@ const OP_CONST: u32 = 0u;
 const OP_PRIM: u32 = 1u;
 const OP_HEIGHT: u32 = 2u;
 const OP_NPRIM: u32 = 3u;
+const OP_SFIELD: u32 = 4u;
 const OP_BLEND: u32 = 16u;
 const OP_UNION: u32 = 17u;
 const OP_INTER: u32 = 18u;
@@ -22,7 +23,25 @@ const OP_TWARP: u32 = 35u;
 const SHAPE_SPHERE: u32 = 0u;
 const SHAPE_CAPSULE: u32 = 1u;
 const SHAPE_BOX: u32 = 2u;
+const SHAPE_CONE: u32 = 4u;
+const SHAPE_ELLIPSOID: u32 = 5u;
+const ELLIPSOID_NEWTON: u32 = 64u;
 const SIGMA_FLAG: u32 = 256u;
+const BICUBIC_FLAG: u32 = 1u;
+
+// What the tape uses, set per pipeline (tape.rs Tape::features): code behind a false one
+// is dropped at compile time. llvmpipe runs every branch of the interpreter with masks,
+// so each tape instruction would otherwise pay for the code of every op. All true (the
+// defaults) is the full evaluator.
+override USE_NPRIM: bool = true;
+override USE_HEIGHT: bool = true;
+override USE_BICUBIC: bool = true;
+override USE_SFIELD: bool = true;
+override USE_SF_CUBIC: bool = true;
+override USE_SF_NOISE: bool = true;
+override USE_TWARP: bool = true;
+override USE_CONE: bool = true;
+override USE_ELLIPSOID: bool = true;
 
 const WYVILL_MAX_SLOPE: f32 = 1.7173008;
 const WYVILL_PEAK_X: f32 = 0.4472136;
@@ -80,41 +99,151 @@ fn param3(o: u32) -> vec3<f32> {
     return vec3<f32>(params[o], params[o + 1u], params[o + 2u]);
 }
 
-fn signed_distance(kind: u32, o: u32, p: vec3<f32>) -> f32 {
-    if kind == SHAPE_SPHERE {
-        return distance(p, param3(o)) - params[o + 3u];
-    }
-    if kind == SHAPE_CAPSULE {
-        let a = param3(o);
-        let ab = param3(o + 3u) - a;
-        let ap = p - a;
-        let l2 = dot(ab, ab);
-        var h = 0.0;
-        if l2 > 0.0 {
-            h = clamp(dot(ap, ab) / l2, 0.0, 1.0);
-        }
-        return length(ap - ab * h) - params[o + 6u];
-    }
-    if kind == SHAPE_BOX {
-        let d = abs(p - param3(o)) - param3(o + 3u);
-        return length(max(d, vec3<f32>(0.0))) + min(max(d.x, max(d.y, d.z)), 0.0);
-    }
-    // SHAPE_PRISM: a heightfield's prism, the largest horizontal excess over [lo, hi]
-    // combined with the vertical one.
-    let lo = param3(o);
-    let hi = param3(o + 3u);
-    let e = max(lo - p, p - hi);
-    let dxy = max(max(e.x, e.y), 0.0);
-    let dz = max(e.z, 0.0);
-    return sqrt(dxy * dxy + dz * dz);
+// The closest point of a solid cone or ellipsoid and the distance to it (0 inside).
+struct Projection {
+    at: vec3<f32>,
+    d: f32,
 }
 
-fn primitive(flags: u32, o: u32, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
+// Cone [base, axis, height, radius] (tape.rs cone_projection): the closest point of the
+// triangle (0, 0), (r, 0), (0, h) in the half-plane (ρ, z) through the axis.
+fn cone_projection(o: u32, p: vec3<f32>) -> Projection {
+    let base = param3(o);
+    let axis = param3(o + 3u);
+    let h = params[o + 6u];
+    let r = params[o + 7u];
+    let w = p - base;
+    let z = dot(w, axis);
+    let radial = w - axis * z;
+    let rho = length(radial);
+    if z >= 0.0 && rho * h + z * r <= r * h {
+        return Projection(p, 0.0);
+    }
+    let x = vec2<f32>(rho, z);
+    let base_at = vec2<f32>(clamp(rho, 0.0, r), 0.0);
+    let d = vec2<f32>(-r, h);
+    let tau = dot(x - vec2<f32>(r, 0.0), d) / dot(d, d);
+    let slant_at = vec2<f32>(r, 0.0) + d * clamp(tau, 0.0, 1.0);
+    let db = dot(x - base_at, x - base_at);
+    let ds = dot(x - slant_at, x - slant_at);
+    var at = slant_at;
+    var d2 = ds;
+    if db <= ds {
+        at = base_at;
+        d2 = db;
+    }
+    var er = vec3<f32>(0.0);
+    if rho > 0.0 {
+        er = radial / rho;
+    }
+    return Projection(base + axis * at.y + er * at.x, sqrt(d2));
+}
+
+// Axis-aligned ellipsoid [centre, radii] (tape.rs ellipsoid_projection): Newton on
+// F(t) = Σ (eᵢyᵢ/(t + eᵢ²))² − 1 from the lower bound ‖e∘y‖ − e²_max of its root.
+fn ellipsoid_projection(o: u32, p: vec3<f32>) -> Projection {
+    let c = param3(o);
+    let e = param3(o + 3u);
+    let y = p - c;
+    let ye = y / e;
+    if dot(ye, ye) <= 1.0 {
+        return Projection(p, 0.0);
+    }
+    let e2 = e * e;
+    let ey = e * y;
+    let emax = max(e2.x, max(e2.y, e2.z));
+    var t = max(length(ey) - emax, 0.0);
+    for (var k = 0u; k < ELLIPSOID_NEWTON; k += 1u) {
+        let inv = 1.0 / (vec3<f32>(t) + e2);
+        let q = ey * inv;
+        let f = dot(q, q) - 1.0;
+        if f <= 0.0 {
+            break;
+        }
+        let qqi = q * q * inv;
+        let df = -2.0 * (qqi.x + qqi.y + qqi.z);
+        let step = -f / df;
+        t += step;
+        if step <= 1e-6 * (t + emax) {
+            break;
+        }
+    }
+    let den = vec3<f32>(t) + e2;
+    return Projection(c + e2 * y / den, length(y * t / den));
+}
+
+// The closest point of the shape `kind` at `o` to `p` and the signed distance to it
+// (tape.rs project). Called at two sites only (p and c in eval_tape): every call site
+// inlines the ellipsoid's Newton loop, and on lavapipe every loop on the way costs
+// iterations of the invocation's shared loop budget, taken or not.
+fn project(kind: u32, o: u32, p: vec3<f32>) -> Projection {
+    switch kind {
+        case SHAPE_SPHERE: {
+            let c = param3(o);
+            let w = p - c;
+            let d = length(w);
+            let rho = params[o + 3u];
+            var at = p;
+            if d > rho {
+                at = c + w * (rho / d);
+            }
+            return Projection(at, d - rho);
+        }
+        case SHAPE_CAPSULE: {
+            let a = param3(o);
+            let ab = param3(o + 3u) - a;
+            let ap = p - a;
+            let l2 = dot(ab, ab);
+            var h = 0.0;
+            if l2 > 0.0 {
+                h = clamp(dot(ap, ab) / l2, 0.0, 1.0);
+            }
+            let s = a + ab * h;
+            let w = ap - ab * h;
+            let d = length(w);
+            let rho = params[o + 6u];
+            var at = p;
+            if d > rho {
+                at = s + (p - s) * (rho / d);
+            }
+            return Projection(at, d - rho);
+        }
+        case SHAPE_BOX: {
+            let c = param3(o);
+            let half = param3(o + 3u);
+            let d = abs(p - c) - half;
+            let sd = length(max(d, vec3<f32>(0.0))) + min(max(d.x, max(d.y, d.z)), 0.0);
+            return Projection(c + clamp(p - c, -half, half), sd);
+        }
+        case SHAPE_CONE: {
+            if USE_CONE {
+                return cone_projection(o, p);
+            }
+            return Projection(p, 0.0);
+        }
+        case SHAPE_ELLIPSOID: {
+            if USE_ELLIPSOID {
+                return ellipsoid_projection(o, p);
+            }
+            return Projection(p, 0.0);
+        }
+        default: {
+            // SHAPE_PRISM: a heightfield's prism, the largest horizontal excess over
+            // [lo, hi] combined with the vertical one (no closest point: never noisy).
+            let lo = param3(o);
+            let hi = param3(o + 3u);
+            let e = max(lo - p, p - hi);
+            let dxy = max(max(e.x, e.y), 0.0);
+            let dz = max(e.z, 0.0);
+            return Projection(p, sqrt(dxy * dxy + dz * dz));
+        }
+    }
+}
+
+// A primitive at `o` from the signed distances of p and of the ball's centre c.
+fn primitive(flags: u32, o: u32, sd_p: f32, sd_c: f32, r: f32) -> vec2<f32> {
     let rad = params[o];
     let energy = params[o + 1u];
-    let kind = flags & 255u;
-    let sd_p = signed_distance(kind, o + 2u, p);
-    let sd_c = signed_distance(kind, o + 2u, c);
     if (flags & SIGMA_FLAG) != 0u {
         return vec2<f32>(sigma(-sd_p, rad), sigma_slope(-sd_c - r, -sd_c + r, rad));
     }
@@ -147,11 +276,68 @@ fn bilinear(o: u32, x: f32, y: f32) -> f32 {
     return bottom + (top - bottom) * fy;
 }
 
-fn heightfield(o: u32, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
+// Catmull-Rom weights of samples -1..=2 at t (src/dem/interp.rs cr_weights).
+fn cr_weights(t: f32) -> vec4<f32> {
+    let t2 = t * t;
+    let t3 = t2 * t;
+    return vec4<f32>(
+        0.5 * (-t3 + 2.0 * t2 - t),
+        0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
+        0.5 * (-3.0 * t3 + 4.0 * t2 + t),
+        0.5 * (t3 - t2),
+    );
+}
+
+// One row of the bicubic stencil: Σ wx[a]·z[i + a − 1, jj], indices clamped, summed in
+// order (no loop: see project).
+fn cr_row(base: u32, i: i32, w: i32, wx: vec4<f32>) -> f32 {
+    var row = 0.0;
+    row += wx.x * heights[base + u32(clamp(i - 1, 0, w - 1))];
+    row += wx.y * heights[base + u32(clamp(i, 0, w - 1))];
+    row += wx.z * heights[base + u32(clamp(i + 1, 0, w - 1))];
+    row += wx.w * heights[base + u32(clamp(i + 2, 0, w - 1))];
+    return row;
+}
+
+// Bicubic elevation (tape.rs bicubic, grid.rs Heightfield::sample): the cell of bilinear,
+// its 4 × 4 stencil with indices clamped to the grid, rows summed first.
+fn bicubic(o: u32, x: f32, y: f32) -> f32 {
+    let ox = params[o + 2u];
+    let oy = params[o + 3u];
+    let cell = params[o + 4u];
+    let nx = params[o + 5u];
+    let ny = params[o + 6u];
+    let off = u32(params[o + 7u]);
+    let gx = clamp((x - ox) / cell, 0.0, nx - 1.0);
+    let gy = clamp((y - oy) / cell, 0.0, ny - 1.0);
+    let fi = min(floor(gx), nx - 2.0);
+    let fj = min(floor(gy), ny - 2.0);
+    let wx = cr_weights(gx - fi);
+    let wy = cr_weights(gy - fj);
+    let i = i32(fi);
+    let j = i32(fj);
+    let w = i32(nx);
+    let h = i32(ny);
+    var v = 0.0;
+    v += wy.x * cr_row(off + u32(w * clamp(j - 1, 0, h - 1)), i, w, wx);
+    v += wy.y * cr_row(off + u32(w * clamp(j, 0, h - 1)), i, w, wx);
+    v += wy.z * cr_row(off + u32(w * clamp(j + 1, 0, h - 1)), i, w, wx);
+    v += wy.w * cr_row(off + u32(w * clamp(j + 2, 0, h - 1)), i, w, wx);
+    return v;
+}
+
+fn elevation(flags: u32, o: u32, x: f32, y: f32) -> f32 {
+    if USE_BICUBIC && (flags & BICUBIC_FLAG) != 0u {
+        return bicubic(o, x, y);
+    }
+    return bilinear(o, x, y);
+}
+
+fn heightfield(flags: u32, o: u32, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
     let fall = params[o];
     let slope = params[o + 1u];
-    let value = sigma(bilinear(o, p.x, p.y) - p.z, fall);
-    let hc = bilinear(o, c.x, c.y);
+    let value = sigma(elevation(flags, o, p.x, p.y) - p.z, fall);
+    let hc = elevation(flags, o, c.x, c.y);
     let l = sigma_slope(hc - slope * r - c.z - r, hc + slope * r - c.z + r, fall) * sqrt(1.0 + slope * slope);
     return vec2<f32>(value, l);
 }
@@ -190,16 +376,31 @@ fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
                 stack[sp] = vec2<f32>(params[o], 0.0);
                 sp += 1u;
             }
-            case OP_PRIM: {
-                stack[sp] = primitive(ins.y, o, p, c, r);
+            case OP_PRIM, OP_NPRIM: {
+                var shape_at = o + 2u;
+                if ins.x == OP_NPRIM {
+                    shape_at = o + NPRIM_HEAD;
+                }
+                let kind = ins.y & 255u;
+                let pp = project(kind, shape_at, p);
+                let pc = project(kind, shape_at, c);
+                if ins.x == OP_PRIM {
+                    stack[sp] = primitive(ins.y, o, pp.d, pc.d, r);
+                } else if USE_NPRIM {
+                    stack[sp] = noisy_primitive(o, p, pp, c, pc, r);
+                }
                 sp += 1u;
             }
-            case OP_NPRIM: {
-                stack[sp] = noisy_primitive(ins.y, o, p, c, r);
+            case OP_SFIELD: {
+                if USE_SFIELD {
+                    stack[sp] = sfield(o, p, c, r);
+                }
                 sp += 1u;
             }
             case OP_HEIGHT: {
-                stack[sp] = heightfield(o, p, c, r);
+                if USE_HEIGHT {
+                    stack[sp] = heightfield(ins.y, o, p, c, r);
+                }
                 sp += 1u;
             }
             case OP_BLEND, OP_UNION, OP_INTER, OP_DIFF: {
@@ -241,7 +442,9 @@ fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
                 frames[2u * fp] = vec4<f32>(p, r);
                 frames[2u * fp + 1u] = vec4<f32>(c, 0.0);
                 fp += 1u;
-                p = twarp_apply(o, p);
+                if USE_TWARP {
+                    p = twarp_apply(o, p);
+                }
                 r += params[o + 1u];
             }
             case OP_UNWARP: {

@@ -114,66 +114,43 @@ fn fbm(o: u32, p: vec3<f32>) -> f32 {
     return value * params[o + 5u];
 }
 
-// The closest point of a convex shape (tape.rs closest): sphere, capsule or box.
-fn closest_point(kind: u32, o: u32, p: vec3<f32>) -> vec3<f32> {
-    if kind == SHAPE_SPHERE {
-        let c = param3(o);
-        let w = p - c;
-        let d = length(w);
-        if d <= params[o + 3u] {
-            return p;
-        }
-        return c + w * (params[o + 3u] / d);
-    }
-    if kind == SHAPE_CAPSULE {
-        let a = param3(o);
-        let ab = param3(o + 3u) - a;
-        let l2 = dot(ab, ab);
-        var h = 0.0;
-        if l2 > 0.0 {
-            h = clamp(dot(p - a, ab) / l2, 0.0, 1.0);
-        }
-        let s = a + ab * h;
-        let w = p - s;
-        let d = length(w);
-        if d <= params[o + 6u] {
-            return p;
-        }
-        return s + w * (params[o + 6u] / d);
-    }
-    let c = param3(o);
-    let half = param3(o + 3u);
-    return c + clamp(p - c, -half, half);
-}
-
-// d̃(p) of the noisy primitive at `o`, capped at 1 (noise.rs noisy_distance).
-fn noisy_distance(kind: u32, o: u32, p: vec3<f32>) -> f32 {
+// d̃ of a noisy primitive at `o` at a point whose projection `pr` on the shape is known,
+// given t, the turbulence read at s + R·u (noise.rs noisy_distance): 0 inside, 1 beyond
+// R + A.
+fn noisy_d(o: u32, pr: Projection, t: f32) -> f32 {
     let r = params[o];
     let a = params[o + 2u];
-    let rho = max(signed_distance(kind, o + NPRIM_HEAD, p), 0.0);
+    let rho = max(pr.d, 0.0);
     if rho >= r + a {
         return 1.0;
     }
     if rho <= 0.0 {
         return 0.0;
     }
-    let s = closest_point(kind, o + NPRIM_HEAD, p);
-    let u = (p - s) / rho;
-    return min(rho / (r + a * fbm(o + 4u, s + u * r)), 1.0);
+    return min(rho / (r + a * t), 1.0);
 }
 
-// (value at p, Lipschitz bound over B(c, rb)) of the noisy primitive at `o`
-// (noise.rs noisy_primitive).
-fn noisy_primitive(kind: u32, o: u32, p: vec3<f32>, c: vec3<f32>, rb: f32) -> vec2<f32> {
+// The point s + R·(q − s)/ρ the turbulence of a noisy primitive is read at for q.
+fn noise_point(o: u32, q: vec3<f32>, pr: Projection) -> vec3<f32> {
+    return pr.at + (q - pr.at) * (params[o] / pr.d);
+}
+
+// (value at p, Lipschitz bound over B(c, rb)) of the noisy primitive at `o` from the
+// projections of p and c (noise.rs noisy_primitive). Two fBm call sites (see project).
+fn noisy_primitive(o: u32, p: vec3<f32>, pp: Projection, c: vec3<f32>, pc: Projection, rb: f32) -> vec2<f32> {
     let r = params[o];
     let e = params[o + 1u];
     let a = params[o + 2u];
     let slope = params[o + 3u];
     let lt = params[o + 4u + 6u];
-    let dp = noisy_distance(kind, o, p);
-    let v = e * wyvill(dp);
     let reach = r + a;
-    let dc = max(signed_distance(kind, o + NPRIM_HEAD, c), 0.0);
+    var tp = 0.0;
+    if pp.d > 0.0 && pp.d < reach {
+        tp = fbm(o + 4u, noise_point(o, p, pp));
+    }
+    let dp = noisy_d(o, pp, tp);
+    let v = e * wyvill(dp);
+    let dc = max(pc.d, 0.0);
     let rho_lo = max(dc - rb, 0.0);
     let rho_hi = dc + rb;
     var den_lo = r - a;
@@ -181,24 +158,20 @@ fn noisy_primitive(kind: u32, o: u32, p: vec3<f32>, c: vec3<f32>, rb: f32) -> ve
     var x0 = rho_lo / den_hi;
     var x1 = rho_hi / den_lo;
     if rho_lo < reach {
-        var xc = 1.0;
+        var tc = 0.0;
+        if dc > 0.0 {
+            tc = fbm(o + 4u, noise_point(o, c, pc));
+        }
+        let xc = noisy_d(o, pc, tc);
         if rho_lo > 0.0 {
-            let s = closest_point(kind, o + NPRIM_HEAD, c);
-            let tc = fbm(o + 4u, s + (c - s) * (r / dc));
             let spread = lt * (1.0 + r / rho_lo) * rb;
             den_lo = max(den_lo, r + a * (tc - spread));
             den_hi = min(den_hi, r + a * (tc + spread));
             x0 = min(rho_lo / den_hi, rho_hi / den_lo);
             x1 = max(rho_lo / den_hi, rho_hi / den_lo);
-            if dc < reach {
-                xc = dc / (r + a * tc);
-            }
-        } else {
-            xc = noisy_distance(kind, o, c);
         }
-        let m = min(xc, 1.0);
-        let lo = max(x0, m - rb * slope);
-        let hi = min(x1, m + rb * slope);
+        let lo = max(x0, xc - rb * slope);
+        let hi = min(x1, xc + rb * slope);
         if lo <= hi {
             x0 = lo;
             x1 = hi;
@@ -223,6 +196,10 @@ fn twarp_apply(o: u32, p: vec3<f32>) -> vec3<f32> {
     if fd == 0.0 {
         return p;
     }
-    let t = vec3<f32>(fbm(o + 11u, p), fbm(o + 11u + FBM_PARAMS, p), fbm(o + 11u + 2u * FBM_PARAMS, p));
+    // One fBm call site in a loop over the axes (see project).
+    var t = vec3<f32>(0.0);
+    for (var k = 0u; k < 3u; k += 1u) {
+        t[k] = fbm(o + 11u + k * FBM_PARAMS, p);
+    }
     return p + t * (params[o] * fd);
 }

@@ -21,12 +21,19 @@ struct Uniforms {
     dims: vec4<u32>,      // width, height, max steps, unused
 }
 
-@group(0) @binding(0) var<uniform> u: Uniforms;
+// A storage buffer, not a uniform one: llvmpipe compiles a variant of the shader for
+// each set of values of the uniforms it inlines (seconds each).
+@group(0) @binding(0) var<storage, read> u: Uniforms;
 @group(0) @binding(4) var<storage, read_write> out_rgba: array<u32>;
 @group(0) @binding(5) var<storage, read_write> out_depth: array<f32>;
 @group(0) @binding(6) var<storage, read_write> out_steps: array<u32>;
 @group(0) @binding(7) var<storage, read> probe_in: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> probe_out: array<vec2<f32>>;
+@group(0) @binding(9) var<storage, read_write> saved: array<Saved>;
+// Written by the host before each pass: [0, 0, 2 (the canary's count), first row of the
+// tile, pass (0: start), evaluations per pass (0: no limit), 0, 0]; the pass counts the
+// pixels it leaves unfinished into [0] and those that made no progress into [1].
+@group(0) @binding(10) var<storage, read_write> progress: array<atomic<u32>, 8>;
 
 const MAX_REFINE: u32 = 12u;
 const FIRST_DELTA: f32 = 0.0625;
@@ -45,147 +52,157 @@ fn clip(o: vec3<f32>, d: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(t0, t1);
 }
 
-fn value(p: vec3<f32>) -> f32 {
-    return eval_tape(p, p, 0.0).x;
-}
-
-struct Hit {
-    t: f32, // MISS when no hit
+// One ray's march (trace.rs::trace: steps of at least the tolerance) and, once the sign
+// of f − T changes, its refinement (trace.rs::refine: false position with the Illinois
+// modification), advanced one field evaluation at a time by `render`.
+struct Ray {
+    o: vec3<f32>,
+    d: vec3<f32>,
+    t: f32,
+    t1: f32,
+    delta: f32,
+    side: f32, // sign of f − T at the start, 0 before the first step
+    prev_t: f32,
+    prev_e: f32,
     steps: u32,
+    // The refinement's bracket [a, b] with f − T = ea, eb, its iterate m (the result: the
+    // hit, or MISS), the last iterate, the width it stops at, the side kept last, and its
+    // evaluations.
+    a: f32,
+    ea: f32,
+    b: f32,
+    eb: f32,
+    m: f32,
+    last: f32,
+    width: f32,
+    kept: i32,
+    n: u32,
 }
 
-// False position with the Illinois modification, as trace.rs::refine.
-fn refine(o: vec3<f32>, d: vec3<f32>, a_in: f32, ea_in: f32, b_in: f32, eb_in: f32, width: f32) -> Hit {
-    var a = a_in;
-    var ea = ea_in;
-    var b = b_in;
-    var eb = eb_in;
-    var n = 0u;
-    var last = -3.4e38;
-    var m = 0.5 * (a + b);
-    var kept = 0;
-    loop {
-        if n >= MAX_REFINE || b - a <= width {
-            break;
-        }
-        if ea != eb {
-            m = a + (b - a) * ea / (ea - eb);
-        } else {
-            m = 0.5 * (a + b);
-        }
-        m = clamp(m, a, b);
-        let e = value(o + d * m) - T;
-        n += 1u;
-        if abs(m - last) < width {
-            break;
-        }
-        last = m;
-        if (e > 0.0) == (ea > 0.0) {
-            a = m;
-            ea = e;
-            if kept == 1 {
-                eb *= 0.5;
-            }
-            kept = 1;
-        } else {
-            b = m;
-            eb = e;
-            if kept == -1 {
-                ea *= 0.5;
-            }
-            kept = -1;
-        }
-    }
-    return Hit(m, n);
+// What the invocation evaluates next: its phases.
+const PH_MARCH: u32 = 0u;  // a march step of the current ray
+const PH_REFINE: u32 = 1u; // a refinement step of the current ray
+const PH_END: u32 = 2u;    // the current ray is over (result in m): no evaluation
+const PH_NORMAL: u32 = 3u; // one of the 4 samples of the normal at the hit
+const PH_DONE: u32 = 4u;   // nothing left
+
+fn start_ray(o: vec3<f32>, d: vec3<f32>, t0: f32, t1: f32) -> Ray {
+    return Ray(o, d, t0, t1, (t1 - t0) * FIRST_DELTA, 0.0, t0, 0.0, 0u, 0.0, 0.0, 0.0, 0.0, MISS, -3.4e38, 0.0, 0, 0u);
 }
 
-// The march of trace.rs::trace: steps of at least the tolerance, refinement on a crossing.
-fn trace_ray(o: vec3<f32>, d: vec3<f32>, t0: f32, t1: f32) -> Hit {
-    if !(t0 <= t1) {
-        return Hit(MISS, 0u);
+// The length of the next march step's segment; 0 for sphere tracing, which evaluates the
+// value alone (r = 0) and steps by the global bound.
+fn march_len(ray: Ray) -> f32 {
+    if u.trace.w == 0.0 {
+        return min(ray.t + ray.delta, ray.t1) - ray.t;
     }
+    return 0.0;
+}
+
+// Consumes the evaluation `ev` of a march step: PH_MARCH to go on, PH_REFINE when the
+// sign changed (the bracket is set), PH_END on leaving the segment (a miss).
+fn march_step(ray: ptr<function, Ray>, ev_in: vec2<f32>) -> u32 {
     let eps = u.box_min.w;
     let cone = u.box_max.w;
     let segment = u.trace.w == 0.0;
-    var t = t0;
-    var delta = (t1 - t0) * FIRST_DELTA;
-    var steps = 0u;
-    var side = 0.0;
-    var prev_t = t0;
-    var prev_e = 0.0;
-    loop {
-        if steps >= u.dims.z {
-            break;
-        }
-        let p = o + d * t;
-        // One call site of eval_tape (drivers inline it at each): sphere tracing asks for
-        // the value alone (r = 0) and uses the global bound.
-        var len = 0.0;
-        if segment {
-            len = min(t + delta, t1) - t;
-        }
-        var ev = eval_tape(p, p + d * (0.5 * len), 0.5 * len);
-        if !segment {
-            ev.y = u.trace.x;
-        }
-        let e = ev.x - T;
-        steps += 1u;
-        var s_now = -1.0;
-        if e > 0.0 {
-            s_now = 1.0;
-        }
-        if side == 0.0 {
-            side = s_now;
-        } else if s_now != side {
-            let h = refine(o, d, prev_t, prev_e, t, e, 0.1 * (eps + cone * prev_t));
-            return Hit(h.t, steps + h.steps);
-        }
-        if t >= t1 {
-            break;
-        }
-        let tol = eps + cone * t;
-        var s = 3.4e38;
-        if ev.y > 0.0 {
-            s = abs(e) / ev.y;
-        }
-        var step = s;
-        if segment {
-            if s >= len {
-                step = len;
-                delta = delta * u.trace.y;
-            } else {
-                delta = max(s, tol);
-            }
-        }
-        prev_t = t;
-        prev_e = e;
-        t = min(t + max(step, tol), t1);
+    let len = march_len(*ray);
+    var ev = ev_in;
+    if !segment {
+        ev.y = u.trace.x;
     }
-    return Hit(MISS, steps);
+    let e = ev.x - T;
+    (*ray).steps += 1u;
+    var s_now = -1.0;
+    if e > 0.0 {
+        s_now = 1.0;
+    }
+    if (*ray).side == 0.0 {
+        (*ray).side = s_now;
+    } else if s_now != (*ray).side {
+        (*ray).a = (*ray).prev_t;
+        (*ray).ea = (*ray).prev_e;
+        (*ray).b = (*ray).t;
+        (*ray).eb = e;
+        (*ray).m = 0.5 * ((*ray).a + (*ray).b);
+        (*ray).width = 0.1 * (eps + cone * (*ray).prev_t);
+        return PH_REFINE;
+    }
+    if (*ray).t >= (*ray).t1 {
+        (*ray).m = MISS;
+        return PH_END;
+    }
+    let t = (*ray).t;
+    let tol = eps + cone * t;
+    var s = 3.4e38;
+    if ev.y > 0.0 {
+        s = abs(e) / ev.y;
+    }
+    var step = s;
+    if segment {
+        if s >= len {
+            step = len;
+            (*ray).delta = (*ray).delta * u.trace.y;
+        } else {
+            (*ray).delta = max(s, tol);
+        }
+    }
+    (*ray).prev_t = t;
+    (*ray).prev_e = e;
+    (*ray).t = min(t + max(step, tol), (*ray).t1);
+    return PH_MARCH;
 }
 
-fn normal_at(p: vec3<f32>) -> vec3<f32> {
-    let h = u.trace.z;
-    // A loop, so the tape is inlined once (same sum order as the CPU's fold).
-    var g = vec3<f32>(0.0);
-    for (var i = 0u; i < 4u; i += 1u) {
-        var k = vec3<f32>(1.0, -1.0, -1.0);
-        if i == 1u {
-            k = vec3<f32>(-1.0, -1.0, 1.0);
-        } else if i == 2u {
-            k = vec3<f32>(-1.0, 1.0, -1.0);
-        } else if i == 3u {
-            k = vec3<f32>(1.0, 1.0, 1.0);
+// The next refinement iterate into m; false when the refinement is over (m is the hit).
+fn refine_next(ray: ptr<function, Ray>) -> bool {
+    let a = (*ray).a;
+    let b = (*ray).b;
+    if (*ray).n >= MAX_REFINE || b - a <= (*ray).width {
+        return false;
+    }
+    let ea = (*ray).ea;
+    let eb = (*ray).eb;
+    var m = 0.5 * (a + b);
+    if ea != eb {
+        m = a + (b - a) * ea / (ea - eb);
+    }
+    (*ray).m = clamp(m, a, b);
+    return true;
+}
+
+// Consumes f − T = e at the iterate m; false when the refinement is over.
+fn refine_step(ray: ptr<function, Ray>, e: f32) -> bool {
+    (*ray).n += 1u;
+    let m = (*ray).m;
+    if abs(m - (*ray).last) < (*ray).width {
+        return false;
+    }
+    (*ray).last = m;
+    if (e > 0.0) == ((*ray).ea > 0.0) {
+        (*ray).a = m;
+        (*ray).ea = e;
+        if (*ray).kept == 1 {
+            (*ray).eb *= 0.5;
         }
-        g += k * value(p + k * h);
+        (*ray).kept = 1;
+    } else {
+        (*ray).b = m;
+        (*ray).eb = e;
+        if (*ray).kept == -1 {
+            (*ray).ea *= 0.5;
+        }
+        (*ray).kept = -1;
     }
-    g = g / (4.0 * h);
-    let n = -g;
-    let l = length(n);
-    if l > 0.0 {
-        return n / l;
+    return true;
+}
+
+// The tetrahedral finite-difference offsets of the normal (the CPU's fold order).
+fn normal_offset(i: u32) -> vec3<f32> {
+    switch i {
+        case 0u: { return vec3<f32>(1.0, -1.0, -1.0); }
+        case 1u: { return vec3<f32>(-1.0, -1.0, 1.0); }
+        case 2u: { return vec3<f32>(-1.0, 1.0, -1.0); }
+        default: { return vec3<f32>(1.0, 1.0, 1.0); }
     }
-    return vec3<f32>(0.0, 0.0, 1.0);
 }
 
 fn smooth_step(a: f32, b: f32, x: f32) -> f32 {
@@ -220,43 +237,189 @@ fn srgb8(c: vec3<f32>) -> u32 {
     return e.x | (e.y << 8u) | (e.z << 16u) | (255u << 24u);
 }
 
+// What a pixel interrupted by lavapipe's loop budget keeps for the next pass (see
+// `budget_left`): its ray, phase and normal sum.
+struct Saved {
+    o: vec4<f32>,       // ray.o, ray.t
+    d: vec4<f32>,       // ray.d, ray.t1
+    march: vec4<f32>,   // delta, side, prev_t, prev_e
+    bracket: vec4<f32>, // a, ea, b, eb
+    refine: vec4<f32>,  // m, last, width, hit_t
+    g: vec4<f32>,       // the normal's sum, unused
+    counts: vec4<u32>,  // phase | shadow << 8 | corner << 16 | (kept + 1) << 24, ray.steps, ray.n, hit steps
+}
+
+// False once the loops of this SIMD group have used up llvmpipe's budget of 65,535
+// iterations per invocation (LP_MAX_TGSI_LOOP_ITERATIONS, shared by every loop; from then
+// on each loop ends after one iteration): a loop asked for 2 iterations (read from a
+// buffer, so the compiler cannot unroll it) then gets 1. The evaluation before it may have been cut
+// short, so its result is dropped. Always true on other drivers.
+fn budget_left() -> bool {
+    var k = 0u;
+    loop {
+        k += 1u;
+        if k >= atomicLoad(&progress[2]) {
+            break;
+        }
+    }
+    return k >= 2u;
+}
+
+// One primary ray: march, refine, normal, shadow ray (march, refine), shade. The phases
+// are states of one loop whose body evaluates the tape once, so `eval_tape` has a single
+// call site: drivers inline every call site (the shader's size drives lavapipe's compile
+// time), and diverging invocations of a SIMD group stay on the same code. A pixel whose
+// loop budget runs out (lavapipe) saves its state and is resumed by the next dispatch
+// (pass) of its tile; `progress` tells the host how many are left.
 @compute @workgroup_size(8, 8, 1)
 fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     let w = u.dims.x;
     let h = u.dims.y;
-    if id.x >= w || id.y >= h {
+    let row = id.y + atomicLoad(&progress[3]);
+    if id.x >= w || row >= h {
         return;
     }
-    let at = id.x + id.y * w;
+    let at = id.x + row * w;
+    let slot = id.x + id.y * w;
     let x = f32(id.x) + 0.5;
-    let y = f32(id.y) + 0.5;
+    let y = f32(row) + 0.5;
     let su = (2.0 * x / u.up.w - 1.0) * u.eye.w * u.right.w;
     let sv = (1.0 - 2.0 * y / u.forward.w) * u.eye.w;
     let o = u.eye.xyz;
     let d = normalize(u.forward.xyz + u.right.xyz * su + u.up.xyz * sv);
-    let span = clip(o, d);
-    var hit = Hit(MISS, 0u);
-    if span.x <= span.y {
-        hit = trace_ray(o, d, span.x, span.y);
+    var phase = PH_DONE;
+    var ray: Ray;
+    var shadow = false;
+    var hit_t = MISS;
+    var hit_steps = 0u;
+    var g = vec3<f32>(0.0);
+    var corner = 0u;
+    let per_pass = atomicLoad(&progress[5]);
+    if atomicLoad(&progress[4]) == 0u {
+        let span = clip(o, d);
+        ray = start_ray(o, d, span.x, span.y);
+        if span.x <= span.y {
+            phase = PH_MARCH;
+        }
+    } else {
+        let sv = saved[slot];
+        phase = sv.counts.x & 255u;
+        if phase == PH_DONE {
+            return;
+        }
+        shadow = ((sv.counts.x >> 8u) & 1u) != 0u;
+        corner = (sv.counts.x >> 16u) & 255u;
+        ray = Ray(sv.o.xyz, sv.d.xyz, sv.o.w, sv.d.w, sv.march.x, sv.march.y, sv.march.z, sv.march.w, sv.counts.y,
+            sv.bracket.x, sv.bracket.y, sv.bracket.z, sv.bracket.w, sv.refine.x, sv.refine.y, sv.refine.z,
+            i32(sv.counts.x >> 24u) - 1, sv.counts.z);
+        hit_t = sv.refine.w;
+        hit_steps = sv.counts.w;
+        g = sv.g.xyz;
     }
-    out_steps[at] = hit.steps;
-    out_depth[at] = hit.t;
-    if hit.t == MISS {
+    var p = o + d * hit_t;
+    var n = vec3<f32>(0.0, 0.0, 1.0);
+    let grad_sum = g / (4.0 * u.trace.z);
+    if corner == 4u && length(grad_sum) > 0.0 {
+        n = -grad_sum / length(grad_sum);
+    }
+    var lit = 1.0;
+    var evals = 0u;
+    loop {
+        // Transitions that need no evaluation.
+        if phase == PH_MARCH && ray.steps >= u.dims.z {
+            ray.m = MISS;
+            phase = PH_END;
+        }
+        if phase == PH_REFINE && !refine_next(&ray) {
+            phase = PH_END;
+        }
+        if phase == PH_END {
+            phase = PH_DONE;
+            if shadow {
+                if ray.m != MISS {
+                    lit = 0.0;
+                }
+            } else {
+                hit_t = ray.m;
+                hit_steps = ray.steps + ray.n;
+                if hit_t != MISS {
+                    p = o + d * hit_t;
+                    phase = PH_NORMAL;
+                }
+            }
+        }
+        if phase == PH_DONE || (per_pass != 0u && evals == per_pass) {
+            break;
+        }
+        // The one evaluation of this step.
+        var qp = ray.o + ray.d * ray.t;
+        var qc = qp;
+        var qr = 0.0;
+        if phase == PH_NORMAL {
+            qp = p + normal_offset(corner) * u.trace.z;
+            qc = qp;
+        } else if phase == PH_REFINE {
+            qp = ray.o + ray.d * ray.m;
+            qc = qp;
+        } else {
+            let len = march_len(ray);
+            qc = qp + ray.d * (0.5 * len);
+            qr = 0.5 * len;
+        }
+        let ev = eval_tape(qp, qc, qr);
+        if !budget_left() {
+            break;
+        }
+        evals += 1u;
+        if phase == PH_MARCH {
+            phase = march_step(&ray, ev);
+        } else if phase == PH_REFINE {
+            if !refine_step(&ray, ev.x - T) {
+                phase = PH_END;
+            }
+        } else {
+            g += normal_offset(corner) * ev.x;
+            corner += 1u;
+            if corner == 4u {
+                let grad = g / (4.0 * u.trace.z);
+                let l = length(grad);
+                if l > 0.0 {
+                    n = -grad / l;
+                }
+                phase = PH_DONE;
+                if u.sun.w > 0.0 && dot(n, u.sun.xyz) > 0.0 {
+                    let tol = u.box_min.w + u.box_max.w * hit_t;
+                    let so = p + n * (2.0 * tol);
+                    let sspan = clip(so, u.sun.xyz);
+                    if sspan.x <= sspan.y {
+                        ray = start_ray(so, u.sun.xyz, sspan.x, sspan.y);
+                        shadow = true;
+                        phase = PH_MARCH;
+                    }
+                }
+            }
+        }
+    }
+    if phase != PH_DONE {
+        let flags = phase | (u32(shadow) << 8u) | (corner << 16u) | (u32(ray.kept + 1) << 24u);
+        saved[slot] = Saved(vec4<f32>(ray.o, ray.t), vec4<f32>(ray.d, ray.t1),
+            vec4<f32>(ray.delta, ray.side, ray.prev_t, ray.prev_e), vec4<f32>(ray.a, ray.ea, ray.b, ray.eb),
+            vec4<f32>(ray.m, ray.last, ray.width, hit_t), vec4<f32>(g, 0.0),
+            vec4<u32>(flags, ray.steps, ray.n, hit_steps));
+        atomicAdd(&progress[0], 1u);
+        if evals == 0u {
+            atomicAdd(&progress[1], 1u);
+        }
+        return;
+    }
+    saved[slot].counts.x = PH_DONE;
+    out_steps[at] = hit_steps;
+    out_depth[at] = hit_t;
+    if hit_t == MISS {
         out_rgba[at] = srgb8(sky(d));
         return;
     }
-    let p = o + d * hit.t;
-    let n = normal_at(p);
-    var lit = 1.0;
-    if u.sun.w > 0.0 && dot(n, u.sun.xyz) > 0.0 {
-        let tol = u.box_min.w + u.box_max.w * hit.t;
-        let so = p + n * (2.0 * tol);
-        let sspan = clip(so, u.sun.xyz);
-        if sspan.x <= sspan.y && trace_ray(so, u.sun.xyz, sspan.x, sspan.y).t != MISS {
-            lit = 0.0;
-        }
-    }
-    out_rgba[at] = srgb8(surface(p, n, hit.t, lit));
+    out_rgba[at] = srgb8(surface(p, n, hit_t, lit));
 }
 
 // Tape probes for the tests: (p.xyz, r) -> (f(p), Lipschitz bound over B(p, r)).

@@ -107,17 +107,26 @@ fn tree_files_load_with_their_tape_or_the_reason_they_have_none() {
     let blobs = load_tree(&dir.join("blobs.ron")).unwrap();
     let tape = blobs.tape.as_ref().expect("point blobs encode");
     assert!(blobs.field.support().contains_box(&tape.support()));
+    // Every scene of trees/ encodes (tests/render_trees.rs); a disc skeleton does not.
     let spire = load_tree(&dir.join("rock_spire.ron")).unwrap();
-    let e = spire.tape.as_ref().unwrap_err().to_string();
+    assert!(spire.tape.is_ok(), "the cone spire encodes");
+    let out = tempfile::tempdir().unwrap();
+    let disc_file = out.path().join("disc.ron");
+    std::fs::write(
+        &disc_file,
+        "(version: 1, root: Primitive(name: \"disc\", shape: Disc(center: (0, 0, 0), normal: (0, 0.6, 0.8), radius: 4), falloff: 2))",
+    )
+    .unwrap();
+    let disc = load_tree(&disc_file).unwrap();
+    let e = disc.tape.as_ref().unwrap_err().to_string();
     assert!(
-        e.contains("\"spire\"") && e.contains("no GPU encoding"),
+        e.contains("\"disc\"") && e.contains("no GPU encoding"),
         "{e}"
     );
     // --gpu without an encoding still renders, on the CPU.
-    let out = tempfile::tempdir().unwrap();
     let mut a = args(&["--size", "40", "30", "--gpu", "--quiet"]);
-    a.output = out.path().join("spire.png");
-    render_tree(&a, &spire).unwrap();
+    a.output = out.path().join("disc.png");
+    render_tree(&a, &disc).unwrap();
     assert_eq!(
         image::open(&a.output).unwrap().to_rgba8().dimensions(),
         (40, 30)

@@ -12,7 +12,7 @@ use indicatif::ProgressBar;
 use karstic::field::falloff::{sigma, wyvill};
 use karstic::field::{Aabb, Fbm, Field, T};
 use karstic::render::gpu::{
-    Combine, GpuContext, Profile, SHADER_MODULES, Shape, Tape, TapeBuilder, shader_source,
+    Combine, FEATURES, GpuContext, Profile, SHADER_MODULES, Shape, Tape, TapeBuilder, shader_source,
 };
 use karstic::render::{Camera, Method, RenderSettings, render};
 
@@ -47,12 +47,22 @@ fn every_shader_parses_and_validates_with_naga() {
         }
         let module = naga::front::wgsl::parse_str(&src)
             .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&src)));
-        naga::valid::Validator::new(
+        let info = naga::valid::Validator::new(
             naga::valid::ValidationFlags::all(),
             naga::valid::Capabilities::default(),
         )
         .validate(&module)
         .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(&src)));
+        // The pipelines a tape compiles (Tape::features): every feature alone, none, all.
+        let n = FEATURES.len() as u32;
+        for bits in (0..n).map(|k| 1 << k).chain([0, (1 << n) - 1]) {
+            let mut constants = naga::back::PipelineConstants::default();
+            for (k, v) in Tape::feature_constants(bits) {
+                constants.insert(k.to_string(), v);
+            }
+            naga::back::pipeline_constants::process_overrides(&module, &info, None, &constants)
+                .unwrap_or_else(|e| panic!("{name} with features {bits:b}: {e}"));
+        }
         for entry in ["render", "probe", "fbm_probe"] {
             assert!(
                 module.entry_points.iter().any(|e| e.name == entry),
@@ -286,6 +296,36 @@ fn compare(
     );
     assert!(cpu.hits() >= min_hits, "{name}: the scene is in view");
     assert_frames_match(name, &cpu, &gpu);
+}
+
+/// Rendering in passes of a few evaluations per pixel (each pixel saving its state and
+/// resuming in the next dispatch, as on lavapipe when its loop budget runs out) gives the
+/// image of one pass, bit for bit, with and without shadows.
+#[test]
+fn renders_in_passes_equal_one_pass() {
+    let Some(ctx) = gpu() else { return };
+    let tape = mixed().0;
+    for shadows in [false, true] {
+        let cam = Camera::frame(&tape.support(), 40.0, 40, 28).unwrap();
+        let mut settings = RenderSettings::for_scene(&tape.support(), &cam, Method::Segment);
+        settings.shading.shadows = shadows;
+        let one = ctx.render(&tape, &cam, &settings).unwrap();
+        assert!(one.hits() > 40, "{} hits", one.hits());
+        for per_pass in [1, 3, 17] {
+            let split = ctx
+                .render_in_passes(&tape, &cam, &settings, per_pass)
+                .unwrap();
+            assert_eq!(one.rgba, split.rgba, "{per_pass} evaluations per pass");
+            assert_eq!(one.steps, split.steps, "{per_pass} evaluations per pass");
+            assert!(
+                one.depth
+                    .iter()
+                    .zip(&split.depth)
+                    .all(|(a, b)| a == b || (a.is_infinite() && b.is_infinite())),
+                "{per_pass} evaluations per pass"
+            );
+        }
+    }
 }
 
 #[test]

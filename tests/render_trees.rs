@@ -17,16 +17,17 @@ use karstic::render::raycast::MeshRaycaster;
 use karstic::render::trace::TraceParams;
 use karstic::render::{Camera, Method, RenderSettings, cpu, render};
 
-/// The scenes `trees/*.ron`, sorted.
+/// The scenes `trees/*.ron` and `trees/curves/*.ron`, sorted.
 fn tree_files() -> Vec<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap()
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
+    let mut files: Vec<PathBuf> = [root.clone(), root.join("curves")]
+        .iter()
+        .flat_map(|dir| std::fs::read_dir(dir).unwrap())
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|x| x == "ron"))
         .collect();
     files.sort();
-    assert!(files.len() >= 5, "{files:?}");
+    assert!(files.len() >= 18, "{files:?}");
     files
 }
 
@@ -37,22 +38,34 @@ fn compile(path: &Path) -> Tree {
         .tree
 }
 
+/// The scene's path under `trees/`, without the extension (`curves/arch`).
 fn name(path: &Path) -> String {
-    path.file_stem().unwrap().to_string_lossy().into_owned()
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
+    let rel = path.strip_prefix(&root).unwrap_or(path).with_extension("");
+    rel.to_string_lossy().into_owned()
 }
 
-/// `(name, tree, tape)` of the scenes that encode; prints why the others do not.
-fn encodable() -> Vec<(String, Tree, Tape)> {
-    let mut out = Vec::new();
-    for path in tree_files() {
-        let tree = compile(&path);
-        match tape_from_tree(&tree) {
-            Ok(tape) => out.push((name(&path), tree, tape)),
-            Err(e @ GpuError::NoEncoding { .. }) => eprintln!("{}: {e}", name(&path)),
-            Err(e) => panic!("{}: the encoder failed: {e}", name(&path)),
-        }
-    }
-    out
+/// `(name, tree, tape)` of every scene: each must encode (compiled once per test binary,
+/// the Feature Curve scenes run the voxel pipeline).
+fn scenes() -> &'static [(String, Tree, Tape)] {
+    static SCENES: std::sync::OnceLock<Vec<(String, Tree, Tape)>> = std::sync::OnceLock::new();
+    SCENES.get_or_init(|| {
+        let encoded: Vec<_> = tree_files()
+            .into_iter()
+            .map(|path| {
+                let tree = compile(&path);
+                let tape = tape_from_tree(&tree)
+                    .unwrap_or_else(|e| panic!("{}: no GPU tape: {e}", name(&path)));
+                (name(&path), tree, tape)
+            })
+            .collect();
+        encoded
+    })
+}
+
+/// The scenes with a surface (all but an empty Feature Curve volume).
+fn solid_scenes() -> impl Iterator<Item = &'static (String, Tree, Tape)> {
+    scenes().iter().filter(|s| !s.1.support().is_empty())
 }
 
 /// The box of the solid `f > T`, from the grid points of a 64³ lattice over the support
@@ -96,13 +109,14 @@ fn point_in(rng: &mut Rng, b: &Aabb) -> Vec3 {
 /// on either side of it.
 fn sample_points(tree: &Tree, n: usize, seed: u64) -> (Vec<Vec3>, usize) {
     let mut rng = Rng(seed);
-    let finite = |b: &Aabb| !b.is_empty() && b.min.is_finite() && b.max.is_finite();
+    // (A constant's "everywhere" is ±f32::MAX: finite corners, infinite size.)
+    let finite = |b: &Aabb| !b.is_empty() && b.size().is_finite();
     let boxes: Vec<Aabb> = (0..tree.nodes().len() as u32)
         .map(|id| tree.info(id).support)
         .filter(finite)
         .collect();
     let root = tree.support();
-    assert!(finite(&root));
+    assert!(finite(&root), "support {root:?}");
     let mut pts = Vec::with_capacity(n);
     let mut surface = 0;
     while pts.len() < n {
@@ -131,14 +145,19 @@ fn sample_points(tree: &Tree, n: usize, seed: u64) -> (Vec<Vec3>, usize) {
     (pts, surface)
 }
 
+/// Every scene of `trees/` and `trees/curves/` encodes; its tape equals its tree at
+/// points spread over it and on its surface, and the tape's ball bounds are sound.
 #[test]
 fn tapes_of_the_scenes_equal_their_trees() {
-    let scenes = encodable();
-    let names: Vec<&str> = scenes.iter().map(|s| s.0.as_str()).collect();
-    for expected in ["arch", "blobs", "floating_island"] {
-        assert!(names.contains(&expected), "{expected} encodes: {names:?}");
-    }
-    for (name, tree, tape) in &scenes {
+    for (name, tree, tape) in scenes() {
+        if tree.support().is_empty() {
+            // A Feature Curve volume without a surface (guidance curves alone): 0.
+            assert!(
+                tape.instrs.len() == 1 && tape.value(Vec3::ZERO) == 0.0,
+                "{name}: an empty field is the constant 0"
+            );
+            continue;
+        }
         let (pts, surface) = sample_points(tree, 20_000, 7);
         assert!(surface >= 500, "{name}: only {surface} surface points");
         let mut between = 0;
@@ -154,6 +173,9 @@ fn tapes_of_the_scenes_equal_their_trees() {
             between * 20 >= pts.len(),
             "{name}: only {between} points where the value is not saturated"
         );
+        // Its ball bounds are sound on random segments (the S-field leaves' bound from the
+        // value at the centre included).
+        common::check_segment_lipschitz(tape, &tree.support(), 4000, 17);
         // The tape's support is the tree's (the encoder passes the cached supports on).
         let (a, b) = (tape.support(), tree.support());
         assert!(b.contains_box(&a), "{name}: tape support {a:?} ⊄ {b:?}");
@@ -170,25 +192,11 @@ fn tapes_of_the_scenes_equal_their_trees() {
     }
 }
 
-#[test]
-fn trees_without_an_encoding_name_the_node() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
-    for (file, expect) in [
-        ("rock_spire.ron", "the Cone primitive \"spire\""),
-        ("warped_rocks.ron", "Ellipsoid primitive"),
-    ] {
-        let e = tape_from_tree(&compile(&dir.join(file))).unwrap_err();
-        let msg = e.to_string();
-        assert!(matches!(e, GpuError::NoEncoding { .. }), "{file}: {msg}");
-        assert!(msg.contains(expect), "{file}: {msg}");
-    }
-}
-
 /// The CPU images of a tree and of its tape: the tape's finite-difference normals and
 /// rounding make the only differences.
 #[test]
 fn tape_images_match_tree_images_on_the_cpu() {
-    for (name, tree, tape) in &encodable() {
+    for (name, tree, tape) in solid_scenes() {
         let (cam, settings) = view(tree);
         let a = render(tree, &cam, &settings, &ProgressBar::hidden());
         let b = render(tape, &cam, &settings, &ProgressBar::hidden());
@@ -197,12 +205,41 @@ fn tape_images_match_tree_images_on_the_cpu() {
     }
 }
 
-/// With an adapter (lavapipe in CI): the GPU render of each encodable scene's tape against
+/// With an adapter: the GPU evaluates every scene's tape (values and ball bounds, with
+/// and without a ball) as the CPU does, at points spread over the scene and on its
+/// surface.
+#[test]
+fn gpu_probes_of_the_scenes_match_the_cpu() {
+    let Some(ctx) = gpu() else { return };
+    for (name, tree, tape) in solid_scenes() {
+        let (pts, _) = sample_points(tree, 3000, 21);
+        let mut rng = Rng(4);
+        let scale = tree.support().radius() * 0.05;
+        let probes: Vec<(Vec3, f32)> = pts
+            .into_iter()
+            .enumerate()
+            .map(|(i, p)| {
+                (
+                    p,
+                    if i % 3 == 0 {
+                        0.0
+                    } else {
+                        rng.range(0.0, scale)
+                    },
+                )
+            })
+            .collect();
+        eprintln!("{name}");
+        assert_probes_match(ctx, tape, &probes);
+    }
+}
+
+/// With an adapter (lavapipe in CI): the GPU render of every scene's tape against
 /// the CPU render of the tree itself.
 #[test]
 fn gpu_renders_of_the_scenes_match_the_cpu() {
     let Some(ctx) = gpu() else { return };
-    for (name, tree, tape) in &encodable() {
+    for (name, tree, tape) in solid_scenes() {
         let (cam, settings) = view(tree);
         let start = std::time::Instant::now();
         let a = render(tree, &cam, &settings, &ProgressBar::hidden());
@@ -288,7 +325,9 @@ fn heightfield(cell: glam::Vec2, interp: Interpolation) -> std::sync::Arc<dyn Fi
 
 /// A tree using every encoded node and skeleton kind — big BVH blend, union, intersection,
 /// difference with a negative curve, rotated and scaled transforms, constants, a box
-/// turned by 90°, a zero-length segment and a placed, scaled heightfield — equals its tape.
+/// turned by 90°, cones (one upside down) and ellipsoids, a zero-length segment and a
+/// placed, scaled heightfield, bilinear and bicubic — equals its tape, and with an adapter
+/// the GPU evaluates the tape as the CPU does.
 #[test]
 fn every_encoding_equals_its_node() {
     let mut b = TreeBuilder::new();
@@ -311,6 +350,10 @@ fn every_encoding_equals_its_node() {
         "(shape: Capsule(a: (-5, -5, 0), b: (-2, -6, 4), radius: 1), falloff: 1.5)",
         "(shape: Box(center: (3, -4, 0), half_size: (2, 1, 0.5), yaw: 90), falloff: 1.2)",
         "(shape: Polyline(points: [(-6, 2, 0), (-3, 5, 2), (0, 6, 1)]), falloff: 1.8)",
+        "(shape: Cone(base: (6, 6, -1), apex: (7, 5, 6), radius: 2.5), falloff: 2, energy: 1.1)",
+        "(shape: Cone(base: (-7, -1, 5), apex: (-6, 1, 0), radius: 1.5), falloff: 1.5)",
+        "(shape: Ellipsoid(center: (2, -7, 1), radii: (3, 1.2, 2)), falloff: 1.8, energy: 1.2)",
+        "(shape: Ellipsoid(center: (-2, 7, 3), radii: (0.6, 2.5, 1)), falloff: 1.2)",
     ] {
         blobs.push(b.leaf(prim(s), None));
     }
@@ -359,17 +402,38 @@ fn every_encoding_equals_its_node() {
         None,
     );
     let island = b.intersection(vec![terrain, flipped], None);
-    let root = b.union(vec![with_curve, capped_lift, island], Some("root".into()));
+    let smooth = b.leaf(
+        heightfield(glam::Vec2::splat(1.5), Interpolation::Bicubic),
+        None,
+    );
+    let smooth = b.transform(
+        smooth,
+        glam::Affine3A::from_translation(Vec3::new(20.0, -6.0, 0.0)),
+        None,
+    );
+    let root = b.union(
+        vec![with_curve, capped_lift, island, smooth],
+        Some("root".into()),
+    );
     let tree = b.build(root);
     let tape = tape_equals_tree(&tree, 30_000);
     common::check_segment_lipschitz(&tape, &tree.support(), 20_000, 4);
-    // The heightfield alone, where the prism's corners get their share of the points.
-    let mut b = TreeBuilder::new();
-    let leaf = b.leaf(
-        heightfield(glam::Vec2::splat(1.5), Interpolation::Bilinear),
-        None,
-    );
-    tape_equals_tree(&b.build(leaf), 20_000);
+    if let Some(ctx) = gpu() {
+        let mut rng = Rng(5);
+        let (pts, _) = sample_points(&tree, 6000, 9);
+        let pts: Vec<(Vec3, f32)> = pts
+            .into_iter()
+            .enumerate()
+            .map(|(i, p)| (p, if i % 3 == 0 { 0.0 } else { rng.range(0.0, 3.0) }))
+            .collect();
+        assert_probes_match(ctx, &tape, &pts);
+    }
+    // Each heightfield alone, where the prism's corners get their share of the points.
+    for interp in [Interpolation::Bilinear, Interpolation::Bicubic] {
+        let mut b = TreeBuilder::new();
+        let leaf = b.leaf(heightfield(glam::Vec2::splat(1.5), interp), None);
+        tape_equals_tree(&b.build(leaf), 20_000);
+    }
 }
 
 /// Compares the tree and its tape at [`sample_points`]; returns the tape.
@@ -411,13 +475,9 @@ fn nodes_without_an_encoding_are_named_errors() {
         heightfield(glam::Vec2::new(1.5, 2.0), Interpolation::Bilinear),
         "square cells",
     );
-    refused(
-        heightfield(glam::Vec2::splat(1.5), Interpolation::Bicubic),
-        "bicubic",
-    );
 }
 
-/// Noisy primitives on every convex shape the tape knows (and a noisy polyline, carving
+/// Noisy primitives on every convex shape the tape knows (cone and ellipsoid included) (and a noisy polyline, carving
 /// with E < 0) and turbulence warps, localized and not, nested in an affine transform: the
 /// tape equals the tree, its ball bounds are sound, and with an adapter the GPU evaluates
 /// the same values and bounds and renders the same image as the CPU renders the tree.
@@ -435,13 +495,20 @@ fn noisy_primitives_and_turbulence_warps_equal_their_nodes() {
         "Sphere(center: (5, 4, 2), radius: 2)",
         "Capsule(a: (-7, -5, 0), b: (-3, -6, 3), radius: 1.2)",
         "Box(center: (4, -4, 0), half_size: (2.5, 1.5, 1))",
+        "Cone(base: (8, 0, -1), apex: (9, 1, 6), radius: 2.5)",
+        "Ellipsoid(center: (-9, 3, 2), radii: (2.5, 1.5, 2))",
     ]
     .iter()
     .enumerate()
     {
         let spec = format!(
             "(shape: {s}, falloff: 3, energy: 1.2, {})",
-            noise(1.0 + 0.3 * i as f32, 2.5 + i as f32, 2 + i as u32, i as u32)
+            noise(
+                (1.0 + 0.3 * i as f32).min(2.2),
+                2.5 + i as f32,
+                2 + i as u32 % 5,
+                i as u32
+            )
         );
         kids.push(b.leaf(prim(&spec), None));
     }

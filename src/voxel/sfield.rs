@@ -203,6 +203,22 @@ impl SField {
         &self.vol.levels
     }
 
+    /// The pipeline's grids: levels, S, α, β and the per-brick bounds (for encoders such
+    /// as the GPU tape).
+    pub fn volume(&self) -> &Volume {
+        &self.vol
+    }
+
+    /// The finest level's tricubic blend, with [`Interpolation::Tricubic`].
+    pub fn cubic(&self) -> Option<&Cubic> {
+        self.cubic.as_deref()
+    }
+
+    /// `max |α·fbm|` over the field: 0 when there is no displacement noise.
+    pub fn noise_amplitude(&self) -> f32 {
+        self.noise_amp
+    }
+
     /// Bytes held by the field's grids.
     pub fn memory_bytes(&self) -> u64 {
         self.vol.stats.field_bytes + self.cubic.as_ref().map_or(0, |c| c.bytes())
@@ -484,5 +500,9 @@ impl Field for SField {
         let d = self.d_in_range(&bc);
         let face = 2.0 * T * wyvill_slope(d.scale(1.0 / self.params.falloff)) / self.params.falloff;
         sig.max(face)
+    }
+
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
     }
 }

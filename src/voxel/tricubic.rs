@@ -168,6 +168,11 @@ impl Cubic {
         &self.bounds[b]
     }
 
+    /// The blend weight (0 or 1) per node of the finest level, by data index.
+    pub fn weights(&self) -> &[f32] {
+        &self.w
+    }
+
     /// Bounds over every brick.
     pub fn all(&self) -> &CubicBounds {
         &self.all

@@ -485,6 +485,7 @@ pub fn check_segment_lipschitz(f: &dyn Field, region: &Aabb, n: usize, seed: u64
 pub mod tapes {
     //! The same scenes encoded as GPU tapes.
     use super::*;
+    use karstic::dem::Interpolation;
     use karstic::render::gpu::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder};
 
     /// The blobs as a blend under a BVH of guards.
@@ -541,6 +542,7 @@ pub mod tapes {
                 nx: d.nx,
                 ny: d.ny,
                 z: &d.z,
+                interpolation: Interpolation::Bilinear,
             },
             falloff,
         )
@@ -581,6 +583,7 @@ pub mod tapes {
                 nx: n,
                 ny: n,
                 z: &z,
+                interpolation: Interpolation::Bilinear,
             },
             tr.falloff,
         )

@@ -41,6 +41,26 @@ impl Cone {
         })
     }
 
+    /// Centre of the base disc.
+    pub fn base(&self) -> Vec3 {
+        self.base
+    }
+
+    /// Unit axis from the base towards the apex.
+    pub fn axis(&self) -> Vec3 {
+        self.axis
+    }
+
+    /// Distance from the base to the apex.
+    pub fn height(&self) -> f32 {
+        self.height
+    }
+
+    /// Radius of the base disc.
+    pub fn radius(&self) -> f32 {
+        self.radius
+    }
+
     /// `(ρ, z, e_r)`: the half-plane coordinates of `p` and the unit radial direction
     /// (any perpendicular of the axis on the axis itself).
     #[inline]

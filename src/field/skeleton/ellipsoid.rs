@@ -30,6 +30,16 @@ impl Ellipsoid {
         Ellipsoid { center, radii }
     }
 
+    /// Centre.
+    pub fn center(&self) -> Vec3 {
+        self.center
+    }
+
+    /// Semi-axes along x, y and z.
+    pub fn radii(&self) -> Vec3 {
+        self.radii
+    }
+
     /// The root `t` of `F` for the local point `y`, or `None` when `y` is inside.
     fn root(&self, y: DVec3) -> Option<f64> {
         let e = self.radii.as_dvec3();

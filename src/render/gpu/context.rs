@@ -1,6 +1,9 @@
 //! wgpu plumbing: adapter and device, the compute pipelines of `shaders/trace.wgsl`,
 //! buffer upload, dispatch and read-back.
 
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 use wgpu::util::DeviceExt;
@@ -21,6 +24,13 @@ struct Uniforms {
     v: [[f32; 4]; 15],
     dims: [u32; 4],
 }
+
+/// Bytes of one pixel's saved state (`struct Saved` of `trace.wgsl`).
+const SAVED_BYTES: u64 = 7 * 16;
+/// Pixels per tile: the saved states of a tile fit one 56 MiB buffer.
+const TILE_PIXELS: u64 = 1 << 19;
+/// Passes over a tile before giving up (each resumes every unfinished pixel).
+const MAX_PASSES: u32 = 100_000;
 
 fn v4(v: Vec3, w: f32) -> [f32; 4] {
     Vec4::new(v.x, v.y, v.z, w).to_array()
@@ -58,15 +68,24 @@ impl Uniforms {
     }
 }
 
+/// The `render` and `probe` pipelines compiled for one set of [`Tape::features`].
+struct TapePipelines {
+    render: wgpu::ComputePipeline,
+    probe: wgpu::ComputePipeline,
+}
+
 /// An open GPU device with the tracing pipelines, reusable across frames.
 pub struct GpuContext {
     device: wgpu::Device,
     queue: wgpu::Queue,
-    render: wgpu::ComputePipeline,
-    probe: wgpu::ComputePipeline,
+    module: wgpu::ShaderModule,
+    /// By [`Tape::features`]: compiled on first use.
+    pipelines: Mutex<HashMap<u32, Arc<TapePipelines>>>,
     fbm_probe: wgpu::ComputePipeline,
     /// Name and backend of the adapter, for messages.
     pub adapter: String,
+    /// True on a software adapter (lavapipe, which runs the shader on the CPU's cores).
+    pub software: bool,
 }
 
 impl GpuContext {
@@ -78,9 +97,9 @@ impl GpuContext {
                 .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
         let info = adapter.get_info();
         let limits = adapter.limits();
-        if limits.max_storage_buffers_per_shader_stage < 6 {
+        if limits.max_storage_buffers_per_shader_stage < 10 {
             return Err(GpuError::Device(format!(
-                "{} binds {} storage buffers per stage; the tracer needs 6",
+                "{} binds {} storage buffers per stage; the tracer needs 10",
                 info.name, limits.max_storage_buffers_per_shader_stage
             )));
         }
@@ -95,18 +114,7 @@ impl GpuContext {
             label: Some("trace.wgsl"),
             source: wgpu::ShaderSource::Wgsl(shader_source().into()),
         });
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let (render, probe, fbm_probe) =
-            (pipeline("render"), pipeline("probe"), pipeline("fbm_probe"));
+        let fbm_probe = pipeline(&device, &module, "fbm_probe", &[]);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Device(format!(
                 "the tracing shader does not compile: {e}"
@@ -115,11 +123,34 @@ impl GpuContext {
         Ok(GpuContext {
             device,
             queue,
-            render,
-            probe,
+            module,
+            pipelines: Mutex::new(HashMap::new()),
             fbm_probe,
             adapter: format!("{} ({:?})", info.name, info.backend),
+            software: info.device_type == wgpu::DeviceType::Cpu,
         })
+    }
+
+    /// The pipelines for `tape`'s features, compiled on first use.
+    fn pipelines(&self, tape: &Tape) -> Result<Arc<TapePipelines>, GpuError> {
+        let key = tape.features();
+        let mut map = self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = map.get(&key) {
+            return Ok(p.clone());
+        }
+        let constants = Tape::feature_constants(key);
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let p = Arc::new(TapePipelines {
+            render: pipeline(&self.device, &self.module, "render", &constants),
+            probe: pipeline(&self.device, &self.module, "probe", &constants),
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Device(format!(
+                "the tracing shader does not compile: {e}"
+            )));
+        }
+        map.insert(key, p.clone());
+        Ok(p)
     }
 
     fn storage(&self, label: &str, bytes: &[u8]) -> wgpu::Buffer {
@@ -153,10 +184,12 @@ impl GpuContext {
         Ok(())
     }
 
-    /// The tape's buffers, bound at 1, 2 and 3 of `shaders/`.
-    fn tape_buffers(&self, tape: &Tape) -> Result<[(u32, wgpu::Buffer); 3], GpuError> {
+    /// The tape's buffers, bound at 1, 2, 3, 11 and 12 of `shaders/`.
+    fn tape_buffers(&self, tape: &Tape) -> Result<[(u32, wgpu::Buffer); 5], GpuError> {
         self.check_size("the tape's parameters", 4 * tape.params.len() as u64)?;
         self.check_size("the tape's heightfields", 4 * tape.heights.len() as u64)?;
+        self.check_size("the S-field brick tables", 4 * tape.sf_table.len() as u64)?;
+        self.check_size("the S-field samples", 4 * tape.sf_data.len() as u64)?;
         Ok([
             (
                 1,
@@ -170,18 +203,23 @@ impl GpuContext {
                 3,
                 self.storage("heights", bytemuck::cast_slice(&tape.heights)),
             ),
+            (
+                11,
+                self.storage("sf_table", bytemuck::cast_slice(&tape.sf_table)),
+            ),
+            (
+                12,
+                self.storage("sf_data", bytemuck::cast_slice(&tape.sf_data)),
+            ),
         ])
     }
 
-    /// Runs one dispatch of `pipeline` and reads `outputs` back (in order).
-    fn run(
+    /// The bind group of `pipeline` with `bindings`.
+    fn bind_group(
         &self,
         pipeline: &wgpu::ComputePipeline,
         bindings: &[(u32, &wgpu::Buffer)],
-        outputs: &[&wgpu::Buffer],
-        groups: (u32, u32),
-    ) -> Result<Vec<Vec<u8>>, GpuError> {
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    ) -> wgpu::BindGroup {
         let layout = pipeline.get_bind_group_layout(0);
         let entries: Vec<_> = bindings
             .iter()
@@ -190,12 +228,42 @@ impl GpuContext {
                 resource: b.as_entire_binding(),
             })
             .collect();
-        let group = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,
             layout: &layout,
             entries: &entries,
-        });
-        let reads: Vec<_> = outputs
+        })
+    }
+
+    /// Runs one dispatch of `pipeline` and returns the first two words of `counters`
+    /// (a `u32` array it counts into).
+    fn dispatch(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        group: &wgpu::BindGroup,
+        groups: (u32, u32),
+        counters: &wgpu::Buffer,
+    ) -> Result<[u32; 2], GpuError> {
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(groups.0, groups.1, 1);
+        }
+        self.queue.submit([enc.finish()]);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Run(e.to_string()));
+        }
+        let out = self.read_back(&[counters])?;
+        let words = bytemuck::cast_slice::<u8, u32>(&out[0]);
+        Ok([words[0], words[1]])
+    }
+
+    /// Copies `buffers` into mappable ones and reads them (after the work submitted).
+    fn read_back(&self, buffers: &[&wgpu::Buffer]) -> Result<Vec<Vec<u8>>, GpuError> {
+        let reads: Vec<_> = buffers
             .iter()
             .map(|b| {
                 self.device.create_buffer(&wgpu::BufferDescriptor {
@@ -207,19 +275,10 @@ impl GpuContext {
             })
             .collect();
         let mut enc = self.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = enc.begin_compute_pass(&Default::default());
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(groups.0, groups.1, 1);
-        }
-        for (src, dst) in outputs.iter().zip(&reads) {
+        for (src, dst) in buffers.iter().zip(&reads) {
             enc.copy_buffer_to_buffer(src, 0, dst, 0, src.size());
         }
         self.queue.submit([enc.finish()]);
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Run(e.to_string()));
-        }
         let (tx, rx) = std::sync::mpsc::channel();
         for r in &reads {
             let tx = tx.clone();
@@ -248,36 +307,118 @@ impl GpuContext {
             .collect()
     }
 
+    /// Runs one dispatch of `pipeline` and reads `outputs` back (in order).
+    fn run(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        bindings: &[(u32, &wgpu::Buffer)],
+        outputs: &[&wgpu::Buffer],
+        groups: (u32, u32),
+    ) -> Result<Vec<Vec<u8>>, GpuError> {
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let group = self.bind_group(pipeline, bindings);
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(groups.0, groups.1, 1);
+        }
+        self.queue.submit([enc.finish()]);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Run(e.to_string()));
+        }
+        self.read_back(outputs)
+    }
+
     /// Renders `tape` through `camera` as [`crate::render::cpu::render`] does on the CPU.
+    ///
+    /// The image goes in tiles of rows; each tile is dispatched until every pixel is done.
+    /// One dispatch finishes them all except on lavapipe, whose invocations stop their
+    /// loops after 65,535 iterations: there an interrupted pixel saves its state and the
+    /// next dispatch (pass) resumes it (see `budget_left` in `shaders/trace.wgsl`).
     pub fn render(
         &self,
         tape: &Tape,
         camera: &Camera,
         settings: &RenderSettings,
     ) -> Result<Frame, GpuError> {
+        self.render_in_passes(tape, camera, settings, 0)
+    }
+
+    /// [`GpuContext::render`] with at most `evals_per_pass` field evaluations per pixel
+    /// and dispatch (0: no limit), the pixels resuming where they stopped: the same image,
+    /// in shorter dispatches (a bound on dispatch time, as OS watchdogs on real GPUs want).
+    pub fn render_in_passes(
+        &self,
+        tape: &Tape,
+        camera: &Camera,
+        settings: &RenderSettings,
+        evals_per_pass: u32,
+    ) -> Result<Frame, GpuError> {
         let (w, h) = (camera.width, camera.height);
         let n = w as u64 * h as u64;
         self.check_size("the image", 4 * n)?;
         let tape_buffers = self.tape_buffers(tape)?;
-        let uniforms = self
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("uniforms"),
-                contents: bytemuck::bytes_of(&Uniforms::new(tape, camera, settings)),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+        let uniforms = self.storage(
+            "uniforms",
+            bytemuck::bytes_of(&Uniforms::new(tape, camera, settings)),
+        );
+        let tile_rows = ((TILE_PIXELS / w as u64).max(8) as u32 / 8 * 8).min(h.next_multiple_of(8));
+        let saved = self.output("saved", SAVED_BYTES * w as u64 * tile_rows as u64);
+        let progress = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("progress"),
+            size: 32,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let rgba = self.output("rgba", 4 * n);
         let depth = self.output("depth", 4 * n);
         let steps = self.output("steps", 4 * n);
         let mut bindings: Vec<(u32, &wgpu::Buffer)> =
             tape_buffers.iter().map(|(k, b)| (*k, b)).collect();
-        bindings.extend([(0, &uniforms), (4, &rgba), (5, &depth), (6, &steps)]);
-        let out = self.run(
-            &self.render,
-            &bindings,
-            &[&rgba, &depth, &steps],
-            (w.div_ceil(8), h.div_ceil(8)),
-        )?;
+        bindings.extend([
+            (0, &uniforms),
+            (4, &rgba),
+            (5, &depth),
+            (6, &steps),
+            (9, &saved),
+            (10, &progress),
+        ]);
+        let pipelines = self.pipelines(tape)?;
+        let group = self.bind_group(&pipelines.render, &bindings);
+        for row0 in (0..h).step_by(tile_rows as usize) {
+            let rows = tile_rows.min(h - row0);
+            for pass in 0.. {
+                if pass == MAX_PASSES {
+                    return Err(GpuError::Run(format!(
+                        "rows {row0}.. still unfinished after {MAX_PASSES} passes"
+                    )));
+                }
+                let info = [0, 0, 2, row0, pass, evals_per_pass, 0, 0u32];
+                self.queue
+                    .write_buffer(&progress, 0, bytemuck::cast_slice(&info));
+                let left = self.dispatch(
+                    &pipelines.render,
+                    &group,
+                    (w.div_ceil(8), rows.div_ceil(8)),
+                    &progress,
+                )?;
+                if left[1] > 0 {
+                    return Err(GpuError::Limits(format!(
+                        "{} pixels cannot evaluate the tape once within this adapter's loop budget ({} instructions)",
+                        left[1],
+                        tape.instrs.len()
+                    )));
+                }
+                if left[0] == 0 {
+                    break;
+                }
+            }
+        }
+        let out = self.read_back(&[&rgba, &depth, &steps])?;
         let depth = bytemuck::cast_slice::<u8, f32>(&out[1])
             .iter()
             .map(|&t| if t < 0.0 { f32::INFINITY } else { t })
@@ -296,7 +437,7 @@ impl GpuContext {
         let tape_buffers = self.tape_buffers(tape)?;
         let bindings: Vec<(u32, &wgpu::Buffer)> =
             tape_buffers.iter().map(|(k, b)| (*k, b)).collect();
-        self.run_probes(&self.probe, &bindings, points)
+        self.run_probes(&self.pipelines(tape)?.probe, &bindings, points)
     }
 
     /// Evaluates the turbulence `fbm` at each point on the GPU (`shaders/noise.wgsl`), to
@@ -339,6 +480,26 @@ impl GpuContext {
             .map(|v| (v[0], v[1]))
             .collect())
     }
+}
+
+/// The compute pipeline of `entry` with the overridable `constants`.
+fn pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: None,
+        module,
+        entry_point: Some(entry),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            ..Default::default()
+        },
+        cache: None,
+    })
 }
 
 /// Opens a device and renders one frame (see [`GpuContext::render`]).

@@ -5,9 +5,10 @@
 //! | tree node | tape |
 //! | --- | --- |
 //! | constant | `CONST` |
-//! | [`Primitive`] on a point, segment, sphere, capsule or axis-aligned box | `PRIM` (Wyvill); `NPRIM` with noise |
+//! | [`Primitive`] on a point, segment, sphere, capsule, axis-aligned box, cone or ellipsoid | `PRIM` (Wyvill); `NPRIM` with noise |
 //! | [`Primitive`] on a polyline or curve | its segments' `PRIM`s (`NPRIM`s) under a BVH of guards, combined by `UNION` (`E ≥ 0`: `E·g(minᵢ d̃ᵢ) = maxᵢ E·g(d̃ᵢ)`, `g` decreasing) or `INTER` (`E < 0`) |
-//! | [`HeightfieldField`] (bilinear, square cells, no nodata, no domain polygon) | `HEIGHT` ∩ `PRIM` on its [`Shape::Prism`], energy `2T`: `min(σ(h − z), 2T·g(d_P/R))` as the leaf defines it |
+//! | [`HeightfieldField`] (bilinear or bicubic, square cells, no nodata, no domain polygon) | `HEIGHT` ∩ `PRIM` on its [`Shape::Prism`], energy `2T`: `min(σ(h − z), 2T·g(d_P/R))` as the leaf defines it |
+//! | [`SField`] (a `FeatureVolume`) | `SFIELD` over its bricks ([`super::sfield`]) |
 //! | blend | children chained by `BLEND`; with a BVH (many children), [`TapeBuilder::combine_bvh`] over the children's supports |
 //! | union / intersection | children chained by `UNION` / `INTER` |
 //! | difference | base, then each carve and `DIFF` |
@@ -15,8 +16,11 @@
 //! | turbulence warp | `TWARP`, child, `UNWARP` (the tree's bound: the child's over the ball grown by the warp's reach, times its Lipschitz bound) |
 //!
 //! Every emitted subtree is then told its support from the tree's cache
-//! ([`TapeBuilder::assume_support`]), so the tape's guards and support box are the tree's.
-//! A node with no encoding — another skeleton, an S-field volume or any other leaf — is a [`GpuError::NoEncoding`] naming it, and
+//! ([`TapeBuilder::assume_support`]), so the tape's guards and support box are the tree's;
+//! S-field volumes and noisy primitives get a guard of their own (their evaluation is
+//! long, and rays away from them jump over it).
+//! A node with no encoding — a disc, plane or prism skeleton, a turned box, a
+//! heightfield with nodata or a domain polygon, any other leaf — is a [`GpuError::NoEncoding`] naming it, and
 //! `karstic render --gpu` falls back to the CPU with that message. An instanced subtree
 //! (one node with several parents) is emitted once per use: a tape is a tree.
 
@@ -24,9 +28,10 @@ use glam::Vec3;
 
 use super::GpuError;
 use super::tape::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder};
-use crate::dem::{HeightfieldField, Interpolation};
+use crate::dem::HeightfieldField;
 use crate::field::skeleton::Project;
 use crate::field::{Field, Node, NodeId, Primitive, Skeleton, T, Tree};
+use crate::voxel::SField;
 
 /// The GPU tape of a compiled tree, or the first node without an encoding.
 pub fn tape_from_tree(tree: &Tree) -> Result<Tape, GpuError> {
@@ -57,9 +62,40 @@ fn no_encoding(tree: &Tree, id: NodeId, kind: &str, why: &str) -> GpuError {
     }
 }
 
+/// True for the leaves worth a guard of their own: S-field volumes and noisy primitives,
+/// whose evaluation is long (on lavapipe, every lane of a SIMD group pays for a leaf any
+/// lane evaluates; a guard lets rays away from the leaf jump over it).
+fn costly(node: &Node) -> bool {
+    let leaf = match node {
+        Node::Primitive(p) => return p.noise().is_some(),
+        Node::Leaf(f) => f.as_any(),
+        _ => return false,
+    };
+    leaf.is_some_and(|a| {
+        a.is::<SField>()
+            || a.downcast_ref::<Primitive>()
+                .is_some_and(|p| p.noise().is_some())
+    })
+}
+
 /// Emits node `id`, leaving one entry on the builder's stack.
 fn emit(tree: &Tree, b: &mut TapeBuilder, id: NodeId) -> Result<(), GpuError> {
-    match &tree.nodes()[id as usize] {
+    let node = &tree.nodes()[id as usize];
+    let support = tree.info(id).support;
+    if costly(node) && !support.is_empty() && support.size().is_finite() {
+        // Every node is 0 outside its support box, so a guard may stand before it.
+        let g = b.guard_begin(support);
+        emit_node(tree, b, id, node)?;
+        b.guard_end(g)?;
+        return b.assume_support(support);
+    }
+    emit_node(tree, b, id, node)?;
+    b.assume_support(support)
+}
+
+/// Emits `node` (node `id`) without a guard of its own.
+fn emit_node(tree: &Tree, b: &mut TapeBuilder, id: NodeId, node: &Node) -> Result<(), GpuError> {
+    match node {
         Node::Constant(v) => b.constant(*v),
         Node::Primitive(p) => primitive(tree, b, id, p)?,
         Node::Leaf(f) => leaf(tree, b, id, f.as_ref())?,
@@ -95,7 +131,7 @@ fn emit(tree: &Tree, b: &mut TapeBuilder, id: NodeId) -> Result<(), GpuError> {
             b.warp_end()?;
         }
     }
-    b.assume_support(tree.info(id).support)
+    Ok(())
 }
 
 /// `c₀ ∘ c₁ ∘ …` as a chain of binary ops (an empty list is the constant 0).
@@ -125,11 +161,14 @@ fn leaf(tree: &Tree, b: &mut TapeBuilder, id: NodeId, f: &dyn Field) -> Result<(
     if let Some(h) = any.and_then(|a| a.downcast_ref::<HeightfieldField>()) {
         return heightfield(tree, b, id, h);
     }
+    if let Some(s) = any.and_then(|a| a.downcast_ref::<SField>()) {
+        return b.sfield(s, &describe(tree, id, "S-field volume"));
+    }
     Err(no_encoding(
         tree,
         id,
         "leaf",
-        "only skeletal primitives and heightfields are encoded; S-field volumes (FeatureVolume) are not yet",
+        "only skeletal primitives, heightfields and S-field volumes are encoded",
     ))
 }
 
@@ -160,6 +199,16 @@ fn primitive(tree: &Tree, b: &mut TapeBuilder, id: NodeId, p: &Primitive) -> Res
             a: s.inner().a(),
             b: s.inner().b(),
             radius: s.radius(),
+        },
+        Skeleton::Cone(c) => Shape::Cone {
+            base: c.base(),
+            axis: c.axis(),
+            height: c.height(),
+            radius: c.radius(),
+        },
+        Skeleton::Ellipsoid(e) => Shape::Ellipsoid {
+            center: e.center(),
+            radii: e.radii(),
         },
         Skeleton::Box(c) => axis_aligned_box(c).ok_or_else(|| {
             no_encoding(
@@ -196,7 +245,7 @@ fn primitive(tree: &Tree, b: &mut TapeBuilder, id: NodeId, p: &Primitive) -> Res
                 id,
                 &kind,
                 &format!(
-                    "the GPU evaluator knows point, segment, polyline, curve, sphere, capsule and box skeletons, not {}",
+                    "the GPU evaluator knows point, segment, polyline, curve, sphere, capsule, box, cone and ellipsoid skeletons, not {}",
                     other.kind()
                 ),
             ));
@@ -237,9 +286,6 @@ fn heightfield(
     let grid = h.heightfield();
     let cell = grid.cell();
     let refuse = |why: &str| Err(no_encoding(tree, id, "heightfield", why));
-    if params.interpolation != Interpolation::Bilinear {
-        return refuse("only bilinear interpolation is encoded, not bicubic");
-    }
     if params.domain.is_some() {
         return refuse("a domain polygon is not encoded");
     }
@@ -257,6 +303,7 @@ fn heightfield(
             nx: grid.nx(),
             ny: grid.ny(),
             z: grid.samples(),
+            interpolation: params.interpolation,
         },
         r,
     )?;

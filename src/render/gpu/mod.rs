@@ -4,6 +4,7 @@
 //! * [`tape`]: the GPU encoding of a field and its CPU reference evaluator.
 //! * [`from_tree`]: a compiled tree as a tape ([`tape_from_tree`]).
 //! * [`noise`]: the fBm encoding, noisy primitives and turbulence warps on the tape.
+//! * [`sfield`]: S-field leaves (sparse bricks) on the tape.
 //! * [`context`]: adapter, device, pipelines, buffers and read-back.
 //!
 //! The WGSL lives in `shaders/` and is assembled by [`shader_source`]; the tests validate
@@ -12,11 +13,12 @@
 pub mod context;
 pub mod from_tree;
 pub mod noise;
+pub mod sfield;
 pub mod tape;
 
 pub use context::{GpuContext, render};
 pub use from_tree::tape_from_tree;
-pub use tape::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder};
+pub use tape::{Combine, FEATURES, HeightGrid, Profile, Shape, Tape, TapeBuilder};
 
 /// Errors of the GPU path.
 #[derive(Debug, thiserror::Error)]
@@ -48,13 +50,16 @@ pub enum GpuError {
 
 /// The WGSL modules, each the concatenation of these files of `shaders/` (WGSL has no
 /// includes). The tests check that every file there belongs to some module.
-pub const SHADER_MODULES: &[(&str, &[&str])] =
-    &[("trace", &["noise.wgsl", "field.wgsl", "trace.wgsl"])];
+pub const SHADER_MODULES: &[(&str, &[&str])] = &[(
+    "trace",
+    &["noise.wgsl", "sfield.wgsl", "field.wgsl", "trace.wgsl"],
+)];
 
 /// The source of the tracing module.
 pub fn shader_source() -> String {
     [
         include_str!("../../../shaders/noise.wgsl"),
+        include_str!("../../../shaders/sfield.wgsl"),
         include_str!("../../../shaders/field.wgsl"),
         include_str!("../../../shaders/trace.wgsl"),
     ]

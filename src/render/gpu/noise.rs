@@ -19,7 +19,7 @@
 
 use glam::Vec3;
 
-use super::tape::{closest, signed_distance};
+use super::tape::project;
 use crate::field::falloff::{wyvill, wyvill_slope};
 use crate::field::{Aabb, Fbm, Interval, Noise, Warp};
 
@@ -117,20 +117,23 @@ pub fn twarp_apply(q: &[f32], noises: &[Fbm], p: Vec3) -> Vec3 {
     p + Vec3::new(t(0), t(1), t(2)) * (q[0] * fd)
 }
 
-/// `d̃(p)` of a noisy primitive on a convex shape, capped at 1.
-fn noisy_distance(kind: u32, q: &[f32], t: &Fbm, p: Vec3) -> f32 {
-    let (r, a) = (q[0], q[2]);
-    let shape = &q[NPRIM_HEAD..];
-    let rho = signed_distance(kind, shape, p).max(0.0);
+/// `d̃` at a point at signed distance `sd` from the shape, `t` the turbulence read for it:
+/// 0 inside, 1 beyond `R + A`, else `min(ρ/(R + A·t), 1)`.
+fn noisy_d(r: f32, a: f32, sd: f32, t: f32) -> f32 {
+    let rho = sd.max(0.0);
     if rho >= r + a {
-        return 1.0;
+        1.0
+    } else if rho <= 0.0 {
+        0.0
+    } else {
+        (rho / (r + a * t)).min(1.0)
     }
-    if rho <= 0.0 {
-        return 0.0;
-    }
-    let s = closest(kind, shape, p);
-    let u = (p - s) / rho;
-    (rho / (r + a * t.value(s + u * r))).min(1.0)
+}
+
+/// The turbulence of a noisy primitive for `x`, projected at `(s, ρ)` (`ρ > 0`): read at
+/// `s + R·(x − s)/ρ`, as `shaders/noise.wgsl` reads it.
+fn turbulence(t: &Fbm, r: f32, x: Vec3, (s, rho): (Vec3, f32)) -> f32 {
+    t.value(s + (x - s) * (r / rho))
 }
 
 /// `(value at p, Lipschitz bound over B(c, r))` of the noisy primitive with parameters
@@ -145,33 +148,41 @@ pub fn noisy_primitive(
 ) -> (f32, f32) {
     let (r, e, a, slope) = (q[0], q[1], q[2], q[3]);
     let t = &noises[q[4] as usize];
-    let dp = noisy_distance(kind, q, t, p);
+    let shape = &q[NPRIM_HEAD..];
+    let reach = r + a;
+    let pp = project(kind, shape, p);
+    let tp = if pp.1 > 0.0 && pp.1 < reach {
+        turbulence(t, r, p, pp)
+    } else {
+        0.0
+    };
+    let dp = noisy_d(r, a, pp.1, tp);
     let v = e * wyvill(dp);
     if !bound {
         return (v, 0.0);
     }
     let lt = t.lipschitz();
-    let shape = &q[NPRIM_HEAD..];
-    let reach = r + a;
-    let dc = signed_distance(kind, shape, c).max(0.0);
+    let pc = if c == p { pp } else { project(kind, shape, c) };
+    let dc = pc.1.max(0.0);
     let rho = Interval::new((dc - rb).max(0.0), dc + rb);
     let (mut den_lo, mut den_hi) = (r - a, r + a);
     let mut xs = Interval::new(rho.lo / den_hi, rho.hi / den_lo);
     if rho.lo < reach {
-        let xc = if rho.lo > 0.0 {
-            let s = closest(kind, shape, c);
-            let tc = t.value(s + (c - s) * (r / dc));
+        let tc = if dc <= 0.0 {
+            0.0
+        } else if c == p && dc < reach {
+            tp
+        } else {
+            turbulence(t, r, c, pc)
+        };
+        let xc = noisy_d(r, a, pc.1, tc);
+        if rho.lo > 0.0 {
             let spread = lt * (1.0 + r / rho.lo) * rb;
             den_lo = den_lo.max(r + a * (tc - spread));
             den_hi = den_hi.min(r + a * (tc + spread));
             xs = Interval::new(rho.lo / den_hi, rho.hi / den_lo);
-            if dc < reach { dc / (r + a * tc) } else { 1.0 }
-        } else if c == p {
-            dp
-        } else {
-            noisy_distance(kind, q, t, c)
-        };
-        let by_slope = Interval::point(xc.min(1.0)).dilate(rb * slope);
+        }
+        let by_slope = Interval::point(xc).dilate(rb * slope);
         let both = xs.intersect(by_slope);
         if !both.is_empty() {
             xs = both;

@@ -9,8 +9,9 @@
 //! | --- | --- | --- | --- |
 //! | `CONST` | `v` | push | constant `v` (Lipschitz 0) |
 //! | `PRIM` | `R, e, shape…` | push | `e·g(max(sd, 0)/R)` (Wyvill) or `σ(−sd, R)` (σ, `flags` bit 8); `sd` = signed distance to the shape (`flags & 0xff`: sphere `c, ρ`; capsule `a, b, ρ`; box `c, half`; heightfield prism `min, max`) |
-//! | `HEIGHT` | `R, L, ox, oy, cell, nx, ny, offset` | push | `σ(h(x, y) − z, R)`, `h` bilinear in `heights[offset..]`, `L ≥ |∇h|` |
+//! | `HEIGHT` | `R, L, ox, oy, cell, nx, ny, offset` | push | `σ(h(x, y) − z, R)`, `h` bilinear (Catmull-Rom bicubic with `flags` bit 0) in `heights[offset..]`, `L ≥ |∇h|` |
 //! | `NPRIM` | see [`super::noise`] | push | a noisy primitive `E·g(d̃)` on a convex shape |
+//! | `SFIELD` | see [`super::sfield`] | push | an S-field leaf (`flags`: its index in [`Tape::sfields`]) |
 //! | `BLEND` / `UNION` / `INTER` / `DIFF` | – | pop 2, push 1 | `a + b`, `max`, `min`, `min(a, 2T − b)` |
 //! | `GUARD` | `min.xyz, max.xyz` | – | when neither `p` nor the ball touches the box, push `(0, 0)` and jump to `jump` (the instruction after the guarded subtree) |
 //! | `WARP` / `UNWARP` | `M⁻¹` (3 rows of 4), `k = ‖M⁻¹‖` / `k` | – | `p, c ← M⁻¹p, M⁻¹c`, `r ← k·r`; on `UNWARP` restore them and scale the top bound by `k` |
@@ -24,13 +25,17 @@
 //! [`Tape`] implements [`Field`] with the same arithmetic as `shaders/field.wgsl`, so the
 //! CPU tracer renders exactly what the GPU renders; the tests compare the two.
 
+use std::sync::Arc;
+
 use bytemuck::{Pod, Zeroable};
 use glam::{Affine3A, Vec2, Vec3, Vec3A};
 
 use super::GpuError;
 use super::noise::{noisy_primitive, nprim_head, twarp_apply, twarp_params};
+use crate::dem::{Heightfield, Interpolation};
 use crate::field::falloff::{sigma, sigma_slope, wyvill, wyvill_slope};
 use crate::field::{Aabb, Fbm, Field, Interval, Noise, T, Warp};
+use crate::voxel::SField;
 
 /// One tape instruction: 16 bytes, `vec4<u32>` in WGSL.
 #[repr(C)]
@@ -56,6 +61,8 @@ pub mod op {
     pub const HEIGHT: u32 = 2;
     /// Push a noisy primitive.
     pub const NPRIM: u32 = 3;
+    /// Push an S-field leaf.
+    pub const SFIELD: u32 = 4;
     /// Sum of the two top entries.
     pub const BLEND: u32 = 16;
     /// Maximum.
@@ -84,9 +91,16 @@ pub mod shape {
     pub const BOX: u32 = 2;
     /// A heightfield's prism `min, max` ([`super::Shape::Prism`]).
     pub const PRISM: u32 = 3;
+    /// Capped cone `base, axis, height, radius` ([`super::Shape::Cone`]).
+    pub const CONE: u32 = 4;
+    /// Axis-aligned ellipsoid `centre, radii` ([`super::Shape::Ellipsoid`]).
+    pub const ELLIPSOID: u32 = 5;
     /// Flag: σ profile instead of Wyvill.
     pub const SIGMA: u32 = 1 << 8;
 }
+
+/// `HEIGHT` flag: Catmull-Rom bicubic interpolation instead of bilinear.
+pub const BICUBIC: u32 = 1;
 
 /// Value-stack depth of the WGSL evaluator.
 pub const MAX_STACK: usize = 32;
@@ -124,6 +138,25 @@ pub enum Shape {
         center: Vec3,
         /// Half the edge lengths.
         half: Vec3,
+    },
+    /// A solid capped cone ([`crate::field::skeleton::Cone`]): a disc of `radius` centred
+    /// on `base`, normal to the unit `axis`, and the apex at `base + height·axis`.
+    Cone {
+        /// Centre of the base disc.
+        base: Vec3,
+        /// Unit axis from the base to the apex.
+        axis: Vec3,
+        /// Base-to-apex distance.
+        height: f32,
+        /// Radius of the base.
+        radius: f32,
+    },
+    /// A solid axis-aligned ellipsoid ([`crate::field::skeleton::Ellipsoid`]).
+    Ellipsoid {
+        /// Centre.
+        center: Vec3,
+        /// Semi-axes along x, y, z (positive).
+        radii: Vec3,
     },
     /// The prism of an implicit heightfield ([`crate::dem::HeightfieldField`], seed 002
     /// §5.1): its distance is `√(d_xy² + d_z²)` with `d_xy` the largest excess of `x, y`
@@ -163,6 +196,21 @@ impl Shape {
                 out.extend([min.x, min.y, min.z, max.x, max.y, max.z]);
                 shape::PRISM
             }
+            Shape::Cone {
+                base,
+                axis,
+                height,
+                radius,
+            } => {
+                out.extend([
+                    base.x, base.y, base.z, axis.x, axis.y, axis.z, height, radius,
+                ]);
+                shape::CONE
+            }
+            Shape::Ellipsoid { center, radii } => {
+                out.extend([center.x, center.y, center.z, radii.x, radii.y, radii.z]);
+                shape::ELLIPSOID
+            }
         }
     }
 
@@ -174,6 +222,21 @@ impl Shape {
             Shape::Segment(a, b) => Aabb::new(a, b).dilate(reach),
             Shape::Capsule { a, b, radius } => Aabb::new(a, b).dilate(radius + reach),
             Shape::Box { center, half } => Aabb::new(center - half, center + half).dilate(reach),
+            Shape::Cone {
+                base,
+                axis,
+                height,
+                radius,
+            } => {
+                // The base disc's box (extent `radius·√(1 − aᵢ²)` along axis i) and the apex.
+                let ext = (Vec3::ONE - axis * axis).max(Vec3::ZERO).powf(0.5) * radius;
+                Aabb::new(base - ext, base + ext)
+                    .include(base + axis * height)
+                    .dilate(reach)
+            }
+            Shape::Ellipsoid { center, radii } => {
+                Aabb::new(center - radii, center + radii).dilate(reach)
+            }
             // Not `Aabb::new`: the corners are kept as given even when min > max.
             Shape::Prism { min, max } => Aabb {
                 min: min - Vec3::splat(reach),
@@ -226,10 +289,13 @@ pub struct HeightGrid<'a> {
     pub ny: usize,
     /// Elevations, x fastest: `z[i + nx·j]` at `origin + cell·(i, j)`.
     pub z: &'a [f32],
+    /// Between the samples: bilinear or Catmull-Rom bicubic, as
+    /// [`crate::dem::Heightfield::sample`] interpolates.
+    pub interpolation: Interpolation,
 }
 
 /// A compiled tape: what the GPU uploads, and a [`Field`] on the CPU.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct Tape {
     /// Instructions in evaluation order.
     pub instrs: Vec<Instr>,
@@ -240,6 +306,12 @@ pub struct Tape {
     /// The turbulences of `NPRIM` and `TWARP`, by the index in their parameters: the CPU
     /// evaluates them with these, the GPU from their encoding.
     pub noises: Vec<Fbm>,
+    /// The brick tables of all `SFIELD` leaves ([`super::sfield`]).
+    pub sf_table: Vec<u32>,
+    /// The samples of all `SFIELD` leaves.
+    pub sf_data: Vec<f32>,
+    /// The `SFIELD` leaves themselves, by index: the CPU evaluates them.
+    pub sfields: Vec<Arc<SField>>,
     support: Aabb,
     lipschitz: f32,
     grad_step: f32,
@@ -281,6 +353,9 @@ pub struct TapeBuilder {
     params: Vec<f32>,
     heights: Vec<f32>,
     noises: Vec<Fbm>,
+    sf_table: Vec<u32>,
+    sf_data: Vec<f32>,
+    sfields: Vec<Arc<SField>>,
     stack: Vec<Entry>,
     max_stack: usize,
     /// Open warps: stack depth at entry, and the warp.
@@ -369,7 +444,7 @@ impl TapeBuilder {
         Ok(())
     }
 
-    /// Pushes `σ(h(x, y) − z, falloff)` for a bilinear heightfield (clamped at its edges).
+    /// Pushes `σ(h(x, y) − z, falloff)` for a heightfield (clamped at its edges).
     /// Solid below the surface and unbounded: intersect it with a prism (seed 002 §5.1).
     pub fn heightfield(&mut self, grid: &HeightGrid<'_>, falloff: f32) -> Result<(), GpuError> {
         let HeightGrid {
@@ -378,6 +453,7 @@ impl TapeBuilder {
             nx,
             ny,
             z,
+            interpolation,
         } = *grid;
         if nx < 2
             || ny < 2
@@ -391,20 +467,10 @@ impl TapeBuilder {
                 z.len()
             )));
         }
-        // The bilinear interpolant's slope is at most the largest edge differences.
-        let mut slope = 0.0f32;
-        for j in 0..ny - 1 {
-            for i in 0..nx - 1 {
-                let at = |a: usize, b: usize| z[a + nx * b];
-                let dx = (at(i + 1, j) - at(i, j))
-                    .abs()
-                    .max((at(i + 1, j + 1) - at(i, j + 1)).abs());
-                let dy = (at(i, j + 1) - at(i, j))
-                    .abs()
-                    .max((at(i + 1, j + 1) - at(i + 1, j)).abs());
-                slope = slope.max((dx * dx + dy * dy).sqrt() / cell);
-            }
-        }
+        // The CPU leaf's own bound of |∇h| (per cell from its samples or stencil).
+        let slope = Heightfield::new(nx, ny, origin, Vec2::splat(cell), z.to_vec())
+            .map_err(|e| GpuError::Tape(format!("heightfield: {e}")))?
+            .lipschitz(interpolation);
         let offset = self.heights.len();
         self.heights.extend_from_slice(z);
         let p = [
@@ -417,9 +483,31 @@ impl TapeBuilder {
             ny as f32,
             offset as f32,
         ];
-        self.emit(op::HEIGHT, 0, &p);
+        let flags = match interpolation {
+            Interpolation::Bilinear => 0,
+            Interpolation::Bicubic => BICUBIC,
+        };
+        self.emit(op::HEIGHT, flags, &p);
         self.push(Entry {
             support: EVERYWHERE_BOX,
+            range: Interval::new(0.0, 2.0 * T),
+        });
+        Ok(())
+    }
+
+    /// Pushes the S-field leaf `sf` (its grids go to [`Tape::sf_table`] and
+    /// [`Tape::sf_data`]); `what` names it in errors. An empty field is the constant 0.
+    pub fn sfield(&mut self, sf: &SField, what: &str) -> Result<(), GpuError> {
+        if sf.is_empty() {
+            self.constant(0.0);
+            return Ok(());
+        }
+        let q = super::sfield::encode(sf, &mut self.sf_table, &mut self.sf_data, what)?;
+        let index = self.sfields.len() as u32;
+        self.sfields.push(Arc::new(sf.clone()));
+        self.emit(op::SFIELD, index, &q);
+        self.push(Entry {
+            support: sf.support(),
             range: Interval::new(0.0, 2.0 * T),
         });
         Ok(())
@@ -678,6 +766,9 @@ impl TapeBuilder {
             params: self.params,
             heights: self.heights,
             noises: self.noises,
+            sf_table: self.sf_table,
+            sf_data: self.sf_data,
+            sfields: self.sfields,
             support,
             lipschitz: 0.0,
             grad_step: 0.0,
@@ -707,7 +798,66 @@ fn warp_params(inv: &Affine3A) -> [f32; 13] {
     ]
 }
 
+/// The pipeline-overridable constants of `shaders/field.wgsl` that switch parts of the
+/// evaluator on, by bit of [`Tape::features`].
+pub const FEATURES: [&str; 9] = [
+    "USE_NPRIM",
+    "USE_HEIGHT",
+    "USE_BICUBIC",
+    "USE_SFIELD",
+    "USE_SF_CUBIC",
+    "USE_SF_NOISE",
+    "USE_TWARP",
+    "USE_CONE",
+    "USE_ELLIPSOID",
+];
+
 impl Tape {
+    /// The parts of the GPU evaluator this tape uses, a bit per name of [`FEATURES`]: the
+    /// GPU compiles a pipeline per set, without the others' code (llvmpipe runs every
+    /// branch of the interpreter with masks, so unused ops would cost on every step).
+    pub fn features(&self) -> u32 {
+        let on = |name: &str| 1u32 << FEATURES.iter().position(|&f| f == name).expect("a feature");
+        let mut bits = 0;
+        for ins in &self.instrs {
+            let at = |k: usize| self.params[ins.param as usize + k];
+            bits |= match ins.op {
+                op::PRIM | op::NPRIM => {
+                    let shape = match ins.flags & 0xff {
+                        shape::CONE => on("USE_CONE"),
+                        shape::ELLIPSOID => on("USE_ELLIPSOID"),
+                        _ => 0,
+                    };
+                    shape
+                        | if ins.op == op::NPRIM {
+                            on("USE_NPRIM")
+                        } else {
+                            0
+                        }
+                }
+                op::HEIGHT if ins.flags & BICUBIC != 0 => on("USE_HEIGHT") | on("USE_BICUBIC"),
+                op::HEIGHT => on("USE_HEIGHT"),
+                op::SFIELD => {
+                    on("USE_SFIELD")
+                        | if at(12) != 0.0 { on("USE_SF_CUBIC") } else { 0 }
+                        | if at(9) != 0.0 { on("USE_SF_NOISE") } else { 0 }
+                }
+                op::TWARP => on("USE_TWARP"),
+                _ => 0,
+            };
+        }
+        bits
+    }
+
+    /// The values of [`FEATURES`] for the feature bits `bits`.
+    pub fn feature_constants(bits: u32) -> Vec<(&'static str, f64)> {
+        FEATURES
+            .iter()
+            .enumerate()
+            .map(|(k, &name)| (name, f64::from((bits >> k) & 1)))
+            .collect()
+    }
+
     /// The step of the tetrahedral finite differences used for gradients (shared with
     /// the GPU so both shade with the same normals).
     pub fn grad_step(&self) -> f32 {
@@ -748,7 +898,12 @@ impl Tape {
                     sp += 1;
                 }
                 op::HEIGHT => {
-                    stack[sp] = self.height::<BOUND>(&prm[o..], p, c, r);
+                    stack[sp] = self.height::<BOUND>(ins.flags, &prm[o..], p, c, r);
+                    sp += 1;
+                }
+                op::SFIELD => {
+                    let sf = &self.sfields[ins.flags as usize];
+                    stack[sp] = super::sfield::eval(sf, (p, c, r), BOUND);
                     sp += 1;
                 }
                 op::BLEND | op::UNION | op::INTER | op::DIFF => {
@@ -797,9 +952,22 @@ impl Tape {
         stack[0]
     }
 
-    fn height<const BOUND: bool>(&self, q: &[f32], p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
+    fn height<const BOUND: bool>(
+        &self,
+        flags: u32,
+        q: &[f32],
+        p: Vec3,
+        c: Vec3,
+        r: f32,
+    ) -> (f32, f32) {
         let (fall, slope) = (q[0], q[1]);
-        let h = |x: f32, y: f32| bilinear(&self.heights, q, x, y);
+        let h = |x: f32, y: f32| {
+            if flags & BICUBIC != 0 {
+                bicubic(&self.heights, q, x, y)
+            } else {
+                bilinear(&self.heights, q, x, y)
+            }
+        };
         let hp = h(p.x, p.y);
         let value = sigma(hp - p.z, fall);
         if !BOUND {
@@ -825,18 +993,63 @@ fn bilinear(heights: &[f32], q: &[f32], x: f32, y: f32) -> f32 {
     bottom + (top - bottom) * fy
 }
 
+/// Catmull-Rom weights of samples `-1..=2` at `t` (`crate::dem`'s, as the WGSL has them).
+fn cr_weights(t: f32) -> [f32; 4] {
+    let t2 = t * t;
+    let t3 = t2 * t;
+    [
+        0.5 * (-t3 + 2.0 * t2 - t),
+        0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
+        0.5 * (-3.0 * t3 + 4.0 * t2 + t),
+        0.5 * (t3 - t2),
+    ]
+}
+
+/// Bicubic (Catmull-Rom) elevation at `(x, y)` clamped to the grid, the stencil's indices
+/// clamped at its edges: [`crate::dem::Heightfield::sample`]'s cell, weights and sum order.
+fn bicubic(heights: &[f32], q: &[f32], x: f32, y: f32) -> f32 {
+    let (ox, oy, cell, nx, ny, off) = (q[2], q[3], q[4], q[5], q[6], q[7] as usize);
+    let gx = ((x - ox) / cell).clamp(0.0, nx - 1.0);
+    let gy = ((y - oy) / cell).clamp(0.0, ny - 1.0);
+    let (i, j) = ((gx.floor()).min(nx - 2.0), (gy.floor()).min(ny - 2.0));
+    let (wx, wy) = (cr_weights(gx - i), cr_weights(gy - j));
+    let (i, j, w, h) = (i as i64, j as i64, nx as i64, ny as i64);
+    let mut v = 0.0;
+    for (b, wyb) in wy.iter().enumerate() {
+        let jj = (j + b as i64 - 1).clamp(0, h - 1);
+        let mut row = 0.0;
+        for (a, wxa) in wx.iter().enumerate() {
+            let ii = (i + a as i64 - 1).clamp(0, w - 1);
+            row += wxa * heights[off + (ii + w * jj) as usize];
+        }
+        v += wyb * row;
+    }
+    v
+}
+
 fn affine(m: &[f32], p: Vec3) -> Vec3 {
     let p4 = |k: usize| m[k] * p.x + m[k + 1] * p.y + m[k + 2] * p.z + m[k + 3];
     Vec3::new(p4(0), p4(4), p4(8))
 }
 
-/// Signed distance to the shape in `q` (after `R, e`).
-pub(super) fn signed_distance(kind: u32, q: &[f32], p: Vec3) -> f32 {
+/// `(closest point, signed distance)` of the shape `kind` with parameters `q` to `p`: the
+/// twin of `project` in `shaders/field.wgsl` (a prism has no closest point: `p`).
+pub(super) fn project(kind: u32, q: &[f32], p: Vec3) -> (Vec3, f32) {
+    let v = |k: usize| Vec3::new(q[k], q[k + 1], q[k + 2]);
     match kind {
-        shape::SPHERE => p.distance(Vec3::new(q[0], q[1], q[2])) - q[3],
+        shape::SPHERE => {
+            let c = v(0);
+            let d = (p - c).length();
+            let at = if d > q[3] {
+                c + (p - c) * (q[3] / d)
+            } else {
+                p
+            };
+            (at, d - q[3])
+        }
         shape::CAPSULE => {
-            let a = Vec3::new(q[0], q[1], q[2]);
-            let ab = Vec3::new(q[3], q[4], q[5]) - a;
+            let a = v(0);
+            let ab = v(3) - a;
             let ap = p - a;
             let l2 = ab.length_squared();
             let h = if l2 > 0.0 {
@@ -844,61 +1057,115 @@ pub(super) fn signed_distance(kind: u32, q: &[f32], p: Vec3) -> f32 {
             } else {
                 0.0
             };
-            (ap - ab * h).length() - q[6]
+            let s = a + ab * h;
+            let d = (ap - ab * h).length();
+            let at = if d > q[6] {
+                s + (p - s) * (q[6] / d)
+            } else {
+                p
+            };
+            (at, d - q[6])
         }
         shape::BOX => {
-            let d = (p - Vec3::new(q[0], q[1], q[2])).abs() - Vec3::new(q[3], q[4], q[5]);
-            Vec3A::from(d).max(Vec3A::ZERO).length() + d.max_element().min(0.0)
+            let (c, half) = (v(0), v(3));
+            let d = (p - c).abs() - half;
+            let sd = Vec3A::from(d).max(Vec3A::ZERO).length() + d.max_element().min(0.0);
+            (c + (p - c).clamp(-half, half), sd)
         }
+        shape::CONE => cone_projection(q, p),
+        shape::ELLIPSOID => ellipsoid_projection(q, p),
         _ => {
-            let (lo, hi) = (Vec3::new(q[0], q[1], q[2]), Vec3::new(q[3], q[4], q[5]));
+            let (lo, hi) = (v(0), v(3));
             let dxy = (lo.x - p.x)
                 .max(p.x - hi.x)
                 .max(lo.y - p.y)
                 .max(p.y - hi.y)
                 .max(0.0);
             let dz = (lo.z - p.z).max(p.z - hi.z).max(0.0);
-            (dxy * dxy + dz * dz).sqrt()
+            (p, (dxy * dxy + dz * dz).sqrt())
         }
     }
 }
 
-/// The closest point to `p` of the convex shape `kind` with parameters `q` (`p` inside
-/// it): the projection the noisy primitives read their turbulence through.
-pub(super) fn closest(kind: u32, q: &[f32], p: Vec3) -> Vec3 {
-    match kind {
-        shape::SPHERE => {
-            let c = Vec3::new(q[0], q[1], q[2]);
-            let w = p - c;
-            let d = w.length();
-            if d <= q[3] { p } else { c + w * (q[3] / d) }
+/// `(closest point, distance)` of the cone `q = [base, axis, height, radius]` to `p`:
+/// [`crate::field::skeleton::Cone`]'s projection onto the triangle `(0, 0), (r, 0), (0, h)`
+/// of the half-plane `(ρ, z)` through the axis, in f32 as `shaders/field.wgsl` computes it.
+/// The distance is the 2D one (equal to the 3D one, without the cancellation of
+/// `|p − s(p)|`).
+fn cone_projection(q: &[f32], p: Vec3) -> (Vec3, f32) {
+    let base = Vec3::new(q[0], q[1], q[2]);
+    let axis = Vec3::new(q[3], q[4], q[5]);
+    let (h, r) = (q[6], q[7]);
+    let w = p - base;
+    let z = w.dot(axis);
+    let radial = w - axis * z;
+    let rho = radial.length();
+    if z >= 0.0 && rho * h + z * r <= r * h {
+        return (p, 0.0);
+    }
+    let x = Vec2::new(rho, z);
+    // Base edge (0, 0)–(r, 0), slant edge (r, 0)–(0, h).
+    let base_at = Vec2::new(rho.clamp(0.0, r), 0.0);
+    let d = Vec2::new(-r, h);
+    let tau = (x - Vec2::new(r, 0.0)).dot(d) / d.length_squared();
+    let slant_at = Vec2::new(r, 0.0) + d * tau.clamp(0.0, 1.0);
+    let (db, ds) = (
+        (x - base_at).length_squared(),
+        (x - slant_at).length_squared(),
+    );
+    let (at, d2) = if db <= ds {
+        (base_at, db)
+    } else {
+        (slant_at, ds)
+    };
+    // On the axis (ρ = 0) the closest point is on it too (at.x = 0), any e_r will do.
+    let er = if rho > 0.0 { radial / rho } else { Vec3::ZERO };
+    (base + axis * at.y + er * at.x, d2.sqrt())
+}
+
+/// Newton iterations at most for the ellipsoid's root (as the CPU's).
+const ELLIPSOID_NEWTON: u32 = 64;
+
+/// `(closest point, distance)` of the ellipsoid `q = [centre, radii]` to `p`:
+/// [`crate::field::skeleton::Ellipsoid`]'s Newton iteration on
+/// `F(t) = Σ (eᵢyᵢ/(t + eᵢ²))² − 1` from the same lower bound of the root, in f32 (WGSL has
+/// no f64), stopping at the root or after a step below `10⁻⁶·(t + e²_max)` (the iterates
+/// climb monotonically and converge quadratically, so what is left is far smaller), as `shaders/field.wgsl` computes it. The distance is
+/// `|y·t/(t + e²)|`, the same `|y − s|` without the cancellation near the surface.
+fn ellipsoid_projection(q: &[f32], p: Vec3) -> (Vec3, f32) {
+    let c = Vec3::new(q[0], q[1], q[2]);
+    let e = Vec3::new(q[3], q[4], q[5]);
+    let y = p - c;
+    if (y / e).length_squared() <= 1.0 {
+        return (p, 0.0);
+    }
+    let e2 = e * e;
+    let ey = e * y;
+    let emax = e2.max_element();
+    let mut t = (ey.length() - emax).max(0.0);
+    for _ in 0..ELLIPSOID_NEWTON {
+        let inv = (Vec3::splat(t) + e2).recip();
+        let qv = ey * inv;
+        let f = qv.length_squared() - 1.0;
+        if f <= 0.0 {
+            break;
         }
-        shape::CAPSULE => {
-            let a = Vec3::new(q[0], q[1], q[2]);
-            let ab = Vec3::new(q[3], q[4], q[5]) - a;
-            let l2 = ab.length_squared();
-            let h = if l2 > 0.0 {
-                ((p - a).dot(ab) / l2).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let s = a + ab * h;
-            let w = p - s;
-            let d = w.length();
-            if d <= q[6] { p } else { s + w * (q[6] / d) }
-        }
-        _ => {
-            let (c, half) = (Vec3::new(q[0], q[1], q[2]), Vec3::new(q[3], q[4], q[5]));
-            c + (p - c).clamp(-half, half)
+        let df = -2.0 * (qv * qv * inv).element_sum();
+        let step = -f / df;
+        t += step;
+        if step <= 1e-6 * (t + emax) {
+            break;
         }
     }
+    let den = Vec3::splat(t) + e2;
+    (c + e2 * y / den, (y * t / den).length())
 }
 
 /// `(value at p, Lipschitz bound over B(c, r))` of a primitive with params `q`.
 fn primitive<const BOUND: bool>(flags: u32, q: &[f32], p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
     let (rad, energy) = (q[0], q[1]);
     let kind = flags & 0xff;
-    let sd_p = signed_distance(kind, &q[2..], p);
+    let sd_p = project(kind, &q[2..], p).1;
     if !BOUND {
         let v = if flags & shape::SIGMA != 0 {
             sigma(-sd_p, rad)
@@ -910,7 +1177,7 @@ fn primitive<const BOUND: bool>(flags: u32, q: &[f32], p: Vec3, c: Vec3, r: f32)
     let sd_c = if p == c {
         sd_p
     } else {
-        signed_distance(kind, &q[2..], c)
+        project(kind, &q[2..], c).1
     };
     if flags & shape::SIGMA != 0 {
         let v = sigma(-sd_p, rad);
