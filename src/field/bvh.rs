@@ -378,7 +378,12 @@ impl ChildBvh {
 
     /// Starts a traversal along `ray` ([`ChildBvh::advance`]); visits the items too large
     /// for the tree that the ray crosses, as `visit(payload, enter, leave)`.
-    pub fn start(&self, ray: &SlabRay, cursor: &mut RayCursor, mut visit: impl FnMut(u32, f32, f32)) {
+    pub fn start(
+        &self,
+        ray: &SlabRay,
+        cursor: &mut RayCursor,
+        mut visit: impl FnMut(u32, f32, f32),
+    ) {
         cursor.heap.clear();
         if !self.nodes.is_empty() {
             cursor.heap.push(Pending {

@@ -287,7 +287,15 @@ impl<'t> Line<'t> {
             let Node::Blend { bvh: Some(bvh), .. } = &tree.nodes[f.blend as usize] else {
                 unreachable!("fronts are opened on blends with a BVH")
             };
-            let visit = lister(tree, f.o, f.d, f.span, self.pad, &mut f.items, &mut self.pending);
+            let visit = lister(
+                tree,
+                f.o,
+                f.d,
+                f.span,
+                self.pad,
+                &mut f.items,
+                &mut self.pending,
+            );
             bvh.advance(&f.ray, &mut f.cursor, upto, visit);
             self.walk_pending();
             k += 1;

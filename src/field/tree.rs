@@ -221,13 +221,16 @@ impl TreeBuilder {
                 (support, range.hull(Interval::ZERO), lipschitz)
             }
             Node::Difference { base, carves } => {
-                let carve_range = carves
-                    .iter()
-                    .fold(Interval::ZERO, |r, c| r.max(info(c).range));
-                let range = info(base).range.min(Interval::new(
-                    2.0 * T - carve_range.hi,
-                    2.0 * T - carve_range.lo,
-                ));
+                // `min(f_base, 2T − max f_c)`: the carves' maximum, which is negative
+                // where every carve is (negative energies), not clamped at 0.
+                let carve_range = carves.iter().map(|c| info(c).range).reduce(Interval::max);
+                let range = match carve_range {
+                    Some(cr) => info(base)
+                        .range
+                        .min(Interval::new(2.0 * T - cr.hi, 2.0 * T - cr.lo)),
+                    None => info(base).range,
+                };
+                let carve_range = carve_range.unwrap_or(Interval::ZERO);
                 let support = if carve_range.hi > 2.0 * T {
                     carves
                         .iter()
