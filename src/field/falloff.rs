@@ -18,7 +18,8 @@ pub const T: f32 = 0.5;
 
 /// `max |g'(x)|` over `[0, 1]`, reached at `x = 1/√5`.
 pub const WYVILL_MAX_SLOPE: f32 = 1.717_300_8;
-const WYVILL_PEAK_X: f32 = 0.447_213_6;
+/// Where `|g'|` peaks: `x = 1/√5`.
+pub const WYVILL_PEAK_X: f32 = 0.447_213_6;
 
 /// Wyvill's falloff `g(x) = (1 − x²)³` for `0 ≤ x < 1`, 0 beyond.
 #[inline]

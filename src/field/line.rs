@@ -385,16 +385,26 @@ fn lister<'a>(
     items: &'a mut Vec<Crossing>,
     pending: &'a mut Vec<(NodeId, Vec3, Vec3, (f32, f32))>,
 ) -> impl FnMut(u32, f32, f32) + 'a {
-    move |c, enter, leave| {
-        let (enter, leave) = (enter - pad, leave.min(span.1) + pad);
+    move |c, mut enter, mut leave| {
         let profile = match &tree.nodes[c as usize] {
             Node::Primitive(p) => p.along_line(o, d),
-            node if !is_leaf(node) => {
-                pending.push((c, o, d, (enter, leave)));
-                None
-            }
             _ => None,
         };
+        // A blob is listed over the chord of its ball, not of its box: half the boxes a
+        // ray crosses miss their ball.
+        if let Some(profile) = &profile {
+            let Some((a, b)) = profile.reach() else {
+                return;
+            };
+            (enter, leave) = (enter.max(a), leave.min(b));
+        }
+        let (enter, leave) = (enter - pad, leave.min(span.1) + pad);
+        if enter > leave {
+            return;
+        }
+        if profile.is_none() && !is_leaf(&tree.nodes[c as usize]) {
+            pending.push((c, o, d, (enter, leave)));
+        }
         items.push(Crossing {
             child: c,
             enter,

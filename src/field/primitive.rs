@@ -163,9 +163,13 @@ impl Primitive {
     #[inline]
     pub fn along_line(&self, o: Vec3, d: Vec3) -> Option<LineProfile> {
         match (&self.skeleton, self.noise) {
-            (Skeleton::Point(pt), None) => {
-                Some(LineProfile::new(pt.center, self.radius, self.energy, o, d))
-            }
+            (Skeleton::Point(pt), None) => Some(LineProfile::new(
+                pt.center,
+                self.inv_radius,
+                self.energy,
+                o,
+                d,
+            )),
             _ => None,
         }
     }

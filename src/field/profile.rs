@@ -12,7 +12,7 @@
 
 use glam::Vec3;
 
-use super::falloff::WYVILL_MAX_SLOPE;
+use super::falloff::{WYVILL_MAX_SLOPE, WYVILL_PEAK_X};
 
 /// `E·g(|p − c| / R)` restricted to the line `o + t·d`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,8 +23,8 @@ pub struct LineProfile {
     scale: f32,
     /// `1 − h²/R²`: the line meets the support where `k > 0`.
     k: f32,
-    /// `√(k/5)`, where the slope peaks.
-    peak_w: f32,
+    /// `√k` (0 when `k < 0`): the slope peaks at `|w| = √(k/5)`.
+    sqrt_k: f32,
     /// `|E|/R · k^{5/2}·max|g'|`, the peak slope per unit of arc length.
     peak: f32,
     energy: f32,
@@ -32,23 +32,34 @@ pub struct LineProfile {
 }
 
 impl LineProfile {
-    /// The blob of centre `c`, radius `r` and energy `e` along `o + t·d` (`d ≠ 0`).
+    /// The blob of centre `c`, radius `1 / inv_radius` and energy `e` along `o + t·d`
+    /// (`d ≠ 0`).
     #[inline]
-    pub fn new(c: Vec3, r: f32, e: f32, o: Vec3, d: Vec3) -> Self {
-        let inv_radius = 1.0 / r;
+    pub fn new(c: Vec3, inv_radius: f32, e: f32, o: Vec3, d: Vec3) -> Self {
         let co = c - o;
-        let foot = co.dot(d) / d.length_squared();
+        let d2 = d.length_squared();
+        let foot = co.dot(d) / d2;
         let k = 1.0 - (co - d * foot).length_squared() * inv_radius * inv_radius;
-        let kp = k.max(0.0);
+        let sk = k.max(0.0).sqrt();
         LineProfile {
             foot,
-            scale: d.length() * inv_radius,
+            scale: d2.sqrt() * inv_radius,
             k,
-            peak_w: (0.2 * kp).sqrt(),
-            peak: e.abs() * inv_radius * WYVILL_MAX_SLOPE * kp * kp * kp.sqrt(),
+            sqrt_k: sk,
+            peak: e.abs() * inv_radius * WYVILL_MAX_SLOPE * k * k * sk,
             energy: e,
             inv_radius,
         }
+    }
+
+    /// The parameter range where the field is non-zero along the line (`w² < k`), or
+    /// `None` when the line misses the support ball.
+    #[inline]
+    pub fn reach(&self) -> Option<(f32, f32)> {
+        (self.k > 0.0).then(|| {
+            let half = self.sqrt_k / self.scale;
+            (self.foot - half, self.foot + half)
+        })
     }
 
     /// The field at parameter `t`.
@@ -73,7 +84,8 @@ impl LineProfile {
         } else {
             (w0.abs().min(w1.abs()), w0.abs().max(w1.abs()))
         };
-        if lo <= self.peak_w && self.peak_w <= hi {
+        let peak_w = self.sqrt_k * WYVILL_PEAK_X;
+        if lo <= peak_w && peak_w <= hi {
             return self.peak;
         }
         let slope = |w: f32| {
@@ -98,7 +110,7 @@ mod tests {
         for ih in 0..12 {
             let h = ih as f32 * 0.09 * r;
             let c = Vec3::new(0.3, h, -0.2);
-            let p = LineProfile::new(c, r, e, Vec3::new(-5.0, 0.0, -0.2), Vec3::X);
+            let p = LineProfile::new(c, 1.0 / r, e, Vec3::new(-5.0, 0.0, -0.2), Vec3::X);
             let f = |t: f32| e * wyvill((Vec3::new(-5.0 + t, 0.0, -0.2) - c).length() / r);
             for (t0, t1) in [(0.0, 10.0), (5.3, 5.5), (5.6, 6.0), (6.2, 7.2), (8.5, 9.5)] {
                 let n = 4000;
