@@ -25,7 +25,7 @@ pub mod geotiff_write;
 pub mod grid;
 pub mod hgt;
 pub mod implicit;
-mod interp;
+pub(crate) mod interp;
 pub mod png16;
 pub mod pyramid;
 pub mod spec;

@@ -993,18 +993,6 @@ fn bilinear(heights: &[f32], q: &[f32], x: f32, y: f32) -> f32 {
     bottom + (top - bottom) * fy
 }
 
-/// Catmull-Rom weights of samples `-1..=2` at `t` (`crate::dem`'s, as the WGSL has them).
-fn cr_weights(t: f32) -> [f32; 4] {
-    let t2 = t * t;
-    let t3 = t2 * t;
-    [
-        0.5 * (-t3 + 2.0 * t2 - t),
-        0.5 * (3.0 * t3 - 5.0 * t2 + 2.0),
-        0.5 * (-3.0 * t3 + 4.0 * t2 + t),
-        0.5 * (t3 - t2),
-    ]
-}
-
 /// Bicubic (Catmull-Rom) elevation at `(x, y)` clamped to the grid, the stencil's indices
 /// clamped at its edges: [`crate::dem::Heightfield::sample`]'s cell, weights and sum order.
 fn bicubic(heights: &[f32], q: &[f32], x: f32, y: f32) -> f32 {
@@ -1012,7 +1000,10 @@ fn bicubic(heights: &[f32], q: &[f32], x: f32, y: f32) -> f32 {
     let gx = ((x - ox) / cell).clamp(0.0, nx - 1.0);
     let gy = ((y - oy) / cell).clamp(0.0, ny - 1.0);
     let (i, j) = ((gx.floor()).min(nx - 2.0), (gy.floor()).min(ny - 2.0));
-    let (wx, wy) = (cr_weights(gx - i), cr_weights(gy - j));
+    let (wx, wy) = (
+        crate::dem::interp::cr_weights(gx - i),
+        crate::dem::interp::cr_weights(gy - j),
+    );
     let (i, j, w, h) = (i as i64, j as i64, nx as i64, ny as i64);
     let mut v = 0.0;
     for (b, wyb) in wy.iter().enumerate() {
