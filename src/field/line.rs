@@ -2,18 +2,20 @@
 //!
 //! A tracer asks the same tree for values and segment bounds many times along one ray, and
 //! each ask of a blend with thousands of children descends the blend's BVH. A [`Line`]
-//! walks those BVHs once per ray instead (a slab traversal, [`Line::restrict`]) and keeps,
-//! for every blend with a BVH that the ray reaches through blends, unions, differences and
-//! affine maps, the children whose support the ray crosses, with the ray parameters where
-//! it is inside, sorted by entry. [`Tree::value_on_line`] and [`Tree::lipschitz_on_line`]
-//! then scan these short lists: the per-ray preprocessing of segment tracing (Galin et
-//! al. 2020 §5, which gathers the primitives along the ray before marching).
+//! keeps instead, for every blend with a BVH that the ray reaches through blends, unions,
+//! differences and affine maps, the children whose supports the ray crosses, with the ray
+//! parameters where it is inside them; [`Line::value`] and [`Line::lipschitz`] scan these
+//! short lists, and evaluate point blobs from their profile along the ray — the per-ray
+//! gathering of segment tracing (Galin et al. 2020 §5). The lists grow lazily: each blend
+//! traverses its BVH along the ray ([`ChildBvh::advance`]) only as far as the queries go.
 //!
 //! Affine maps send lines to lines with the same parameter, so the lists of blends below
 //! them are indexed by the root ray's `t`. Warps bend the line: what lies below one is
 //! evaluated as usual. The answers are those of the whole tree: a list only drops
-//! children whose supports the ray does not reach, and every listed child is still tested
-//! against its support.
+//! children whose supports the ray does not reach, and every listed child that is not a
+//! profiled blob is still tested against its support.
+
+use std::mem::take;
 
 use glam::Vec3;
 
@@ -179,9 +181,9 @@ struct Crossing {
 /// A ray through a [`Tree`], with the lists of the children of its BVH blends that the
 /// ray crosses. Reuse one per thread: [`Line::restrict`] keeps its buffers.
 ///
-/// The lists grow as the queries go down the ray: each blend traverses its BVH front to
-/// back ([`ChildBvh::advance`]) only as far as asked, so a ray that meets the surface
-/// early never opens what lies behind, and the lists come out sorted by entry.
+/// The lists grow as the queries go down the ray: each blend traverses its BVH along the
+/// ray ([`ChildBvh::advance`]) only as far as asked, so a ray that meets the surface
+/// early never opens what lies behind. Queries must stay within the restricted span.
 pub struct Line<'t> {
     tree: &'t Tree,
     origin: Vec3,
@@ -193,22 +195,23 @@ pub struct Line<'t> {
     /// Per node: the index of its front in `fronts`, or [`NONE`].
     slot: Vec<u32>,
     /// The blends' traversals; the first `used` are in use.
-    fronts: Vec<Front>,
+    fronts: Vec<Front<'t>>,
     used: usize,
     /// Children below which the tree is still to be walked (they hold BVH blends).
     pending: Vec<(NodeId, Vec3, Vec3, (f32, f32))>,
 }
 
 /// One blend's traversal along the line, in the blend's space.
-struct Front {
+struct Front<'t> {
     blend: NodeId,
+    bvh: &'t ChildBvh,
     ray: SlabRay,
     o: Vec3,
     d: Vec3,
     /// The blend's range on the line.
     span: (f32, f32),
     cursor: RayCursor,
-    /// The children listed so far, by entry.
+    /// The children listed so far, in no order.
     items: Vec<Crossing>,
 }
 
@@ -240,8 +243,8 @@ impl<'t> Line<'t> {
         // A ten-thousandth of the span: metres along a unit ray.
         self.pad = 1e-4 * (span.1 - span.0).abs().max(1e-3);
         self.reach = f32::NEG_INFINITY;
-        // A tree with shared nodes keeps no lists: its queries use the BVHs.
-        if !self.tree.shares_nodes && !(span.0 > span.1) {
+        // Without lists, queries use the BVHs (see `Tree::keeps_line_lists`).
+        if self.tree.line_lists && !(span.0 > span.1) {
             self.walk(self.tree.root, origin, dir, span);
             self.walk_pending();
         }
@@ -284,9 +287,6 @@ impl<'t> Line<'t> {
         let mut k = 0;
         while k < self.used {
             let f = &mut self.fronts[k];
-            let Node::Blend { bvh: Some(bvh), .. } = &tree.nodes[f.blend as usize] else {
-                unreachable!("fronts are opened on blends with a BVH")
-            };
             let visit = lister(
                 tree,
                 f.o,
@@ -296,7 +296,7 @@ impl<'t> Line<'t> {
                 &mut f.items,
                 &mut self.pending,
             );
-            bvh.advance(&f.ray, &mut f.cursor, upto, visit);
+            f.bvh.advance(&f.ray, &mut f.cursor, upto, visit);
             self.walk_pending();
             k += 1;
         }
@@ -327,23 +327,28 @@ impl<'t> Line<'t> {
                 bvh: Some(bvh),
                 children: _,
             } => {
-                if self.used == self.fronts.len() {
-                    self.fronts.push(Front {
-                        blend: id,
-                        ray: SlabRay::new(o, d, span, pad),
-                        o,
-                        d,
-                        span,
-                        cursor: RayCursor::default(),
-                        items: Vec::new(),
-                    });
-                }
-                let f = &mut self.fronts[self.used];
-                (f.blend, f.o, f.d, f.span) = (id, o, d, span);
-                f.ray = SlabRay::new(o, d, span, pad);
+                // A reused front keeps its buffers.
+                let (cursor, items) = match self.fronts.get_mut(self.used) {
+                    Some(f) => (take(&mut f.cursor), take(&mut f.items)),
+                    None => Default::default(),
+                };
+                let mut f = Front {
+                    blend: id,
+                    bvh,
+                    ray: SlabRay::new(o, d, span, pad),
+                    o,
+                    d,
+                    span,
+                    cursor,
+                    items,
+                };
                 f.items.clear();
                 let visit = lister(tree, o, d, span, pad, &mut f.items, &mut self.pending);
                 bvh.start(&f.ray, &mut f.cursor, visit);
+                match self.fronts.get_mut(self.used) {
+                    Some(slot) => *slot = f,
+                    None => self.fronts.push(f),
+                }
                 self.slot[id as usize] = self.used as u32;
                 self.used += 1;
             }

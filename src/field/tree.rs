@@ -36,9 +36,9 @@ pub struct Tree {
     pub(super) supports: Vec<Aabb>,
     pub(super) info: Vec<NodeInfo>,
     pub(super) root: NodeId,
-    /// Some node has several parents (the builder made a DAG): then a node can be reached
-    /// along several paths with different maps, and [`super::Line`]s keep no lists.
-    pub(super) shares_nodes: bool,
+    /// Whether [`super::Line`]s keep lists: some blend has a BVH, and no node has several
+    /// parents (in a DAG a node can be reached along several paths with different maps).
+    pub(super) line_lists: bool,
 }
 
 /// Builds a [`Tree`] bottom-up: children first, then their parents.
@@ -156,8 +156,12 @@ impl TreeBuilder {
         for c in self.nodes.iter().flat_map(Node::children) {
             parents[c as usize] = parents[c as usize].saturating_add(1);
         }
+        let bvh_blends = self
+            .nodes
+            .iter()
+            .any(|n| matches!(n, Node::Blend { bvh: Some(_), .. }));
         Tree {
-            shares_nodes: parents.iter().any(|&n| n > 1),
+            line_lists: bvh_blends && parents.iter().all(|&n| n <= 1),
             nodes: self.nodes,
             supports: self.info.iter().map(|i| i.support).collect(),
             info: self.info,
@@ -282,6 +286,12 @@ impl TreeBuilder {
 }
 
 impl Tree {
+    /// Whether tracing along [`super::Line`]s pays: some blend has a BVH (and the tree is
+    /// not a DAG). Without lists a line answers through the BVHs like the tree itself.
+    pub fn keeps_line_lists(&self) -> bool {
+        self.line_lists
+    }
+
     /// The root node.
     pub fn root(&self) -> NodeId {
         self.root

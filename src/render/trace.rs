@@ -23,7 +23,7 @@
 use glam::Vec3;
 
 use super::camera::Ray;
-use crate::field::{Field, Line, Node, T, Tree};
+use crate::field::{Field, Line, T, Tree};
 
 /// Which step rule to use.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -139,11 +139,7 @@ impl<'f> Tracer<'f> {
         let line = field
             .as_any()
             .and_then(|a| a.downcast_ref::<Tree>())
-            .filter(|t| {
-                t.nodes()
-                    .iter()
-                    .any(|n| matches!(n, Node::Blend { bvh: Some(_), .. }))
-            })
+            .filter(|t| t.keeps_line_lists())
             .map(Line::new);
         Tracer { field, line }
     }
@@ -166,7 +162,7 @@ impl<'f> Tracer<'f> {
         match &mut self.line {
             Some(line) => {
                 line.restrict(ray.origin, ray.dir, span);
-                march(&mut OnLine(line), global, span, params, locate)
+                march(line, global, span, params, locate)
             }
             None => march(&mut OnRay(self.field, ray), global, span, params, locate),
         }
@@ -194,14 +190,12 @@ impl Along for OnRay<'_> {
 }
 
 /// A tree restricted to the ray.
-struct OnLine<'a, 'f>(&'a mut Line<'f>);
-
-impl Along for OnLine<'_, '_> {
+impl Along for Line<'_> {
     fn value(&mut self, t: f32) -> f32 {
-        self.0.value(t)
+        Line::value(self, t)
     }
     fn lipschitz(&mut self, t0: f32, t1: f32) -> f32 {
-        self.0.lipschitz(t0, t1)
+        Line::lipschitz(self, t0, t1)
     }
 }
 
