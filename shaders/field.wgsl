@@ -252,28 +252,43 @@ fn primitive(flags: u32, o: u32, sd_p: f32, sd_c: f32, r: f32) -> vec2<f32> {
     return vec2<f32>(v, l);
 }
 
-fn bilinear(o: u32, x: f32, y: f32) -> f32 {
+// The grid cell holding (x, y) of the heightfield at `o` (grid.rs Heightfield::sample):
+// its lower corner (i, j), the fractions within it, the grid's size and the samples'
+// offset in `heights`.
+struct Cell {
+    i: i32,
+    j: i32,
+    fx: f32,
+    fy: f32,
+    w: i32,
+    h: i32,
+    off: u32,
+}
+
+fn grid_cell(o: u32, x: f32, y: f32) -> Cell {
     let ox = params[o + 2u];
     let oy = params[o + 3u];
     let cell = params[o + 4u];
     let nx = params[o + 5u];
     let ny = params[o + 6u];
-    let off = u32(params[o + 7u]);
     let gx = clamp((x - ox) / cell, 0.0, nx - 1.0);
     let gy = clamp((y - oy) / cell, 0.0, ny - 1.0);
     let fi = min(floor(gx), nx - 2.0);
     let fj = min(floor(gy), ny - 2.0);
-    let fx = gx - fi;
-    let fy = gy - fj;
-    let w = u32(nx);
-    let k = off + u32(fi) + w * u32(fj);
+    return Cell(i32(fi), i32(fj), gx - fi, gy - fj, i32(nx), i32(ny), u32(params[o + 7u]));
+}
+
+fn bilinear(o: u32, x: f32, y: f32) -> f32 {
+    let c = grid_cell(o, x, y);
+    let w = u32(c.w);
+    let k = c.off + u32(c.i) + w * u32(c.j);
     let z00 = heights[k];
     let z10 = heights[k + 1u];
     let z01 = heights[k + w];
     let z11 = heights[k + w + 1u];
-    let bottom = z00 + (z10 - z00) * fx;
-    let top = z01 + (z11 - z01) * fx;
-    return bottom + (top - bottom) * fy;
+    let bottom = z00 + (z10 - z00) * c.fx;
+    let top = z01 + (z11 - z01) * c.fx;
+    return bottom + (top - bottom) * c.fy;
 }
 
 // Catmull-Rom weights of samples -1..=2 at t (src/dem/interp.rs cr_weights).
@@ -302,27 +317,14 @@ fn cr_row(base: u32, i: i32, w: i32, wx: vec4<f32>) -> f32 {
 // Bicubic elevation (tape.rs bicubic, grid.rs Heightfield::sample): the cell of bilinear,
 // its 4 × 4 stencil with indices clamped to the grid, rows summed first.
 fn bicubic(o: u32, x: f32, y: f32) -> f32 {
-    let ox = params[o + 2u];
-    let oy = params[o + 3u];
-    let cell = params[o + 4u];
-    let nx = params[o + 5u];
-    let ny = params[o + 6u];
-    let off = u32(params[o + 7u]);
-    let gx = clamp((x - ox) / cell, 0.0, nx - 1.0);
-    let gy = clamp((y - oy) / cell, 0.0, ny - 1.0);
-    let fi = min(floor(gx), nx - 2.0);
-    let fj = min(floor(gy), ny - 2.0);
-    let wx = cr_weights(gx - fi);
-    let wy = cr_weights(gy - fj);
-    let i = i32(fi);
-    let j = i32(fj);
-    let w = i32(nx);
-    let h = i32(ny);
+    let c = grid_cell(o, x, y);
+    let wx = cr_weights(c.fx);
+    let wy = cr_weights(c.fy);
     var v = 0.0;
-    v += wy.x * cr_row(off + u32(w * clamp(j - 1, 0, h - 1)), i, w, wx);
-    v += wy.y * cr_row(off + u32(w * clamp(j, 0, h - 1)), i, w, wx);
-    v += wy.z * cr_row(off + u32(w * clamp(j + 1, 0, h - 1)), i, w, wx);
-    v += wy.w * cr_row(off + u32(w * clamp(j + 2, 0, h - 1)), i, w, wx);
+    v += wy.x * cr_row(c.off + u32(c.w * clamp(c.j - 1, 0, c.h - 1)), c.i, c.w, wx);
+    v += wy.y * cr_row(c.off + u32(c.w * clamp(c.j, 0, c.h - 1)), c.i, c.w, wx);
+    v += wy.z * cr_row(c.off + u32(c.w * clamp(c.j + 1, 0, c.h - 1)), c.i, c.w, wx);
+    v += wy.w * cr_row(c.off + u32(c.w * clamp(c.j + 2, 0, c.h - 1)), c.i, c.w, wx);
     return v;
 }
 
