@@ -229,13 +229,15 @@ fn project(kind: u32, o: u32, p: vec3<f32>) -> Projection {
         }
         default: {
             // SHAPE_PRISM: a heightfield's prism, the largest horizontal excess over
-            // [lo, hi] combined with the vertical one (no closest point: never noisy).
+            // [lo, hi] combined with the vertical one; inside, minus the depth below the
+            // nearest face (tape.rs project; no closest point: never noisy).
             let lo = param3(o);
             let hi = param3(o + 3u);
             let e = max(lo - p, p - hi);
             let dxy = max(max(e.x, e.y), 0.0);
             let dz = max(e.z, 0.0);
-            return Projection(p, sqrt(dxy * dxy + dz * dz));
+            let inside = min(max(max(e.x, e.y), e.z), 0.0);
+            return Projection(p, sqrt(dxy * dxy + dz * dz) + inside);
         }
     }
 }

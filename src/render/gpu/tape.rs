@@ -1073,7 +1073,10 @@ pub(super) fn project(kind: u32, q: &[f32], p: Vec3) -> (Vec3, f32) {
                 .max(p.y - hi.y)
                 .max(0.0);
             let dz = (lo.z - p.z).max(p.z - hi.z).max(0.0);
-            (p, (dxy * dxy + dz * dz).sqrt())
+            // Signed: inside, minus the depth below the nearest face, so a ball deep
+            // inside gets a zero slope (an unsigned 0 would let it reach `r` outside).
+            let inside = (lo - p).max(p - hi).max_element().min(0.0);
+            (p, (dxy * dxy + dz * dz).sqrt() + inside)
         }
     }
 }
