@@ -337,9 +337,35 @@ fn elevation(flags: u32, o: u32, x: f32, y: f32) -> f32 {
     return bilinear(o, x, y);
 }
 
+// The highest bit where a and b differ (0 when they are equal).
+fn high_bit(a: u32, b: u32) -> u32 {
+    let x = a ^ b;
+    return select(firstLeadingBit(x), 0u, x == 0u);
+}
+
+// A bound of |∇h| over the disc B(c, r) from the heightfield's slope pyramid (tape.rs
+// slope_under): the cells under the disc's square lie in at most 2 × 2 blocks of level k.
+fn slope_under(o: u32, c: vec3<f32>, r: f32) -> f32 {
+    let lo = grid_cell(o, c.x - r, c.y - r);
+    let hi = grid_cell(o, c.x + r, c.y + r);
+    let i0 = u32(lo.i);
+    let i1 = u32(hi.i);
+    let j0 = u32(lo.j);
+    let j1 = u32(hi.j);
+    let levels = u32(params[o + 1u]);
+    let k = min(max(high_bit(i0, i1), high_bit(j0, j1)), levels - 1u);
+    let w = (u32(lo.w) - 1u + (1u << k) - 1u) >> k;
+    let at = u32(params[o + 8u + k]);
+    let a = heights[at + (i0 >> k) + w * (j0 >> k)];
+    let b = heights[at + (i1 >> k) + w * (j0 >> k)];
+    let d = heights[at + (i0 >> k) + w * (j1 >> k)];
+    let e = heights[at + (i1 >> k) + w * (j1 >> k)];
+    return max(max(a, b), max(d, e));
+}
+
 fn heightfield(flags: u32, o: u32, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
     let fall = params[o];
-    let slope = params[o + 1u];
+    let slope = slope_under(o, c, r);
     let value = sigma(elevation(flags, o, p.x, p.y) - p.z, fall);
     let hc = elevation(flags, o, c.x, c.y);
     let l = sigma_slope(hc - slope * r - c.z - r, hc + slope * r - c.z + r, fall) * sqrt(1.0 + slope * slope);

@@ -107,6 +107,12 @@ impl MinMaxPyramid {
         Interval { lo, hi }
     }
 
+    /// The levels, finest first: `(w, h, ranges)` with `ranges[i + w·j]` the range of
+    /// block `(i, j)` (`2^k × 2^k` cells at level `k`, so `w = ⌈w₀ / 2^k⌉`).
+    pub fn levels(&self) -> impl Iterator<Item = (usize, usize, &[[f32; 2]])> {
+        self.levels.iter().map(|l| (l.w, l.h, l.data.as_slice()))
+    }
+
     /// Bytes held.
     pub fn memory(&self) -> usize {
         self.levels.iter().map(|l| l.data.len() * 8).sum()

@@ -9,7 +9,7 @@
 //! | --- | --- | --- | --- |
 //! | `CONST` | `v` | push | constant `v` (Lipschitz 0) |
 //! | `PRIM` | `R, e, shape…` | push | `e·g(max(sd, 0)/R)` (Wyvill) or `σ(−sd, R)` (σ, `flags` bit 8); `sd` = signed distance to the shape (`flags & 0xff`: sphere `c, ρ`; capsule `a, b, ρ`; box `c, half`; heightfield prism `min, max`) |
-//! | `HEIGHT` | `R, L, ox, oy, cell, nx, ny, offset` | push | `σ(h(x, y) − z, R)`, `h` bilinear (Catmull-Rom bicubic with `flags` bit 0) in `heights[offset..]`, `L ≥ |∇h|` |
+//! | `HEIGHT` | `R, n, ox, oy, cell, nx, ny, offset, level₀ … levelₙ₋₁` | push | `σ(h(x, y) − z, R)`, `h` bilinear (Catmull-Rom bicubic with `flags` bit 0) in `heights[offset..]`; the ball's slope of `h` from a max pyramid of `n` levels of per-cell bounds of `|∇h|` at `heights[levelₖ..]` ([`slope_under`]) |
 //! | `NPRIM` | see [`super::noise`] | push | a noisy primitive `E·g(d̃)` on a convex shape |
 //! | `SFIELD` | see [`super::sfield`] | push | an S-field leaf (`flags`: its index in [`Tape::sfields`]) |
 //! | `BLEND` / `UNION` / `INTER` / `DIFF` | – | pop 2, push 1 | `a + b`, `max`, `min`, `min(a, 2T − b)` |
@@ -32,7 +32,7 @@ use glam::{Affine3A, Vec2, Vec3, Vec3A};
 
 use super::GpuError;
 use super::noise::{noisy_primitive, nprim_head, twarp_apply, twarp_params};
-use crate::dem::{Heightfield, Interpolation};
+use crate::dem::{Heightfield, Interpolation, MinMaxPyramid};
 use crate::field::falloff::{sigma, sigma_slope, wyvill, wyvill_slope};
 use crate::field::{Aabb, Fbm, Field, Interval, Noise, T, Warp};
 use crate::voxel::SField;
@@ -467,15 +467,17 @@ impl TapeBuilder {
                 z.len()
             )));
         }
-        // The CPU leaf's own bound of |∇h| (per cell from its samples or stencil).
-        let slope = Heightfield::new(nx, ny, origin, Vec2::splat(cell), z.to_vec())
+        // The CPU leaf's own bounds of |∇h| per cell (from its samples or stencil), as a
+        // max pyramid, so a ball's slope is that of the cells under it (seed 001 §7.3.1).
+        let slopes = Heightfield::new(nx, ny, origin, Vec2::splat(cell), z.to_vec())
             .map_err(|e| GpuError::Tape(format!("heightfield: {e}")))?
-            .lipschitz(interpolation);
+            .cell_slopes(interpolation);
+        let pyramid = MinMaxPyramid::new(nx - 1, ny - 1, slopes);
         let offset = self.heights.len();
         self.heights.extend_from_slice(z);
-        let p = [
+        let mut p = vec![
             falloff,
-            slope,
+            pyramid.levels().count() as f32,
             origin.x,
             origin.y,
             cell,
@@ -483,6 +485,16 @@ impl TapeBuilder {
             ny as f32,
             offset as f32,
         ];
+        for (_, _, level) in pyramid.levels() {
+            p.push(self.heights.len() as f32);
+            self.heights.extend(level.iter().map(|s| s[1]));
+        }
+        if self.heights.len() >= 1 << 24 {
+            return Err(GpuError::Tape(format!(
+                "heightfield: {} samples and slopes in all exceed the 2^24 a tape indexes",
+                self.heights.len()
+            )));
+        }
         let flags = match interpolation {
             Interpolation::Bilinear => 0,
             Interpolation::Bicubic => BICUBIC,
@@ -960,7 +972,7 @@ impl Tape {
         c: Vec3,
         r: f32,
     ) -> (f32, f32) {
-        let (fall, slope) = (q[0], q[1]);
+        let fall = q[0];
         let h = |x: f32, y: f32| {
             if flags & BICUBIC != 0 {
                 bicubic(&self.heights, q, x, y)
@@ -974,9 +986,31 @@ impl Tape {
             return (value, 0.0);
         }
         let hc = if p == c { hp } else { h(c.x, c.y) };
+        let slope = slope_under(&self.heights, q, c, r);
         let v = Interval::new(hc - slope * r - c.z - r, hc + slope * r - c.z + r);
         (value, sigma_slope(v, fall) * (1.0 + slope * slope).sqrt())
     }
+}
+
+/// A bound of `|∇h|` over the disc of radius `r` around `c` (and its clamp to the grid)
+/// from the slope pyramid of the heightfield `q` ([`TapeBuilder::heightfield`]): the
+/// cells under the disc's square are `i0..=i1 × j0..=j1`, and at the level `k` of the
+/// highest bit where `i0` and `i1` (or `j0` and `j1`) differ, they lie in at most 2 × 2
+/// blocks, whose maximum is read.
+fn slope_under(heights: &[f32], q: &[f32], c: Vec3, r: f32) -> f32 {
+    let (ox, oy, cell, nx, ny) = (q[2], q[3], q[4], q[5], q[6]);
+    let index =
+        |x: f32, o: f32, n: f32| (((x - o) / cell).clamp(0.0, n - 1.0).floor()).min(n - 2.0) as u32;
+    let (i0, i1) = (index(c.x - r, ox, nx), index(c.x + r, ox, nx));
+    let (j0, j1) = (index(c.y - r, oy, ny), index(c.y + r, oy, ny));
+    let high = |a: u32, b: u32| 31u32.saturating_sub((a ^ b).leading_zeros());
+    let levels = q[1] as u32;
+    let k = high(i0, i1).max(high(j0, j1)).min(levels - 1);
+    let w = (nx as u32 - 1 + (1 << k) - 1) >> k;
+    let at = q[8 + k as usize] as usize;
+    let s = |i: u32, j: u32| heights[at + (i + w * j) as usize];
+    let (i0, i1, j0, j1) = (i0 >> k, i1 >> k, j0 >> k, j1 >> k);
+    s(i0, j0).max(s(i1, j0)).max(s(i0, j1)).max(s(i1, j1))
 }
 
 /// Bilinear elevation at `(x, y)` clamped to the grid `q = [.., .., ox, oy, cell, nx, ny, offset]`.
