@@ -49,7 +49,7 @@ fn renders_png_and_cost_image_and_checks_the_budget() {
     let terrain = Terrain::new(100.0, 12.0, 4.0);
     let tree = LoadedTree {
         field: Box::new(terrain),
-        tape: Err(karstic::render::gpu::GpuError::Tape("not needed".into())),
+        tape: None,
     };
     let mut a = args(&["--size", "120", "80", "--quiet"]);
     a.output = dir.path().join("t.png");
@@ -90,7 +90,7 @@ fn gpu_flag_falls_back_or_renders() {
     let tape = tapes::terrain(&terrain, 48);
     let tree = LoadedTree {
         field: Box::new(tape.clone()),
-        tape: Ok(tape),
+        tape: Some(Ok(tape)),
     };
     let mut a = args(&["--size", "48", "32", "--gpu", "--quiet"]);
     a.output = dir.path().join("g.png");
@@ -104,12 +104,24 @@ fn gpu_flag_falls_back_or_renders() {
 #[test]
 fn tree_files_load_with_their_tape_or_the_reason_they_have_none() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
-    let blobs = load_tree(&dir.join("blobs.ron")).unwrap();
-    let tape = blobs.tape.as_ref().expect("point blobs encode");
+    // Without the GPU asked for, no tape is built.
+    assert!(
+        load_tree(&dir.join("blobs.ron"), false)
+            .unwrap()
+            .tape
+            .is_none()
+    );
+    let blobs = load_tree(&dir.join("blobs.ron"), true).unwrap();
+    let tape = blobs
+        .tape
+        .as_ref()
+        .unwrap()
+        .as_ref()
+        .expect("point blobs encode");
     assert!(blobs.field.support().contains_box(&tape.support()));
     // Every scene of trees/ encodes (tests/render_trees.rs); a disc skeleton does not.
-    let spire = load_tree(&dir.join("rock_spire.ron")).unwrap();
-    assert!(spire.tape.is_ok(), "the cone spire encodes");
+    let spire = load_tree(&dir.join("rock_spire.ron"), true).unwrap();
+    assert!(matches!(spire.tape, Some(Ok(_))), "the cone spire encodes");
     let out = tempfile::tempdir().unwrap();
     let disc_file = out.path().join("disc.ron");
     std::fs::write(
@@ -117,8 +129,14 @@ fn tree_files_load_with_their_tape_or_the_reason_they_have_none() {
         "(version: 1, root: Primitive(name: \"disc\", shape: Disc(center: (0, 0, 0), normal: (0, 0.6, 0.8), radius: 4), falloff: 2))",
     )
     .unwrap();
-    let disc = load_tree(&disc_file).unwrap();
-    let e = disc.tape.as_ref().unwrap_err().to_string();
+    let disc = load_tree(&disc_file, true).unwrap();
+    let e = disc
+        .tape
+        .as_ref()
+        .unwrap()
+        .as_ref()
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("\"disc\"") && e.contains("no GPU encoding"),
         "{e}"

@@ -54,15 +54,16 @@ pub struct RenderArgs {
 pub struct LoadedTree {
     /// The compiled field (CPU tracing).
     pub field: Box<dyn Field>,
-    /// Its GPU encoding, or why there is none (a node without an encoding).
-    pub tape: Result<Tape, GpuError>,
+    /// When the GPU was asked for: its encoding, or why there is none (a node without an
+    /// encoding). Not built for CPU renders: it copies every DEM and its slope pyramid.
+    pub tape: Option<Result<Tape, GpuError>>,
 }
 
-/// Loads and compiles a tree file for rendering, with its GPU tape when every node has an
-/// encoding ([`gpu::tape_from_tree`]).
-pub fn load_tree(path: &Path) -> anyhow::Result<LoadedTree> {
+/// Loads and compiles a tree file for rendering, with its GPU tape when `gpu` and every
+/// node has an encoding ([`gpu::tape_from_tree`]).
+pub fn load_tree(path: &Path, gpu: bool) -> anyhow::Result<LoadedTree> {
     let tree = super::load_tree(path)?;
-    let tape = gpu::tape_from_tree(&tree);
+    let tape = gpu.then(|| gpu::tape_from_tree(&tree));
     Ok(LoadedTree {
         field: Box::new(tree),
         tape,
@@ -71,7 +72,7 @@ pub fn load_tree(path: &Path) -> anyhow::Result<LoadedTree> {
 
 /// Runs `karstic render`.
 pub fn run(args: RenderArgs) -> anyhow::Result<()> {
-    let tree = load_tree(&args.tree)?;
+    let tree = load_tree(&args.tree, args.gpu)?;
     render_tree(&args, &tree)
 }
 
@@ -96,18 +97,18 @@ pub fn render_tree(args: &RenderArgs, tree: &LoadedTree) -> anyhow::Result<()> {
     settings.shading.shadows = !args.no_shadows;
     let start = Instant::now();
     let (frame, device) = match (args.gpu, &tree.tape) {
-        (true, Ok(tape)) => match gpu::render(tape, &camera, &settings) {
+        (true, Some(Ok(tape))) => match gpu::render(tape, &camera, &settings) {
             Ok(frame) => (frame, "GPU"),
             Err(e) => {
                 eprintln!("--gpu: {e}; rendering on the CPU instead");
                 (cpu_frame(field, &camera, &settings, args.quiet), "CPU")
             }
         },
-        (true, Err(e)) => {
+        (true, Some(Err(e))) => {
             eprintln!("--gpu: {e}; rendering on the CPU instead");
             (cpu_frame(field, &camera, &settings, args.quiet), "CPU")
         }
-        (false, _) => (cpu_frame(field, &camera, &settings, args.quiet), "CPU"),
+        _ => (cpu_frame(field, &camera, &settings, args.quiet), "CPU"),
     };
     let elapsed = start.elapsed();
     frame
