@@ -193,6 +193,8 @@ fn check_s_boxes(f: &SField, seed: u64) {
         for _ in 0..40 {
             let p = rng.point(&b);
             let v = f.s_value(p);
+            // The value-only path (the march's) is the gradient path's value, bit for bit.
+            assert_eq!(v.to_bits(), f.s_grad(p).0.to_bits(), "S' at {p}");
             assert!(
                 iv.contains(v),
                 "S interval {iv:?} misses {v} at {p} in {b:?}"

@@ -246,11 +246,18 @@ impl SField {
 
     /// `S'(p)`: the displaced surface field at `p` clamped to the domain (`+∞` when empty).
     pub fn s_value(&self, p: Vec3) -> f32 {
-        self.s_grad(p).0
+        self.s_eval::<false>(p).0
     }
 
     /// `(S'(p), ∇S'(p))` at `p` clamped to the domain.
     pub fn s_grad(&self, p: Vec3) -> (f32, Vec3) {
+        self.s_eval::<true>(p)
+    }
+
+    /// `S'(p)`, and `∇S'(p)` when `GRAD` (else zero): the same arithmetic for the value
+    /// either way, without the gradient's cost when only the value is asked (the march).
+    #[inline(always)]
+    fn s_eval<const GRAD: bool>(&self, p: Vec3) -> (f32, Vec3) {
         let q = self.params.domain.clamp(p);
         let Some((l, idx, f)) = locate(&self.vol.levels, q) else {
             return (f32::INFINITY, Vec3::ZERO);
@@ -260,7 +267,7 @@ impl SField {
         if let Some(c) = &self.cubic
             && l + 1 == self.vol.levels.len()
         {
-            lin = c.eval(&self.vol.levels[l], &self.vol.s[l], &idx, f, lin);
+            lin = c.eval::<GRAD>(&self.vol.levels[l], &self.vol.s[l], &idx, f, lin);
         }
         let (s, gs) = lin;
         if self.noise_amp == 0.0 {
@@ -269,6 +276,9 @@ impl SField {
         let (a, ga) = trilinear_grad(&self.vol.alpha[l], &idx, f, h);
         let (b, gb) = trilinear_grad(&self.vol.beta[l], &idx, f, h);
         let o = q - self.params.domain.min;
+        if !GRAD {
+            return (s - a * self.params.fbm.value(o * b), Vec3::ZERO);
+        }
         let (n, gn) = self.params.fbm.value_grad(o * b);
         let gd = ga * n + (gn * b + gb * gn.dot(o)) * a;
         (s - a * n, gs - gd)

@@ -184,8 +184,9 @@ impl Cubic {
     }
 
     /// S and its gradient in the finest level's cell `idx` at fraction `f`, given the
-    /// trilinear `(value, gradient)` there: the blend `L + w·(C − L)`.
-    pub fn eval(
+    /// trilinear `(value, gradient)` there: the blend `L + w·(C − L)`. Without `GRAD` the
+    /// gradient is not computed (the value is the same).
+    pub fn eval<const GRAD: bool>(
         &self,
         bricks: &Bricks,
         s: &[f32],
@@ -201,7 +202,7 @@ impl Cubic {
             return lin;
         };
         let (wv, wg) = trilinear_grad(&self.w, idx, f, h);
-        let (c, cg) = catmull_rom(&v, f, h);
+        let (c, cg) = catmull_rom::<GRAD>(&v, f, h);
         let d = c - lin.0;
         (lin.0 + wv * d, lin.1 + (cg - lin.1) * wv + wg * d)
     }
@@ -251,9 +252,9 @@ fn weights(t: f32) -> ([f32; 4], [f32; 4]) {
     )
 }
 
-/// Value and gradient (per metre) of the tricubic interpolant of the 4³ nodes `v` at
-/// fraction `f` of the middle cell.
-fn catmull_rom(v: &[f32; 64], f: Vec3, h: f32) -> (f32, Vec3) {
+/// Value and gradient (per metre; zero without `GRAD`) of the tricubic interpolant of the
+/// 4³ nodes `v` at fraction `f` of the middle cell.
+fn catmull_rom<const GRAD: bool>(v: &[f32; 64], f: Vec3, h: f32) -> (f32, Vec3) {
     let (wx, dx) = weights(f.x);
     let (wy, dy) = weights(f.y);
     let (wz, dz) = weights(f.z);
@@ -265,14 +266,20 @@ fn catmull_rom(v: &[f32; 64], f: Vec3, h: f32) -> (f32, Vec3) {
             let (mut r, mut rx) = (0.0, 0.0);
             for i in 0..4 {
                 r += wx[i] * row[i];
-                rx += dx[i] * row[i];
+                if GRAD {
+                    rx += dx[i] * row[i];
+                }
             }
             a += wy[j] * r;
-            ax += wy[j] * rx;
-            ay += dy[j] * r;
+            if GRAD {
+                ax += wy[j] * rx;
+                ay += dy[j] * r;
+            }
         }
         val += wz[k] * a;
-        g += Vec3::new(wz[k] * ax, wz[k] * ay, dz[k] * a);
+        if GRAD {
+            g += Vec3::new(wz[k] * ax, wz[k] * ay, dz[k] * a);
+        }
     }
     (val, g / h)
 }
@@ -346,7 +353,7 @@ mod tests {
         let eval = |p: Vec3| {
             let (idx, f) = bricks.cell(p)?;
             let t = trilinear_grad(&s, &idx, f, geom.h);
-            Some(cubic.eval(&bricks, &s, &idx, f, t))
+            Some(cubic.eval::<true>(&bricks, &s, &idx, f, t))
         };
         let (mut over_value, mut over_slope) = (false, false);
         let lip = wide.grad_s.length();
@@ -388,7 +395,7 @@ mod tests {
             Vec3::new(0.3, 0.8, 0.55),
             Vec3::splat(0.5),
         ] {
-            let (c, g) = catmull_rom(&v, f, 1.0);
+            let (c, g) = catmull_rom::<true>(&v, f, 1.0);
             assert!((c - q(f)).abs() < 1e-4, "{c} vs {}", q(f));
             let e = 1e-2;
             let fd = Vec3::new(
