@@ -374,6 +374,12 @@ proptest! {
                 let ti = at + (end - at) * i as f32 / 12.0;
                 let (v, w) = (line.value(ti), t.value(o + d * ti));
                 prop_assert!((v - w).abs() < 1e-5, "value at t = {ti}: line {v}, tree {w}");
+                // Gradients (the hit's normal) too.
+                let ((lv, lg), (tv, tg)) = (line.value_grad(ti), t.value_grad(o + d * ti));
+                prop_assert!(
+                    (lv - tv).abs() < 1e-5 && lg.abs_diff_eq(tg, 1e-4 * (1.0 + tg.length())),
+                    "gradient at t = {ti}: line {lv} {lg}, tree {tv} {tg}"
+                );
                 let df = (v - line.value(at)).abs();
                 prop_assert!(df <= lam * (ti - at) * 1.001 + 1e-4, "bound {lam} on [{at}, {end}]: {df}");
             }

@@ -61,13 +61,23 @@ impl Tree {
     /// `(f(p), ∇f(p))` of node `id`. At the kinks of min/max the gradient of the selected
     /// child is returned.
     pub fn value_grad_at(&self, id: NodeId, p: Vec3) -> (f32, Vec3) {
+        self.value_grad_at_with(id, p, Anywhere)
+    }
+
+    /// [`Tree::value_grad_at`], its blends finding their children through `at`.
+    pub(super) fn value_grad_at_with(
+        &self,
+        id: NodeId,
+        p: Vec3,
+        at: impl Candidates,
+    ) -> (f32, Vec3) {
         if !self.supports[id as usize].contains(p) {
             return (0.0, Vec3::ZERO);
         }
         let pick = |children: &[NodeId], better: fn(f32, f32) -> bool| {
-            let mut best = self.value_grad_at(children[0], p);
+            let mut best = self.value_grad_at_with(children[0], p, at);
             for &c in &children[1..] {
-                let vg = self.value_grad_at(c, p);
+                let vg = self.value_grad_at_with(c, p, at);
                 if better(vg.0, best.0) {
                     best = vg;
                 }
@@ -80,38 +90,36 @@ impl Tree {
             Node::Leaf(f) => f.value_grad(p),
             Node::Blend { children, bvh } => {
                 let mut acc = (0.0, Vec3::ZERO);
-                let mut add = |c: NodeId| {
-                    let (v, g) = self.value_grad_at(c, p);
+                at.each_containing(self, id, children, bvh, p, |c| {
+                    let (v, g) = self.value_grad_at_with(c, p, at);
                     acc.0 += v;
                     acc.1 += g;
-                };
-                match bvh {
-                    Some(bvh) => bvh.at_point(p, add),
-                    None => children.iter().for_each(|&c| add(c)),
-                }
+                });
                 acc
             }
             Node::Union(children) => pick(children, |a, b| a > b),
             Node::Intersection(children) => pick(children, |a, b| a < b),
             Node::Difference { base, carves } => {
-                let mut best = self.value_grad_at(*base, p);
+                let mut best = self.value_grad_at_with(*base, p, at);
                 for &c in carves.iter() {
-                    let (v, g) = self.value_grad_at(c, p);
+                    let (v, g) = self.value_grad_at_with(c, p, at);
                     if 2.0 * T - v < best.0 {
                         best = (2.0 * T - v, -g);
                     }
                 }
                 best
             }
+            // An affine map keeps the line's parameter: the child's lists still apply.
             Node::Affine {
                 child, to_child, ..
             } => {
-                let (v, g) = self.value_grad_at(*child, to_child.transform_point3(p));
+                let (v, g) = self.value_grad_at_with(*child, to_child.transform_point3(p), at);
                 (
                     v,
                     Vec3::from(to_child.matrix3.transpose() * glam::Vec3A::from(g)),
                 )
             }
+            // A warp bends it: below one, blends use their BVHs.
             Node::Warp { child, warp } => {
                 let (q, j) = warp.apply_jacobian(p);
                 let (v, g) = self.value_grad_at(*child, q);

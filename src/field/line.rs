@@ -4,10 +4,11 @@
 //! each ask of a blend with thousands of children descends the blend's BVH. A [`Line`]
 //! keeps instead, for every blend with a BVH that the ray reaches through blends, unions,
 //! differences and affine maps, the children whose supports the ray crosses, with the ray
-//! parameters where it is inside them; [`Line::value`] and [`Line::lipschitz`] scan these
-//! short lists, and evaluate point blobs from their profile along the ray — the per-ray
-//! gathering of segment tracing (Galin et al. 2020 §5). The lists grow lazily: each blend
-//! traverses its BVH along the ray ([`ChildBvh::advance`]) only as far as the queries go.
+//! parameters where it is inside them; [`Line::value`], [`Line::lipschitz`] and
+//! [`Line::value_grad`] scan these short lists, and the first two evaluate point blobs
+//! from their profile along the ray — the per-ray gathering of segment tracing (Galin et
+//! al. 2020 §5). The lists grow lazily: each blend traverses its BVH along the ray
+//! ([`ChildBvh::advance`]) only as far as the queries go.
 //!
 //! Affine maps send lines to lines with the same parameter, so the lists of blends below
 //! them are indexed by the root ray's `t`. Warps bend the line: what lies below one is
@@ -48,6 +49,18 @@ pub(super) trait Candidates: Copy {
         b: &Aabb,
         bound: impl FnMut(NodeId) -> f32,
     ) -> f32;
+
+    /// Calls `visit(c)` for each child `c` of blend `id` whose support contains `p`, as
+    /// a node (a listed blob too: gradients need the node, not its profile).
+    fn each_containing(
+        self,
+        tree: &Tree,
+        id: NodeId,
+        children: &[NodeId],
+        bvh: &Option<ChildBvh>,
+        p: Vec3,
+        visit: impl FnMut(NodeId),
+    );
 }
 
 /// Queries anywhere: the blends' BVHs (or a scan of small blends' children).
@@ -59,21 +72,34 @@ impl Candidates for Anywhere {
     fn sum_containing(
         self,
         tree: &Tree,
-        _: NodeId,
+        id: NodeId,
         children: &[NodeId],
         bvh: &Option<ChildBvh>,
         p: Vec3,
         mut value: impl FnMut(NodeId) -> f32,
     ) -> f32 {
         let mut sum = 0.0;
+        self.each_containing(tree, id, children, bvh, p, |c| sum += value(c));
+        sum
+    }
+
+    #[inline(always)]
+    fn each_containing(
+        self,
+        tree: &Tree,
+        _: NodeId,
+        children: &[NodeId],
+        bvh: &Option<ChildBvh>,
+        p: Vec3,
+        mut visit: impl FnMut(NodeId),
+    ) {
         match bvh {
-            Some(bvh) => bvh.at_point(p, |c| sum += value(c)),
+            Some(bvh) => bvh.at_point(p, visit),
             None => children
                 .iter()
                 .filter(|&&c| tree.supports[c as usize].contains(p))
-                .for_each(|&c| sum += value(c)),
+                .for_each(|&c| visit(c)),
         }
-        sum
     }
 
     #[inline(always)]
@@ -100,10 +126,23 @@ pub(super) struct OnLine<'a> {
     t1: f32,
 }
 
-impl OnLine<'_> {
-    /// Sums over the listed children of blend `id` whose parameter ranges meet `t0..=t1`:
-    /// `profiled(profile)` for those with a [`LineProfile`], `each(c)` for the others
-    /// that pass `keep`. `None` when `id` has no list.
+impl<'a> OnLine<'a> {
+    /// The listed children of blend `id` whose parameter ranges meet `t0..=t1`; `None`
+    /// when `id` has no list.
+    #[inline(always)]
+    fn listed(self, id: NodeId) -> Option<impl Iterator<Item = &'a Crossing>> {
+        let at = self.line.slot.get(id as usize).copied().unwrap_or(NONE);
+        let (t0, t1) = (self.t0, self.t1);
+        (at != NONE).then(|| {
+            self.line.fronts[at as usize]
+                .items
+                .iter()
+                .filter(move |c| c.enter <= t1 && c.leave >= t0)
+        })
+    }
+
+    /// Sums over [`OnLine::listed`]: `profiled(profile)` for the children with a
+    /// [`LineProfile`], `each(c)` for the others that pass `keep`.
     #[inline(always)]
     fn sum_listed(
         self,
@@ -112,15 +151,9 @@ impl OnLine<'_> {
         keep: impl Fn(NodeId) -> bool,
         mut each: impl FnMut(NodeId) -> f32,
     ) -> Option<f32> {
-        let at = self.line.slot.get(id as usize).copied().unwrap_or(NONE);
-        if at == NONE {
-            return None;
-        }
+        let items = self.listed(id)?;
         let mut sum = 0.0;
-        for c in &self.line.fronts[at as usize].items {
-            if c.enter > self.t1 || c.leave < self.t0 {
-                continue;
-            }
+        for c in items {
             match &c.profile {
                 Some(profile) => sum += profiled(profile),
                 None if keep(c.child) => sum += each(c.child),
@@ -162,6 +195,24 @@ impl Candidates for OnLine<'_> {
         let meets = |c: NodeId| tree.supports[c as usize].overlaps(b);
         self.sum_listed(id, |pr| pr.lipschitz(t0, t1), meets, &mut bound)
             .unwrap_or_else(|| Anywhere.sum_overlapping(tree, id, children, bvh, b, bound))
+    }
+
+    #[inline(always)]
+    fn each_containing(
+        self,
+        tree: &Tree,
+        id: NodeId,
+        children: &[NodeId],
+        bvh: &Option<ChildBvh>,
+        p: Vec3,
+        mut visit: impl FnMut(NodeId),
+    ) {
+        match self.listed(id) {
+            Some(items) => items
+                .filter(|c| tree.supports[c.child as usize].contains(p))
+                .for_each(|c| visit(c.child)),
+            None => Anywhere.each_containing(tree, id, children, bvh, p, visit),
+        }
     }
 }
 
@@ -261,6 +312,18 @@ impl<'t> Line<'t> {
         self.tree.value_at_with(self.tree.root, self.at(t), on)
     }
 
+    /// `(f, ∇f)` at parameter `t`: the whole tree's [`Tree::value_grad_at`] at
+    /// [`Line::at`]`(t)` (for shading the hit).
+    pub fn value_grad(&mut self, t: f32) -> (f32, Vec3) {
+        self.reach_to(t);
+        let on = OnLine {
+            line: self,
+            t0: t,
+            t1: t,
+        };
+        self.tree.value_grad_at_with(self.tree.root, self.at(t), on)
+    }
+
     /// A Lipschitz bound on the segment between parameters `t0 ≤ t1`: the whole tree's
     /// [`Tree::lipschitz_segment_at`] there (per metre of the segment).
     pub fn lipschitz(&mut self, t0: f32, t1: f32) -> f32 {
@@ -268,6 +331,11 @@ impl<'t> Line<'t> {
         let on = OnLine { line: self, t0, t1 };
         let tree = self.tree;
         tree.lipschitz_segment_with(tree.root, self.at(t0), self.at(t1), on)
+    }
+
+    /// Whether the line is (restricted to) the ray `origin + t·dir`.
+    pub fn runs_along(&self, origin: Vec3, dir: Vec3) -> bool {
+        self.origin == origin && self.dir == dir
     }
 
     /// The point at parameter `t`.

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use super::camera::{Camera, Ray};
 use super::image::Frame;
 use super::shade::{Shading, to_srgb8};
-use super::trace::{Method, Trace, TraceParams, Tracer, normal};
+use super::trace::{Method, Trace, TraceParams, Tracer};
 use glam::Vec3;
 
 use crate::field::{Aabb, Field, Tree};
@@ -154,7 +154,7 @@ fn tile(
                 return (tr, Vec3::ZERO, None);
             }
             let p = ray.at(tr.t);
-            let n = normal(f, p);
+            let n = tracer.normal(ray, tr.t);
             let shadow = (sh.shadows && n.dot(sh.sun) > 0.0)
                 .then(|| {
                     let tol = s.trace.epsilon + s.trace.cone * tr.t;

@@ -149,6 +149,17 @@ impl<'f> Tracer<'f> {
         self.march(ray, span, params, true)
     }
 
+    /// The outward unit normal ([`normal`]) at `ray.at(t)`, for a hit `t` that
+    /// [`Tracer::trace`] just found along `ray`: through the line's lists when the tracer
+    /// keeps them and is still on that ray, else from the field.
+    pub fn normal(&mut self, ray: &Ray, t: f32) -> Vec3 {
+        let g = match &mut self.line {
+            Some(line) if line.runs_along(ray.origin, ray.dir) => line.value_grad(t).1,
+            _ => self.field.value_grad(ray.at(t)).1,
+        };
+        outward(g)
+    }
+
     /// [`occluded`] with this tracer.
     pub fn occluded(&mut self, ray: &Ray, span: (f32, f32), params: &TraceParams) -> bool {
         self.march(ray, span, params, false).hit()
@@ -324,7 +335,11 @@ fn refine(
 /// The outward unit normal at `p`: `−∇f / |∇f|` (solid where `f > T`); `+Z` where the
 /// gradient vanishes.
 pub fn normal(field: &dyn Field, p: Vec3) -> Vec3 {
-    let (_, g) = field.value_grad(p);
+    outward(field.value_grad(p).1)
+}
+
+/// `−g / |g|`, or `+Z` where the gradient vanishes or is not finite.
+fn outward(g: Vec3) -> Vec3 {
     let n = -g;
     let l = n.length();
     if l > 0.0 && l.is_finite() {
