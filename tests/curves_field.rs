@@ -2,7 +2,7 @@
 //! displacement on), gradients against finite differences, determinism, the cache, and
 //! the memory of the sparse grid on a large domain.
 
-mod curves_util;
+use crate::curves_util;
 
 use std::path::Path;
 

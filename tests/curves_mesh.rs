@@ -2,7 +2,7 @@
 //! build -o mesh.glb` writes), not only the field: closed, through the seed curves, and
 //! in one piece, with the through-holes of the arch and the tunnels.
 
-mod curves_util;
+use crate::curves_util;
 
 use std::collections::HashMap;
 

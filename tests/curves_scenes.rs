@@ -1,7 +1,7 @@
 //! The thesis's examples (seed 000 §7.2) as scenes in `trees/curves/`: each is built by
 //! the voxel pipeline and its S field is checked against what the curves ask for.
 
-mod curves_util;
+use crate::curves_util;
 
 use glam::Vec3;
 use karstic::curves::{CurveSample, FeatureVolumeSpec, Features};

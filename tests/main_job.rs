@@ -1,7 +1,7 @@
 //! Issue 7: the bundled default scene has an open tunnel cave, a free-standing arch and a
 //! grotto, and the main job writes a valid mesh and image.
 
-mod gltf_validator;
+use crate::gltf_validator;
 
 use glam::{Vec2, Vec3};
 use karstic::dem::HeightfieldField;

@@ -1,8 +1,8 @@
 //! Exporters: glTF accepted by the Khronos validator, Y-up conversion, OBJ/PLY layouts,
 //! identical bytes whatever the thread count.
 
-mod gltf_validator;
-mod mesh_fields;
+use crate::gltf_validator;
+use crate::mesh_fields;
 
 use glam::Vec3;
 use gltf_validator::{assert_valid, khronos_validate};

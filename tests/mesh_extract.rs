@@ -1,7 +1,7 @@
 //! Field extraction: exact shapes within 1%, topology, pruning that changes nothing,
 //! thread-count independence, direct elevation extraction.
 
-mod mesh_fields;
+use crate::mesh_fields;
 
 use std::f64::consts::PI;
 

@@ -1,7 +1,7 @@
 //! `karstic render` argument parsing and outputs (through `render_tree`, the part after
 //! the tree file is loaded).
 
-mod common;
+use crate::common;
 
 use karstic::field::Field;
 

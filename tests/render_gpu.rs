@@ -1,7 +1,7 @@
 //! The GPU path: naga validates every shader; the tape evaluator against independent
 //! formulas; and, when an adapter exists, the GPU against the CPU on the same tapes.
 
-mod common;
+use crate::common;
 
 use common::{
     Blobs, Rng, SigmaSphere, Terrain, assert_frames_match, assert_probes_match,

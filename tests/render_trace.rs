@@ -1,6 +1,6 @@
 //! The CPU tracer against independent ground truths, and segment vs sphere tracing.
 
-mod common;
+use crate::common;
 
 use common::{
     Blobs, Rng, SigmaSphere, Terrain, check_segment_lipschitz, depth_agreement, uv_sphere,

@@ -2,7 +2,7 @@
 //! (values, CPU images and, with an adapter, GPU images), and the traced depth of the trees
 //! against ray casting their Marching Cubes meshes.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

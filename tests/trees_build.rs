@@ -2,7 +2,7 @@
 //! support into a closed surface (open only on the support's faces) and exports a `.glb`
 //! the Khronos validator accepts.
 
-mod gltf_validator;
+use crate::gltf_validator;
 
 use std::path::{Path, PathBuf};
 
