@@ -6,17 +6,23 @@ pub mod bspline;
 pub mod compound;
 pub mod constraint;
 pub mod ribbon;
+pub mod room;
 pub mod shapes;
 pub mod spec;
+pub mod terrain;
 
 use std::path::PathBuf;
 
+use glam::Vec3;
+
 pub use bspline::BSpline;
-pub use compound::{Arch, Profile, Tunnel, tunnel_proxies};
+pub use compound::{Arch, Profile, Tube, Tunnel, tube_proxy, tunnel_proxies};
 pub use constraint::{ConstraintPoint, CurveSample, FeatureCurve, slope_bitangent};
 pub use ribbon::{ProxyMesh, ProxyTriangle, ProxyVertex, Side, curve_ribbon};
 pub use shapes::{Disc, Quad};
 pub use spec::{FeatureSet, FeatureVolumeSpec, Orientation, Propagation};
+pub use room::Room;
+pub use terrain::TerrainSurface;
 
 /// Errors of curve files, feature-volume specs and the voxel pipeline.
 #[derive(Debug, thiserror::Error)]
@@ -80,12 +86,16 @@ pub struct Features {
     pub arches: Vec<Arch>,
     /// Extra proxy triangles (any mesh with normals).
     pub meshes: Vec<ProxyMesh>,
+    /// The terrain the primitives sit on, as boundary conditions: its seed triangles join
+    /// the proxy meshes, and compounds keep only their side of it (a tunnel what is
+    /// underground, an arch what is above).
+    pub terrain: Option<TerrainSurface>,
 }
 
 impl Features {
     /// Tunnels whose section is at least `min_section` metres (smaller ones are left out
     /// of coarse levels, whose cells would hold their floor and ceiling at once).
-    pub fn tunnels_from(&self, min_section: f32) -> Vec<Tunnel> {
+    pub fn tunnels_from(&self, min_section: f32) -> Vec<Tube> {
         self.tunnels
             .iter()
             .filter(|t| t.section() >= min_section)
@@ -99,7 +109,7 @@ impl Features {
     /// thin. Levels before the first one with a seed hold a constant S of this sign.
     pub fn outside_of_thin(&self, min_section: f32) -> f32 {
         let thin_tunnel = self.tunnels.iter().any(|t| t.section() < min_section);
-        let thin_arch = self.arches.iter().any(|a| a.thickness < min_section);
+        let thin_arch = self.arches.iter().any(|a| a.beam().section() < min_section);
         if thin_arch && !thin_tunnel { 1.0 } else { -1.0 }
     }
 
@@ -110,11 +120,28 @@ impl Features {
             || self
                 .arches
                 .iter()
-                .any(|a| a.ground.is_some() || a.thickness >= min_section)
+                .any(|a| a.ground.is_some() || a.beam().section() >= min_section)
             || self.quads.iter().any(|q| q.seed)
             || self.discs.iter().any(|d| d.seed)
             || self.meshes.iter().any(|m| m.has_seed())
             || self.tunnels.iter().any(|t| t.section() >= min_section)
+            || self.terrain.as_ref().is_some_and(|t| t.mesh().has_seed())
+    }
+
+    /// Where a tunnel's curves are kept: on a terrain, deeper than its clearance
+    /// underground (where the ground is known); everywhere otherwise.
+    fn tunnel_side(&self, p: Vec3) -> bool {
+        self.terrain
+            .as_ref()
+            .is_none_or(|t| !t.above(p, -t.clearance()))
+    }
+
+    /// Where an arch's curves are kept: on a terrain, higher than its clearance above
+    /// ground (where the ground is known); everywhere otherwise.
+    fn arch_side(&self, p: Vec3) -> bool {
+        self.terrain
+            .as_ref()
+            .is_none_or(|t| !t.below(p, -t.clearance()))
     }
 
     /// All primitives as one proxy mesh: ribbons `ribbon` metres wide unless a curve sets
@@ -123,21 +150,29 @@ impl Features {
     /// thickness under `min_section` are left out.
     pub fn proxy(&self, ribbon: f32, guide: f32, segment: f32, min_section: f32) -> ProxyMesh {
         let mut mesh = ProxyMesh::default();
-        let all = |_: glam::Vec3| true;
+        let all = |_: Vec3| true;
+        let guide = guide.max(ribbon);
         for c in &self.curves {
             let w = c.ribbon.unwrap_or(ribbon);
             mesh.append(&curve_ribbon(c, w, guide.max(w), segment, &all));
         }
         for a in &self.arches {
-            for c in a.curves_at(min_section) {
-                mesh.append(&curve_ribbon(&c, ribbon, guide.max(ribbon), segment, &all));
+            let beam = a.beam();
+            if beam.section() >= min_section {
+                let keep = |p: Vec3| self.arch_side(p);
+                mesh.append(&tube_proxy(&beam, ribbon, guide, segment, &keep));
+            }
+            if let Some(c) = a.ground_curve() {
+                mesh.append(&curve_ribbon(&c, ribbon, guide, segment, &all));
             }
         }
+        let keep = |p: Vec3| self.tunnel_side(p);
         mesh.append(&tunnel_proxies(
             &self.tunnels_from(min_section),
             ribbon,
-            guide.max(ribbon),
+            guide,
             segment,
+            &keep,
         ));
         for q in &self.quads {
             mesh.append(&q.proxy());
@@ -148,14 +183,18 @@ impl Features {
         for m in &self.meshes {
             mesh.append(m);
         }
+        if let Some(t) = &self.terrain {
+            mesh.append(t.mesh());
+        }
         mesh
     }
 
     /// Samples every `step` metres of every seed curve (those the compounds place
-    /// included, junctions of tunnels left out): where the surface must pass.
+    /// included, junctions of tunnels and, on a terrain, the compounds' parts on the
+    /// wrong side of the ground left out): where the surface must pass.
     pub fn seed_samples(&self, step: f32, ribbon: f32) -> Vec<CurveSample> {
         let mut out = Vec::new();
-        let mut push = |c: &FeatureCurve, keep: &dyn Fn(glam::Vec3) -> bool| {
+        let mut push = |c: &FeatureCurve, keep: &dyn Fn(Vec3) -> bool| {
             if c.seed {
                 let n = ((c.spline.length(64) / step).ceil() as usize).max(1);
                 out.extend(
@@ -166,17 +205,84 @@ impl Features {
             }
         };
         self.curves.iter().for_each(|c| push(c, &|_| true));
-        self.arches
-            .iter()
-            .flat_map(|a| a.curves())
-            .for_each(|c| push(&c, &|_| true));
+        for a in &self.arches {
+            a.beam()
+                .curves()
+                .iter()
+                .for_each(|c| push(c, &|p| self.arch_side(p)));
+            a.ground_curve().iter().for_each(|c| push(c, &|_| true));
+        }
         for (i, t) in self.tunnels.iter().enumerate() {
             for c in t.curves() {
                 push(&c, &|p| {
-                    compound::outside_others(&self.tunnels, i, p, ribbon)
+                    self.tunnel_side(p) && compound::outside_others(&self.tunnels, i, p, ribbon)
                 });
             }
         }
         out
+    }
+
+    /// Balls around the tubes (tunnels, arch beams) whose section lies in
+    /// `[min_section, 2·min_section)`, grown by `margin`: those that first appear on a
+    /// level admitting sections of `min_section` (the coarser one admits twice that).
+    /// The guidance the coarser levels diffused there knows nothing of them.
+    pub fn fresh_room(&self, min_section: f32, margin: f32) -> Room {
+        let fresh = |t: &Tube| (min_section..2.0 * min_section).contains(&t.section());
+        let tubes = self
+            .tunnels
+            .iter()
+            .cloned()
+            .chain(self.arches.iter().map(Arch::beam))
+            .filter(fresh);
+        let mut out = Vec::new();
+        for tube in tubes {
+            out.extend(
+                tube.balls(min_section / 3.0)
+                    .into_iter()
+                    .map(|(p, r)| (p, r + margin)),
+            );
+        }
+        Room::new(out)
+    }
+
+    /// Balls in which a terrain's samples give way to the primitives: around every seed
+    /// curve (radius `ribbon + clearance`), and around the axis of every tube on its side
+    /// of the ground (radius: half the section's larger side plus `clearance`), with
+    /// `step` metres between samples.
+    pub fn room(&self, step: f32, ribbon: f32, clearance: f32) -> Room {
+        let mut out: Vec<(Vec3, f32)> = self
+            .seed_samples(step, ribbon)
+            .iter()
+            .map(|s| (s.pos, ribbon + clearance))
+            .collect();
+        let tubes = self
+            .tunnels
+            .iter()
+            .cloned()
+            .chain(self.arches.iter().map(Arch::beam));
+        for tube in tubes {
+            let side = |p: Vec3| {
+                if tube.inward {
+                    self.tunnel_side(p)
+                } else {
+                    self.arch_side(p)
+                }
+            };
+            out.extend(
+                tube.balls(step)
+                    .into_iter()
+                    .filter(|&(p, _)| side(p))
+                    .map(|(p, r)| (p, r + clearance)),
+            );
+        }
+        for q in self.quads.iter().filter(|q| q.seed) {
+            let c = q.corners.iter().sum::<Vec3>() / 4.0;
+            let r = q.corners.iter().map(|p| p.distance(c)).fold(0.0, f32::max);
+            out.push((c, r + clearance));
+        }
+        for d in self.discs.iter().filter(|d| d.seed) {
+            out.push((d.center, d.radius + clearance));
+        }
+        Room::new(out)
     }
 }

@@ -23,7 +23,8 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::compound::{Arch, Profile, Tunnel};
+use super::compound::{Arch, Profile, Tube};
+use super::terrain::TerrainSurface;
 use super::constraint::{ConstraintPoint, FeatureCurve, reproject, slope_bitangent};
 use super::shapes::{Disc, Quad};
 use super::{BSpline, CurveError, Features};
@@ -159,18 +160,26 @@ pub struct TunnelSpec {
     pub roughness: NonNegative,
 }
 
-/// A natural arch from three curves (top, underside, ground).
+/// A natural arch: a rock slab from foot to foot, thinnest at the crown.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ArchSpec {
-    /// One foot.
+    /// One foot (the centre of the slab where it meets the ground).
     pub from: Point,
     /// The other foot.
     pub to: Point,
     /// Apex height of the top above the feet.
     pub height: Positive,
-    /// Vertical thickness at the apex.
+    /// Thickness of the slab at the crown.
     pub thickness: Positive,
-    /// Flank slope in degrees below the horizontal (default 45).
+    /// Width of the slab at the crown, across the span (default: twice the thickness).
+    #[serde(default)]
+    pub width: Option<Positive>,
+    /// Thickness at the feet (default: three times the crown's).
+    #[serde(default)]
+    pub abutment: Option<Positive>,
+    /// Version-1 files: the slope in degrees of the flanks of the old two-curve beam. When
+    /// `width` is absent it sets it: `thickness / tan(flank)`, the width at which flanks
+    /// of that slope close the beam.
     #[serde(default)]
     pub flank: Option<Finite>,
     /// Half-length of a ground curve under the apex, across the span (none by default).
@@ -341,6 +350,17 @@ pub struct FeatureVolumeSpec {
     /// Interpolation of S between the voxel nodes (trilinear by default).
     #[serde(default)]
     pub interpolation: Interpolation,
+    /// The scene's terrain as boundary conditions: it is sampled over the domain (every
+    /// voxel) and its surface enters the pipeline as seed triangles (see
+    /// [`super::terrain`]), so S reproduces the ground away from the features. Put the
+    /// volume in a `Replace` node over the terrain. Off by default.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub on_terrain: bool,
+    /// With `on_terrain`, the room left to the features: the terrain's samples give way
+    /// within this many metres of a curve's ribbon or a tube's section (default: 4
+    /// voxels).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clearance: Option<Positive>,
 }
 
 /// Reads a RON file with the tree files' options (`Some` implicit, newtype variants
@@ -530,11 +550,12 @@ impl FeatureSet {
         }
         for (i, t) in self.tunnels.iter().enumerate() {
             let what = || label("tunnel", i, &t.name);
-            out.tunnels.push(Tunnel {
+            out.tunnels.push(Tube {
                 path: spline(r.points(&t.path, &what)?, &what)?,
                 width: profile(&t.width, &|| format!("{} width", what()))?,
                 height: profile(&t.height, &|| format!("{} height", what()))?,
                 noise: Vec2::new(t.amplitude.0, t.roughness.0),
+                inward: true,
             });
         }
         for (i, a) in self.arches.iter().enumerate() {
@@ -552,12 +573,25 @@ impl FeatureSet {
                     "thickness must be less than height",
                 ));
             }
+            let thickness = a.thickness.0;
+            let width = match (a.width, a.flank) {
+                (Some(w), _) => w.0,
+                (None, Some(f)) if f.0 > 1.0 && f.0 < 89.0 => thickness / f.0.to_radians().tan(),
+                (None, Some(f)) => {
+                    return Err(CurveError::invalid(
+                        format!("{} flank", what()),
+                        format!("{f} degrees: must lie between 1 and 89 (or give `width`)"),
+                    ));
+                }
+                (None, None) => 2.0 * thickness,
+            };
             out.arches.push(Arch {
                 from,
                 to,
                 height: a.height.0,
-                thickness: a.thickness.0,
-                flank: a.flank.map_or(45.0, |f| f.0),
+                thickness,
+                width,
+                abutment: a.abutment.map_or(3.0 * thickness, |b| b.0),
                 ground: a.ground.map(|g| g.0),
                 noise: Vec2::new(a.amplitude.0, a.roughness.0),
             });
@@ -611,6 +645,7 @@ impl FeatureVolumeSpec {
         let h = self.voxel.0;
         let (a, b) = (self.domain.0.0, self.domain.1.0);
         let domain = Aabb::new(a, b);
+        let transition = self.transition.map_or(2.0 * h, |t| t.0);
         let p = Params {
             domain,
             voxel: h,
@@ -623,12 +658,13 @@ impl FeatureVolumeSpec {
             max_memory,
             ribbon: self.ribbon_width(),
             keep_normals: false,
+            transition,
         };
         let f = FieldParams {
             domain,
             voxel: h,
             orientation: self.orientation,
-            transition: self.transition.map_or(2.0 * h, |t| t.0),
+            transition,
             falloff: self.falloff.map_or(4.0 * h, |t| t.0),
             fbm: self.noise.fbm(seed),
             interpolation: self.interpolation,
@@ -661,7 +697,7 @@ impl FeatureVolumeSpec {
     ) -> Result<SField, CurveError> {
         let no_ground = |_: Vec2| None;
         let set = self.feature_set(base_dir)?;
-        let features = set
+        let mut features = set
             .resolve(opts.ground.unwrap_or(&no_ground))
             .map_err(|e| match e {
                 CurveError::Invalid { what, msg } => CurveError::Invalid {
@@ -670,7 +706,44 @@ impl FeatureVolumeSpec {
                 },
                 e => e,
             })?;
+        if self.on_terrain {
+            if self.orientation != Orientation::Solid {
+                return Err(CurveError::invalid(
+                    format!("{} on_terrain", self.label()),
+                    "terrain boundary conditions need `orientation: Solid` (the volume stands in for the ground)",
+                ));
+            }
+            let ground = opts.ground.ok_or_else(|| {
+                CurveError::invalid(
+                    format!("{} on_terrain", self.label()),
+                    "terrain boundary conditions need a terrain: the scene has no Heightfield",
+                )
+            })?;
+            features.terrain = Some(self.terrain_surface(&features, ground));
+        }
         self.build_features(&features, opts.seed, opts.max_memory)
+    }
+
+    /// The terrain under the volume, sampled over its domain, with room made for the
+    /// features.
+    fn terrain_surface(&self, features: &Features, ground: Ground<'_>) -> TerrainSurface {
+        let h = self.voxel.0;
+        let (a, b) = (self.domain.0.0, self.domain.1.0);
+        let clearance = self.clearance.map_or(4.0 * h, |c| c.0);
+        let beta = features
+            .proxy(h, h, h, 0.0)
+            .vertices
+            .iter()
+            .map(|v| v.noise.y)
+            .fold(0.0, f32::max);
+        let mut surface = TerrainSurface::new(ground, &Aabb::new(a, b), h, clearance, beta);
+        // The compounds' sides of the ground are read off the surface itself.
+        let on = Features {
+            terrain: Some(surface.clone()),
+            ..features.clone()
+        };
+        surface.make_room(&on.room(0.5 * h, self.ribbon_width(), clearance));
+        surface
     }
 
     /// Runs the pipeline on resolved primitives.

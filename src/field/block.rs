@@ -316,6 +316,16 @@ impl Tree {
                     s.values.push(v);
                 }
             }
+            Node::Replace { base, by, mix } => {
+                self.block(*base, pts, bounds, out, s);
+                if mix.interval(bounds).hi <= 0.0 {
+                    return;
+                }
+                let mut v = s.values(out.len());
+                self.block(*by, pts, bounds, &mut v, s);
+                pts.for_each(|i, p| out[i] += mix.weight(p) * (v[i] - out[i]));
+                s.values.push(v);
+            }
             Node::Affine {
                 child, to_child, ..
             } => self.mapped(*child, pts, out, s, |p| to_child.transform_point3(p)),

@@ -63,6 +63,14 @@ impl Tree {
                     r.min(Interval::new(2.0 * T - ci.hi, 2.0 * T - ci.lo))
                 })
             }
+            Node::Replace { base, by, mix } => {
+                let ib = self.interval_at(*base, b);
+                if mix.interval(b).hi <= 0.0 {
+                    ib
+                } else {
+                    mix.mix_interval(b, ib, self.interval_at(*by, b))
+                }
+            }
             Node::Affine {
                 child, to_child, ..
             } => self.interval_at(*child, &map_box(to_child, b)),
@@ -98,6 +106,18 @@ impl Tree {
             Node::Union(children) | Node::Intersection(children) => max_of(children),
             Node::Difference { base, carves } => {
                 max_of(carves).max(self.lipschitz_box_at(*base, b))
+            }
+            Node::Replace { base, by, mix } => {
+                let w = mix.interval(b);
+                let lb = self.lipschitz_box_at(*base, b);
+                if w.hi <= 0.0 {
+                    return lb;
+                }
+                mix.mix_lipschitz(
+                    w,
+                    (lb, self.interval_at(*base, b)),
+                    (self.lipschitz_box_at(*by, b), self.interval_at(*by, b)),
+                )
             }
             Node::Affine {
                 child,
@@ -148,6 +168,21 @@ impl Tree {
             Node::Union(children) | Node::Intersection(children) => max_of(children),
             Node::Difference { base, carves } => {
                 max_of(carves).max(self.lipschitz_segment_with(*base, a, b, at))
+            }
+            Node::Replace { base, by, mix } => {
+                let w = mix.interval(&bx);
+                let lb = self.lipschitz_segment_with(*base, a, b, at);
+                if w.hi <= 0.0 {
+                    return lb;
+                }
+                mix.mix_lipschitz(
+                    w,
+                    (lb, self.interval_at(*base, &bx)),
+                    (
+                        self.lipschitz_segment_with(*by, a, b, at),
+                        self.interval_at(*by, &bx),
+                    ),
+                )
             }
             Node::Affine {
                 child,

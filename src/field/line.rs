@@ -436,6 +436,10 @@ impl<'t> Line<'t> {
                     self.walk(c, o, d, span);
                 }
             }
+            Node::Replace { base, by, .. } => {
+                self.walk(*base, o, d, span);
+                self.walk(*by, o, d, span);
+            }
             Node::Affine {
                 child, to_child, ..
             } => {

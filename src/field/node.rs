@@ -7,6 +7,7 @@ use glam::{Affine3A, Mat3A};
 use super::bvh::ChildBvh;
 use super::contract::Field;
 use super::primitive::Primitive;
+use super::replace::Transition;
 use super::warp::Warp;
 
 /// Index of a node in a [`super::Tree`] arena. Children always have smaller ids than their
@@ -48,6 +49,16 @@ pub enum Node {
         /// `‖M⁻¹‖₂`, the factor on the child's Lipschitz bounds.
         stretch: f32,
     },
+    /// Replacement: `f_base + w·(f_by − f_base)`, `w` the partition of unity of a region
+    /// ([`Transition`]): the base outside the region, `by` in its core.
+    Replace {
+        /// What is replaced (the terrain).
+        base: NodeId,
+        /// What stands in for it inside the region.
+        by: NodeId,
+        /// The region and its transition.
+        mix: Box<Transition>,
+    },
     /// Localized turbulence warp `f(p) = f_child(p + δ(p)·f_D(p))` (seed 002 §5.3).
     Warp {
         /// The warped subtree.
@@ -78,6 +89,7 @@ impl Node {
             Node::Difference { base, carves } => std::iter::once(*base)
                 .chain(carves.iter().copied())
                 .collect(),
+            Node::Replace { base, by, .. } => vec![*base, *by],
             Node::Affine { child, .. } | Node::Warp { child, .. } => vec![*child],
         }
     }
@@ -92,6 +104,7 @@ impl Node {
             Node::Union(_) => "union",
             Node::Intersection(_) => "intersection",
             Node::Difference { .. } => "difference",
+            Node::Replace { .. } => "replace",
             Node::Affine { .. } => "transform",
             Node::Warp { .. } => "warp",
         }

@@ -124,6 +124,22 @@ impl Pruner<'_> {
                     }
                 }
             }
+            Node::Replace { base, by, mix } => {
+                let w = mix.interval(b);
+                if w.hi <= 0.0 {
+                    return self.node(*base, b);
+                }
+                if w.lo >= 1.0 {
+                    return self.node(*by, b);
+                }
+                let (base, by) = (self.node(*base, b), self.node(*by, b));
+                let mut or_zero = |n: Option<NodeId>| n.unwrap_or_else(|| self.out.constant(0.0, None));
+                let (base, by) = match (base, by) {
+                    (None, None) => return None,
+                    (base, by) => (or_zero(base), or_zero(by)),
+                };
+                Some(self.out.replace(base, by, **mix, name))
+            }
             Node::Affine {
                 child, to_child, ..
             } => {

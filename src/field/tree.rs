@@ -10,6 +10,7 @@ use super::contract::{Elevation, Field};
 use super::falloff::T;
 use super::node::{Node, NodeId, spectral_norm};
 use super::primitive::Primitive;
+use super::replace::Transition;
 use super::slope_grid::blend_lipschitz;
 use super::warp::Warp;
 
@@ -59,6 +60,11 @@ impl TreeBuilder {
         self.nodes.push(node);
         self.info.push(info);
         (self.nodes.len() - 1) as NodeId
+    }
+
+    /// The support box of a node built so far.
+    pub fn support(&self, id: NodeId) -> Aabb {
+        self.info[id as usize].support
     }
 
     /// A skeletal primitive, stored inline in the arena.
@@ -134,6 +140,24 @@ impl TreeBuilder {
                 child,
                 to_child,
                 stretch,
+            },
+            name,
+        )
+    }
+
+    /// `base`, replaced by `by` inside `mix`'s region (see [`Transition`]).
+    pub fn replace(
+        &mut self,
+        base: NodeId,
+        by: NodeId,
+        mix: Transition,
+        name: Option<String>,
+    ) -> NodeId {
+        self.push(
+            Node::Replace {
+                base,
+                by,
+                mix: Box::new(mix),
             },
             name,
         )
@@ -247,6 +271,16 @@ impl TreeBuilder {
                     .map(|c| info(c).lipschitz)
                     .fold(info(base).lipschitz, f32::max);
                 (support, range.hull(Interval::ZERO), lipschitz)
+            }
+            Node::Replace { base, by, mix } => {
+                let (b, v) = (info(base), info(by));
+                let support = b
+                    .support
+                    .union(v.support.intersection(*mix.region()));
+                let everywhere = Interval::new(0.0, 1.0);
+                let lipschitz =
+                    mix.mix_lipschitz(everywhere, (b.lipschitz, b.range), (v.lipschitz, v.range));
+                (support, b.range.hull(v.range), lipschitz)
             }
             Node::Affine {
                 child,

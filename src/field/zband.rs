@@ -5,6 +5,7 @@ use super::bounds::{Interval, Rect, ZBands};
 use super::contract::{Elevation, Field, z_bands_by_interval};
 use super::falloff::T;
 use super::node::{Node, NodeId};
+use super::replace::Transition;
 use super::tree::Tree;
 
 /// The z-ranges covered by at least two of `ranges`: where several children of a sum can
@@ -71,6 +72,7 @@ impl Tree {
                     self.z_bands_at(c, fp, z, out);
                 }
             }
+            Node::Replace { base, by, mix } => self.replace_bands(id, [*base, *by], mix, fp, z, out),
             Node::Warp { child, warp } => {
                 // The child is evaluated at most `r` away: its bands, widened by `r`.
                 let r = warp.reach();
@@ -119,12 +121,60 @@ impl Tree {
         }
     }
 
+    /// The z-bands of the replace node `id`: its base's outside the region; inside, the
+    /// bands of both children, and the gaps between them where the mix's interval holds
+    /// `T` (there the children can disagree on the side, and the mix crosses between).
+    fn replace_bands(
+        &self,
+        id: NodeId,
+        [base, by]: [NodeId; 2],
+        mix: &Transition,
+        fp: &Rect,
+        z: Interval,
+        out: &mut ZBands,
+    ) {
+        let region = mix.region();
+        if !region.footprint().overlaps(fp) {
+            return self.z_bands_at(base, fp, z, out);
+        }
+        let inside = z.intersect(region.z());
+        // Above and below the region: the base alone.
+        for outside in [
+            Interval::new(z.lo, inside.lo.min(z.hi)),
+            Interval::new(inside.hi.max(z.lo), z.hi),
+        ] {
+            if !inside.is_empty() && outside.width() > 0.0 {
+                self.z_bands_at(base, fp, outside, out);
+            }
+        }
+        if inside.is_empty() {
+            return self.z_bands_at(base, fp, z, out);
+        }
+        let mut own = ZBands::new();
+        self.z_bands_at(base, fp, inside, &mut own);
+        self.z_bands_at(by, fp, inside, &mut own);
+        let subtree = self.subtree(id);
+        let mut lo = inside.lo;
+        for b in own.as_slice().iter().chain(&[Interval::point(inside.hi)]) {
+            let gap = Interval::new(lo, b.lo.max(lo));
+            if gap.width() > 0.0 {
+                z_bands_by_interval(&subtree, fp, gap, out);
+            }
+            lo = lo.max(b.hi);
+        }
+        out.extend(&own);
+    }
+
     /// The heightfield that node `id` equals over `fp`, with where that holds.
     pub fn elevation_at(&self, id: NodeId, fp: &Rect) -> Option<Elevation<'_>> {
         let support = &self.info[id as usize].support;
         match &self.nodes[id as usize] {
             Node::Primitive(f) => f.elevation(fp),
             Node::Leaf(f) => f.elevation(fp),
+            // Outside the region the node is its base.
+            Node::Replace { base, mix, .. } if !mix.region().footprint().overlaps(fp) => {
+                self.elevation_at(*base, fp)
+            }
             Node::Blend { .. } | Node::Union(_) | Node::Difference { .. } => {
                 let children = self.children_in_column(id, fp, support.z());
                 let (base, others): (NodeId, Vec<NodeId>) = match &self.nodes[id as usize] {

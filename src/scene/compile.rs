@@ -12,7 +12,7 @@ use std::sync::Arc;
 use crate::curves::FeatureVolumeSpec;
 use crate::curves::spec::BuildOptions;
 use crate::dem::{DemCache, HeightfieldField};
-use crate::field::{Aabb, Fbm, NodeId, Primitive, Tree, TreeBuilder, Warp};
+use crate::field::{Aabb, Fbm, NodeId, Primitive, Transition, Tree, TreeBuilder, Warp};
 use crate::io::DEFAULT_MEMORY_BUDGET;
 use crate::voxel::SField;
 
@@ -208,6 +208,33 @@ impl Compiler<'_> {
                     Affine3A::from_scale_rotation_translation(t.scale.0, rotation, t.translate.0);
                 let child = self.node(&t.child, depth + 1)?;
                 self.builder.transform(child, m, name)
+            }
+            NodeSpec::Replace(r) => {
+                let base = self.node(&r.base, depth + 1)?;
+                let by = self.node(&r.by, depth + 1)?;
+                let region = match (&r.region, &*r.by) {
+                    (Some(b), _) => Aabb::new(b.min.0, b.max.0),
+                    (None, NodeSpec::FeatureVolume(f)) => {
+                        let (_, field) = f.params(self.scene.seed, DEFAULT_MEMORY_BUDGET);
+                        field.domain.dilate(-field.falloff)
+                    }
+                    (None, _) => self.builder.support(by),
+                };
+                if region.is_empty() || !region.size().is_finite() {
+                    return Err(self.error(
+                        n,
+                        format!(
+                            "the region {:?} .. {:?} is empty or unbounded: give `region`",
+                            region.min, region.max
+                        ),
+                    ));
+                }
+                let blend = r.blend.map_or_else(
+                    || 0.125 * region.size().x.min(region.size().y),
+                    |b| b.0,
+                );
+                self.builder
+                    .replace(base, by, Transition::new(region, blend), name)
             }
             NodeSpec::Warp(w) => {
                 let child = self.node(&w.child, depth + 1)?;

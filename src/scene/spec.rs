@@ -61,6 +61,31 @@ pub enum NodeSpec {
     Instance(InstanceSpec),
     /// Localized turbulence warp of a subtree (seed 002 §5.3).
     Warp(WarpSpec),
+    /// `by` stands in for `base` inside a region, with a smooth transition near the
+    /// region's faces: how a terrain-aware Feature Volume goes into its terrain.
+    Replace(ReplaceSpec),
+}
+
+/// A replace node: `f_base + w·(f_by − f_base)` with `w` a partition of unity of the
+/// region (1 inside, falling to 0 over `blend` metres inside its faces, 0 outside).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReplaceSpec {
+    /// Unique node name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// What is replaced (the terrain).
+    pub base: Box<NodeSpec>,
+    /// What stands in for it: typically a `FeatureVolume` with `terrain: Some(())`.
+    pub by: Box<NodeSpec>,
+    /// The region (default: `by`'s support box; a Feature Volume's domain inside its face
+    /// falloff).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub region: Option<BoxSpec>,
+    /// Width of the transition inside the region's faces, in metres (default: an eighth
+    /// of the region's smaller horizontal side).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blend: Option<Positive>,
 }
 
 /// An n-ary operator node.
@@ -265,6 +290,7 @@ impl NodeSpec {
             NodeSpec::Transform(_) => "Transform",
             NodeSpec::Instance(_) => "Instance",
             NodeSpec::Warp(_) => "Warp",
+            NodeSpec::Replace(_) => "Replace",
         }
     }
 
@@ -282,6 +308,7 @@ impl NodeSpec {
             NodeSpec::Transform(n) => n.name.as_deref(),
             NodeSpec::Instance(n) => n.name.as_deref(),
             NodeSpec::Warp(n) => n.name.as_deref(),
+            NodeSpec::Replace(n) => n.name.as_deref(),
         }
     }
 
@@ -292,6 +319,7 @@ impl NodeSpec {
                 n.children.iter().collect()
             }
             NodeSpec::Difference(d) => std::iter::once(&*d.base).chain(&d.carves).collect(),
+            NodeSpec::Replace(r) => vec![&*r.base, &*r.by],
             NodeSpec::Transform(t) => vec![&*t.child],
             NodeSpec::Warp(w) => vec![&*w.child],
             NodeSpec::Anchor(a) => vec![&*a.child],
@@ -322,6 +350,7 @@ impl NodeSpec {
             NodeSpec::Difference(d) => std::iter::once(&mut *d.base)
                 .chain(d.carves.iter_mut())
                 .collect(),
+            NodeSpec::Replace(r) => vec![&mut *r.base, &mut *r.by],
             NodeSpec::Transform(t) => vec![&mut *t.child],
             NodeSpec::Warp(w) => vec![&mut *w.child],
             NodeSpec::Anchor(a) => vec![&mut *a.child],

@@ -53,6 +53,13 @@ pub struct Params {
     /// Keep the diffused guidance normals N in the result ([`Volume::normals`]), e.g.
     /// for Feature Curve expansion.
     pub keep_normals: bool,
+    /// Width of the sigmoid the field puts on S ([`super::FieldParams::transition`]). The
+    /// result's S is clamped to `±(transition + α_max + 2 voxels)`: beyond
+    /// `transition + α_max` the field is constant, and far from the seeds S holds
+    /// whatever the coarse levels left (on a terrain, distances of a hundred metres),
+    /// which meets the fine band's values in steep ramps that would only inflate the
+    /// Lipschitz bounds.
+    pub transition: f32,
 }
 
 /// Guidance ribbons reach at least this many voxels of each level (see
@@ -270,6 +277,7 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
         * features.outside_of_thin(TUNNEL_VOXELS * geoms[top].h);
     let finest = features.proxy(p.ribbon, p.ribbon, 0.5 * p.voxel, 0.0);
     let uniform_noise = finest.vertices.windows(2).all(|w| w[0].noise == w[1].noise);
+    let max_alpha = finest.vertices.iter().map(|v| v.noise.x).fold(0.0, f32::max);
     drop(finest);
     let mut seen_seeds = false;
     let mut levels: Vec<Bricks> = Vec::new();
@@ -361,6 +369,18 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
             }
         };
         let mut n = init(&n_ch);
+        // Around tubes too thin for the coarser level the prolonged guidance is that of
+        // their surroundings (on a terrain, the ground's upward normals): cleared, it
+        // fills from the tubes' own constraints (a zero neighbour weighs fully, §4.3).
+        let fresh = features.fresh_room(TUNNEL_VOXELS * geom.h, 2.0 * geom.h);
+        if !first && !fresh.is_empty() {
+            n.par_iter_mut().enumerate().for_each(|(i, n)| {
+                let g = bricks.node_coord(i);
+                if fresh.contains(geom.origin + g.as_vec3() * geom.h) {
+                    *n = Vec3::ZERO;
+                }
+            });
+        }
         let mut b = if streamline { init(&b_ch) } else { Vec::new() };
         let mut r = if first {
             let mean = cons.iter().map(|c| c.noise).sum::<Vec2>() / cons.len().max(1) as f32;
@@ -482,7 +502,11 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
     let clock = Instant::now();
     let first = top - base;
     let levels: Vec<Bricks> = levels.drain(first..).collect();
-    let s: Vec<Vec<f32>> = s_ch.drain(first..).collect();
+    let cap = p.transition + max_alpha + 2.0 * p.voxel;
+    let mut s: Vec<Vec<f32>> = s_ch.drain(first..).collect();
+    s.par_iter_mut()
+        .flat_map(|s| s.par_iter_mut())
+        .for_each(|v| *v = v.clamp(-cap, cap));
     let alpha: Vec<Vec<f32>> = r_ch[first..]
         .iter()
         .map(|r| r.iter().map(|v| v.x).collect())

@@ -118,6 +118,9 @@ fn emit_node(tree: &Tree, b: &mut TapeBuilder, id: NodeId, node: &Node) -> Resul
                 b.combine(Combine::Difference)?;
             }
         }
+        Node::Replace { .. } => {
+            return Err(no_encoding(tree, id, "replace", "no tape op yet"));
+        }
         Node::Affine {
             child, to_child, ..
         } => {
