@@ -2,6 +2,7 @@
 //! draws the same numbers and the tests need no RNG crate.
 
 use glam::Vec3;
+use karstic::field::Aabb;
 
 /// SplitMix64 (Steele, Lea and Flood 2014): the state is the seed, advanced by a constant
 /// and mixed on every draw.
@@ -27,6 +28,11 @@ impl Rng {
         a + (b - a) * self.f32()
     }
 
+    /// Uniform in the box `b`.
+    pub fn in_box(&mut self, b: &Aabb) -> Vec3 {
+        b.min + Vec3::new(self.f32(), self.f32(), self.f32()) * b.size()
+    }
+
     /// Uniform in the ball of radius `r`.
     pub fn in_ball(&mut self, r: f32) -> Vec3 {
         loop {
@@ -37,6 +43,16 @@ impl Rng {
             );
             if p.length_squared() <= 1.0 {
                 return p * r;
+            }
+        }
+    }
+
+    /// A uniform unit vector.
+    pub fn dir(&mut self) -> Vec3 {
+        loop {
+            let v = self.in_ball(1.0);
+            if v.length_squared() > 0.01 {
+                return v.normalize();
             }
         }
     }
