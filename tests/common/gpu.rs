@@ -2,18 +2,18 @@
 
 use glam::Vec3;
 
-/// The shared GPU context of a test binary, `None` (after printing a notice) when there is
-/// no adapter; panics when an adapter exists but the tracer cannot run on it.
+use super::{REQUIRE_GPU, unavailable};
+
+/// The shared GPU context of a test binary; `None` (after a notice) when there is no
+/// adapter, a failure instead where [`REQUIRE_GPU`] is set; panics when an adapter exists
+/// but the tracer cannot run on it.
 pub fn gpu() -> Option<&'static karstic::render::gpu::GpuContext> {
     use karstic::render::gpu::{GpuContext, GpuError};
     static CTX: std::sync::OnceLock<Option<GpuContext>> = std::sync::OnceLock::new();
     CTX.get_or_init(|| match GpuContext::new() {
-        Ok(c) => {
-            eprintln!("GPU tests on {}", c.adapter);
-            Some(c)
-        }
+        Ok(c) => Some(c),
         Err(e @ GpuError::NoAdapter(_)) => {
-            eprintln!("NOTICE: skipping the GPU comparison: {e}");
+            unavailable(REQUIRE_GPU, &format!("GPU comparisons: {e}"));
             None
         }
         Err(e) => panic!("the GPU adapter exists but the tracer cannot run on it: {e}"),

@@ -2,7 +2,7 @@
 //! fields (a σ-sphere with analytic ground truth, a sum of many Wyvill point blobs with
 //! local Lipschitz bounds from a grid, a heightfield-like terrain chunk) and their GPU
 //! tapes, the Jacksboro DEM, the seeded random generator, bound and image checks, and the
-//! GPU context.
+//! GPU context, and the switch that makes a missing optional tool a failure.
 
 pub mod dem;
 pub mod tapes;
@@ -11,6 +11,7 @@ mod blobs;
 mod frames;
 mod gpu;
 mod lipschitz;
+mod optional;
 mod rng;
 mod sphere;
 mod terrain;
@@ -20,6 +21,7 @@ pub use blobs::Blobs;
 pub use frames::{assert_frames_match, depth_agreement};
 pub use gpu::{assert_probes_match, gpu};
 pub use lipschitz::check_segment_lipschitz;
+pub use optional::{REQUIRE_GLTF_VALIDATOR, REQUIRE_GPU, unavailable};
 pub use rng::Rng;
 pub use sphere::SigmaSphere;
 pub use terrain::Terrain;
