@@ -58,14 +58,17 @@ pub fn khronos_validate(file: &Path) -> Option<(bool, String)> {
     Some((out.status.success(), text))
 }
 
-/// Asserts that the validator (when available) reports no error and no warning on `file`.
+/// Asserts that the validator (when available) reports nothing on `file`: no error, no
+/// warning, and not even an info or a hint.
 pub fn assert_valid(file: &Path) {
     if let Some((ok, report)) = khronos_validate(file) {
         assert!(ok, "{report}");
-        assert!(
-            report.contains("\"numErrors\": 0") && report.contains("\"numWarnings\": 0"),
-            "{}: {report}",
-            file.display()
-        );
+        for count in ["numErrors", "numWarnings", "numInfos", "numHints"] {
+            assert!(
+                report.contains(&format!("\"{count}\": 0")),
+                "{}: {report}",
+                file.display()
+            );
+        }
     }
 }
