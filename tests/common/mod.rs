@@ -1,8 +1,9 @@
-//! Shared helpers of the renderer's tests and benches, one file per concern: small test
-//! fields (a σ-sphere with analytic ground truth, a sum of many Wyvill point blobs with
-//! local Lipschitz bounds from a grid, a heightfield-like terrain chunk) and their GPU
-//! tapes, the Jacksboro DEM, the seeded random generator, bound and image checks, and the
-//! GPU context, and the switch that makes a missing optional tool a failure.
+//! Helpers shared by the test suites (and, through `#[path]`, the benches), one file per
+//! concern: the seeded random generator; small test fields for the renderer (a σ-sphere
+//! with analytic ground truth, a sum of many Wyvill point blobs with local Lipschitz
+//! bounds from a grid, a heightfield-like terrain chunk) and their GPU tapes; the
+//! Jacksboro DEM; bound and image checks; the GPU context; and the switch that makes a
+//! missing optional tool (GPU adapter, glTF validator) a failure.
 
 pub mod dem;
 pub mod tapes;
