@@ -2,6 +2,11 @@
 //! samples): point evaluation, per-column z-bands and elevation queries, block evaluation,
 //! and the generic interval-subdivision z-bands as the baseline the pyramid replaces.
 
+#[path = "../tests/common/rng.rs"]
+#[allow(dead_code)] // the draws this bench does not use
+mod rng;
+
+use rng::Rng;
 use std::hint::black_box;
 use std::path::Path;
 
@@ -20,16 +25,8 @@ fn leaf() -> HeightfieldField {
 
 fn points(f: &HeightfieldField, n: usize) -> Vec<Vec3> {
     let s = f.support();
-    let mut seed = 9u64;
-    let mut r = move || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (seed >> 40) as f32 / (1u64 << 24) as f32
-    };
-    (0..n)
-        .map(|_| s.min + s.size() * Vec3::new(r(), r(), r()))
-        .collect()
+    let mut rng = Rng(9);
+    (0..n).map(|_| rng.in_box(&s)).collect()
 }
 
 /// Footprints of 100 × 100 MC columns of 30 m in raster order (as a mesher walks them),

@@ -1,6 +1,11 @@
 //! Point evaluation cost of the skeletal primitives, per kind, with and without noise.
 //! Baseline: `value/sphere` (the leaf of the lead's 100,000-sphere blend).
 
+#[path = "../tests/common/rng.rs"]
+#[allow(dead_code)] // the draws this bench does not use
+mod rng;
+
+use rng::Rng;
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
@@ -10,16 +15,8 @@ use karstic::field::{Aabb, Field, Primitive, PrimitiveSpec};
 const N: usize = 4096;
 
 fn points(b: &Aabb) -> Vec<Vec3> {
-    let mut s = 0x1234_5678_9abc_def0u64;
-    let mut r = move || {
-        s = s
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (s >> 40) as f32 / (1u64 << 24) as f32
-    };
-    (0..N)
-        .map(|_| b.min + Vec3::new(r(), r(), r()) * b.size())
-        .collect()
+    let mut rng = Rng(0x1234_5678_9abc_def0);
+    (0..N).map(|_| rng.in_box(b)).collect()
 }
 
 fn prim(s: &str) -> Primitive {

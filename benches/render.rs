@@ -21,6 +21,7 @@
 //! latter tracks the work better.
 
 #[path = "../tests/common/mod.rs"]
+#[allow(dead_code, unused_imports)] // the helpers this bench does not use
 mod common;
 
 use common::{Blobs, Terrain, dem, tapes};

@@ -7,6 +7,11 @@
 //! * point queries one by one (`Field::value` over rayon chunks) and batched
 //!   (`Tree::values`, parallel chunks).
 
+#[path = "../tests/common/rng.rs"]
+#[allow(dead_code)] // the draws this bench does not use
+mod rng;
+
+use rng::Rng;
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
@@ -14,23 +19,12 @@ use glam::Vec3;
 use karstic::field::{Field, Grid, Tree, eval_grid, eval_grid_naive};
 use rayon::prelude::*;
 
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (self.0 >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
-
 /// 100,000 spheres of radius 2 m and falloff 3 m over [0, 5000]² with centres at z ∈ [0, 20].
 pub fn spheres_scene() -> Tree {
-    let mut rng = Lcg(42);
+    let mut rng = Rng(42);
     let mut text = String::from("(version: 1, root: Blend(children: [\n");
     for _ in 0..100_000 {
-        let (x, y, z) = (rng.next() * 5000.0, rng.next() * 5000.0, rng.next() * 20.0);
+        let (x, y, z) = (rng.f32() * 5000.0, rng.f32() * 5000.0, rng.f32() * 20.0);
         text +=
             &format!("Primitive(shape: Sphere(center: ({x}, {y}, {z}), radius: 2), falloff: 3),\n");
     }
@@ -59,14 +53,14 @@ fn bench(c: &mut Criterion) {
     let spheres = spheres_scene();
     let blobs = blobs_scene();
 
-    let mut rng = Lcg(7);
+    let mut rng = Rng(7);
     let n = 1 << 20;
     let uniform: Vec<Vec3> = (0..n)
         .map(|_| {
             Vec3::new(
-                rng.next() * 5000.0,
-                rng.next() * 5000.0,
-                rng.next() * 25.0 - 2.5,
+                rng.f32() * 5000.0,
+                rng.f32() * 5000.0,
+                rng.f32() * 25.0 - 2.5,
             )
         })
         .collect();

@@ -4,6 +4,11 @@
 //! with and without varying noise parameters (the noise diffusion stage); and the S-field
 //! leaf's evaluation with trilinear and tricubic interpolation.
 
+#[path = "../tests/common/rng.rs"]
+#[allow(dead_code)] // the draws this bench does not use
+mod rng;
+
+use rng::Rng;
 use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -51,14 +56,10 @@ fn interpolation(c: &mut Criterion) {
     let cubic = spec.build_features(&features, 0, 8 << 30).unwrap();
     // Points near the surface: a deterministic scatter, kept where |S| < 3 m.
     let d = lin.params().domain;
-    let mut seed = 1u64;
+    let mut rng = Rng(1);
     let mut points = Vec::new();
     while points.len() < 100_000 {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let r = |k: u32| ((seed >> (k * 21)) & 0x1f_ffff) as f32 / 0x1f_ffff as f32;
-        let p = d.min + glam::Vec3::new(r(0), r(1), r(2)) * d.size();
+        let p = rng.in_box(&d);
         if lin.s_value(p).abs() < 3.0 {
             points.push(p);
         }

@@ -2,6 +2,7 @@
 //! displacement on), gradients against finite differences, determinism, the cache, and
 //! the memory of the sparse grid on a large domain.
 
+use crate::common::Rng;
 use crate::curves_util;
 
 use std::path::Path;
@@ -38,20 +39,6 @@ fn noisy_ridge_with(interpolation: Interpolation) -> SField {
     spec.build_features(&f, 3, 1 << 32).unwrap()
 }
 
-struct Rng(u64);
-impl Rng {
-    fn f(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn point(&mut self, b: &Aabb) -> Vec3 {
-        b.min + Vec3::new(self.f(), self.f(), self.f()) * b.size()
-    }
-}
-
 /// `loose`: the largest accepted median ratio of the box Lipschitz bound to the gradient
 /// near the surface (worst-case noise bounds are far above typical noise slopes).
 fn check_soundness(f: &SField, seed: u64, loose: f32) {
@@ -63,11 +50,11 @@ fn check_soundness(f: &SField, seed: u64, loose: f32) {
     let mut max_ratio = 0.0f32;
     for _ in 0..3000 {
         // Lipschitz on random pairs, some close, some far, some outside the support.
-        let a = rng.point(&around);
-        let b = if rng.f() < 0.5 {
-            a + (Vec3::new(rng.f(), rng.f(), rng.f()) - 0.5) * 3.0
+        let a = rng.in_box(&around);
+        let b = if rng.f32() < 0.5 {
+            a + (Vec3::new(rng.f32(), rng.f32(), rng.f32()) - 0.5) * 3.0
         } else {
-            rng.point(&around)
+            rng.in_box(&around)
         };
         let (fa, fb) = (f.value(a), f.value(b));
         let d = a.distance(b).max(1e-6);
@@ -86,7 +73,7 @@ fn check_soundness(f: &SField, seed: u64, loose: f32) {
     // Near the surface, the box bound is within a sane factor of the true slope.
     let mut ratios = Vec::new();
     for _ in 0..4000 {
-        let p = rng.point(&support);
+        let p = rng.in_box(&support);
         let (v, g) = f.value_grad(p);
         if (v - T).abs() < 0.05 && g.length() > 1e-3 {
             ratios.push(f.lipschitz_box(&Aabb::around(p, 0.5)) / g.length());
@@ -108,14 +95,14 @@ fn check_soundness(f: &SField, seed: u64, loose: f32) {
     );
     for _ in 0..300 {
         // Intervals and box Lipschitz bounds over random boxes of all sizes.
-        let c = rng.point(&around);
-        let r = 0.3 + 20.0 * rng.f() * rng.f();
+        let c = rng.in_box(&around);
+        let r = 0.3 + 20.0 * rng.f32() * rng.f32();
         let b = Aabb::around(c, r);
         let iv = f.interval(&b);
         let lb = f.lipschitz_box(&b);
         let mut prev: Option<(Vec3, f32)> = None;
         for _ in 0..60 {
-            let p = rng.point(&b);
+            let p = rng.in_box(&b);
             let v = f.value(p);
             assert!(iv.contains(v), "interval {iv:?} misses {v} at {p} in {b:?}");
             if let Some((q, w)) = prev {
@@ -130,7 +117,7 @@ fn check_soundness(f: &SField, seed: u64, loose: f32) {
     for _ in 0..400 {
         // Gradient against central differences, away from the min() switch and cell faces
         // (both are kinks of a piecewise-smooth field): compare on smooth samples only.
-        let p = rng.point(&support.dilate(-2.0));
+        let p = rng.in_box(&support.dilate(-2.0));
         let (v, g) = f.value_grad(p);
         assert!((v - f.value(p)).abs() < 1e-5);
         let e = 1e-3;
@@ -159,12 +146,12 @@ fn check_s_slope(f: &SField, seed: u64) -> f32 {
     let (mut rng, dom, ls) = (Rng(seed), f.support().dilate(-0.5), f.s_lipschitz());
     let mut seen = 0.0f32;
     for i in 0..20_000 {
-        let a = rng.point(&dom);
-        let off = Vec3::new(rng.f(), rng.f(), rng.f()) - 0.5;
+        let a = rng.in_box(&dom);
+        let off = Vec3::new(rng.f32(), rng.f32(), rng.f32()) - 0.5;
         let b = if i % 2 == 0 {
             a + off * 0.2
         } else {
-            rng.point(&dom)
+            rng.in_box(&dom)
         };
         let d = a.distance(b).max(1e-6);
         let q = (f.s_value(a) - f.s_value(b)).abs() / d;
@@ -186,12 +173,12 @@ fn check_s_boxes(f: &SField, seed: u64) {
     let h = f.params().voxel;
     let dom = f.support();
     for _ in 0..3000 {
-        let b = Aabb::around(rng.point(&dom), h * (0.3 + 2.0 * rng.f()));
+        let b = Aabb::around(rng.in_box(&dom), h * (0.3 + 2.0 * rng.f32()));
         let (iv, lb) = (f.s_interval(&b), f.s_lipschitz_box(&b));
         let b = b.intersection(dom);
         let mut prev: Option<(Vec3, f32)> = None;
         for _ in 0..40 {
-            let p = rng.point(&b);
+            let p = rng.in_box(&b);
             let v = f.s_value(p);
             // The value-only path (the march's) is the gradient path's value, bit for bit.
             assert_eq!(v.to_bits(), f.s_grad(p).0.to_bits(), "S' at {p}");
@@ -268,10 +255,10 @@ fn tricubic_bounds_are_sound() {
     let mut rng = Rng(13);
     let dom = f.support().dilate(-3.0);
     for _ in 0..400 {
-        let b = Aabb::around(rng.point(&dom), 0.5 + 3.0 * rng.f());
+        let b = Aabb::around(rng.in_box(&dom), 0.5 + 3.0 * rng.f32());
         let iv = f.interval(&b);
         for _ in 0..40 {
-            let p = rng.point(&b);
+            let p = rng.in_box(&b);
             assert!(iv.contains(f.value(p)));
         }
     }
@@ -290,7 +277,7 @@ fn tricubic_interpolates_the_nodes_and_is_smooth() {
     let (mut differ, mut n) = (0, 0);
     for _ in 0..4000 {
         // At the nodes both interpolants take the node values.
-        let g = (Vec3::new(rng.f(), rng.f(), rng.f()) * (fine.dims - 1).as_vec3()).floor();
+        let g = (Vec3::new(rng.f32(), rng.f32(), rng.f32()) * (fine.dims - 1).as_vec3()).floor();
         let p = fine.origin + g * fine.h;
         let (a, b) = (f.s_value(p), lin.s_value(p));
         assert!(
@@ -313,8 +300,9 @@ fn tricubic_interpolates_the_nodes_and_is_smooth() {
         let mut rng = Rng(22);
         let mut j = Vec::new();
         while j.len() < 300 {
-            let g = (Vec3::new(rng.f(), rng.f(), rng.f()) * (fine.dims - 1).as_vec3()).floor();
-            let p = fine.origin + (g + Vec3::new(0.0, rng.f(), rng.f())) * fine.h;
+            let g =
+                (Vec3::new(rng.f32(), rng.f32(), rng.f32()) * (fine.dims - 1).as_vec3()).floor();
+            let p = fine.origin + (g + Vec3::new(0.0, rng.f32(), rng.f32())) * fine.h;
             if f.s_value(p).abs() > 2.0 * fine.h || !f.support().dilate(-8.0).contains(p) {
                 continue;
             }
@@ -338,12 +326,12 @@ fn z_bands_contain_the_surface() {
     let mut rng = Rng(9);
     let d = f.support();
     for _ in 0..40 {
-        let c = rng.point(&d);
+        let c = rng.in_box(&d);
         let fp = Rect::new(c.truncate() - 2.0, c.truncate() + 2.0);
         let mut bands = ZBands::new();
         f.z_bands(&fp, Interval::new(d.min.z - 1.0, d.max.z + 1.0), &mut bands);
         for _ in 0..10 {
-            let xy = fp.min + (fp.max - fp.min) * glam::Vec2::new(rng.f(), rng.f());
+            let xy = fp.min + (fp.max - fp.min) * glam::Vec2::new(rng.f32(), rng.f32());
             let mut last = f.value(xy.extend(d.max.z + 1.0)) > T;
             for k in 0..400 {
                 let z = d.max.z + 1.0 - k as f32 * (d.size().z + 2.0) / 400.0;

@@ -1,34 +1,14 @@
 //! The implicit heightfield leaf (seed 002 §5.1): every bound is checked by sampling, on the
 //! real UTM DEM (with its nodata edges) and on synthetic grids with polygons and bicubic.
 
+use crate::common::Rng;
+
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
 use karstic::dem::{Heightfield, HeightfieldField, HeightfieldSpec, ImplicitParams, Interpolation};
 use karstic::field::falloff::sigma;
 use karstic::field::{Aabb, Field, Interval, Rect, T, ZBands};
-
-struct Rng(u64);
-
-impl Rng {
-    fn f(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f()
-    }
-    fn point(&mut self, b: &Aabb) -> Vec3 {
-        Vec3::new(
-            self.range(b.min.x, b.max.x),
-            self.range(b.min.y, b.max.y),
-            self.range(b.min.z, b.max.z),
-        )
-    }
-}
 
 fn utm_leaf(r: f32, interp: Interpolation) -> HeightfieldField {
     let ron = format!(
@@ -80,8 +60,8 @@ fn leaves() -> Vec<(&'static str, HeightfieldField)> {
 /// A random box around the support: sizes from a fraction of a cell to a large part.
 fn random_box(f: &HeightfieldField, rng: &mut Rng) -> Aabb {
     let s = f.support().dilate(20.0);
-    let c = rng.point(&s);
-    let size = s.size() * rng.f().powi(3) * 0.3;
+    let c = rng.in_box(&s);
+    let size = s.size() * rng.f32().powi(3) * 0.3;
     Aabb::new(c - size * 0.5, c + size * 0.5)
 }
 
@@ -95,7 +75,7 @@ fn intervals_contain_sampled_values() {
             let iv = f.interval(&b);
             informative += (iv.width() < 2.0 * T) as usize;
             for _ in 0..20 {
-                let p = rng.point(&b);
+                let p = rng.in_box(&b);
                 let v = f.value(p);
                 assert!(
                     iv.lo - 1e-5 <= v && v <= iv.hi + 1e-5,
@@ -123,7 +103,7 @@ fn lipschitz_bounds_hold_on_random_pairs() {
                 lb <= l * 1.0001,
                 "{name}: box bound {lb} above the global {l}"
             );
-            let (p, q) = (rng.point(&b), rng.point(&b));
+            let (p, q) = (rng.in_box(&b), rng.in_box(&b));
             let d = p.distance(q);
             if d < 1e-2 {
                 continue;
@@ -150,7 +130,7 @@ fn gradients_match_finite_differences() {
         let mut checked = 0;
         while checked < 400 {
             // points near the surface, where the gradient matters
-            let mut p = rng.point(&s);
+            let mut p = rng.in_box(&s);
             let h = f
                 .heightfield()
                 .sample(p.truncate(), f.params().interpolation);
@@ -190,7 +170,7 @@ fn z_bands_contain_every_sampled_crossing() {
         let mut bands = ZBands::new();
         let (mut crossings, mut pruned) = (0, 0.0);
         for _ in 0..600 {
-            let c = rng.point(&s).truncate();
+            let c = rng.in_box(&s).truncate();
             let half = Vec2::new(rng.range(1.0, 60.0), rng.range(1.0, 60.0));
             let fp = Rect::new(c - half, c + half);
             bands.clear();
@@ -236,7 +216,7 @@ fn elevation_answers_only_where_the_field_is_the_heightfield() {
         let s = f.support();
         let (mut some, mut none) = (0, 0);
         for _ in 0..3000 {
-            let c = rng.point(&s).truncate();
+            let c = rng.in_box(&s).truncate();
             let half = Vec2::splat(rng.range(1.0, 200.0));
             let fp = Rect::new(c - half, c + half);
             let Some(e) = f.elevation(&fp) else {
@@ -272,7 +252,7 @@ fn field_vanishes_outside_the_support_and_the_domain() {
         let s = f.support();
         let big = s.dilate(500.0);
         for _ in 0..20000 {
-            let p = rng.point(&big);
+            let p = rng.in_box(&big);
             let v = f.value(p);
             assert!((0.0..=2.0 * T).contains(&v), "{name}: {v}");
             if !s.contains(p) {
@@ -394,7 +374,7 @@ fn small_boxes_near_the_terrain_have_sound_and_sharp_bounds() {
         let (mut above, mut known) = (0, 0);
         let mut checked = 0;
         while checked < 3000 {
-            let c = rng.point(&s);
+            let c = rng.in_box(&s);
             let h = f.heightfield().sample(c.truncate(), interp);
             if h.is_nan() {
                 continue;
@@ -411,7 +391,7 @@ fn small_boxes_near_the_terrain_have_sound_and_sharp_bounds() {
             let iv = f.interval(&b);
             let lb = f.lipschitz_box(&b);
             for _ in 0..20 {
-                let (p, q) = (rng.point(&b), rng.point(&b));
+                let (p, q) = (rng.in_box(&b), rng.in_box(&b));
                 let (vp, vq) = (f.value(p), f.value(q));
                 assert!(
                     iv.lo - 1e-5 <= vp && vp <= iv.hi + 1e-5,

@@ -1,6 +1,8 @@
 //! Soundness of every bound the skeletal primitives report, for every skeleton kind, with
 //! and without anisotropic noise, on random primitives (proptest) and random points.
 
+use crate::common::Rng;
+
 use glam::{Vec2, Vec3};
 use karstic::field::noise::{NoiseSpec, Octaves};
 use karstic::field::skeleton::{Points, Polygon, Size3, ZRange};
@@ -10,31 +12,6 @@ use karstic::field::{
 use karstic::scene::{Dir3, Finite, NonNegative, P2, P3, Positive};
 use proptest::collection::vec;
 use proptest::prelude::*;
-
-/// splitmix64: random points inside a test case.
-struct Rng(u64);
-
-impl Rng {
-    fn f(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 40) as f32 / (1u64 << 24) as f32
-    }
-    /// A uniform point of `b`.
-    fn in_box(&mut self, b: &Aabb) -> Vec3 {
-        b.min + Vec3::new(self.f(), self.f(), self.f()) * b.size()
-    }
-    fn dir(&mut self) -> Vec3 {
-        loop {
-            let v = Vec3::new(self.f(), self.f(), self.f()) * 2.0 - 1.0;
-            if v.length_squared() > 0.01 && v.length_squared() <= 1.0 {
-                return v.normalize();
-            }
-        }
-    }
-}
 
 fn p3(r: f32) -> impl Strategy<Value = P3> {
     (-r..r, -r..r, -r..r).prop_map(|(x, y, z)| P3(Vec3::new(x, y, z)))
@@ -147,7 +124,8 @@ fn primitive(min_wavelength: f32) -> impl Strategy<Value = (Primitive, Primitive
 fn random_box(rng: &mut Rng, prim: &Primitive) -> Aabb {
     let s = prim.support().dilate(1.0);
     let c = rng.in_box(&s);
-    let size = Vec3::new(rng.f(), rng.f(), rng.f()) * s.size().max_element() * rng.f().powi(2);
+    let size =
+        Vec3::new(rng.f32(), rng.f32(), rng.f32()) * s.size().max_element() * rng.f32().powi(2);
     Aabb::new(c - size * 0.5, c + size * 0.5)
 }
 
@@ -188,7 +166,7 @@ proptest! {
             // Half the pairs along the gradient, where the slope is steepest.
             let g = prim.value_grad(p).1;
             let d = if i % 2 == 0 && g.length() > 0.0 { g.normalize() } else { rng.dir() };
-            let q = p + d * s.size().max_element() * [1e-3f32, 1e-2, 0.1, 1.0][i % 4] * rng.f();
+            let q = p + d * s.size().max_element() * [1e-3f32, 1e-2, 0.1, 1.0][i % 4] * rng.f32();
             let lhs = (prim.value(p) - prim.value(q)).abs();
             prop_assert!(lhs <= lambda * (p - q).length() * 1.0001 + 1e-6, "{spec:?}\nglobal {lambda}: {lhs} over {}", (p - q).length());
         }
@@ -203,7 +181,7 @@ proptest! {
                 let ls = prim.lipschitz_segment(p, q);
                 prop_assert!(lhs <= ls * (p - q).length() * 1.0001 + 1e-6);
                 // And every pair on the segment.
-                let (u, v) = (p.lerp(q, rng.f()), p.lerp(q, rng.f()));
+                let (u, v) = (p.lerp(q, rng.f32()), p.lerp(q, rng.f32()));
                 let on = (prim.value(u) - prim.value(v)).abs();
                 // (Absolute slack for the rounding of two nearly equal values.)
                 prop_assert!(on <= ls * (u - v).length() * 1.0001 + 2e-5, "{spec:?}\nsegment bound {ls}: {on}");
@@ -284,7 +262,7 @@ proptest! {
         let z = s.z();
         for _ in 0..6 {
             let c = rng.in_box(&s).truncate();
-            let half = Vec2::new(rng.f(), rng.f()) * 2.0 + 0.05;
+            let half = Vec2::new(rng.f32(), rng.f32()) * 2.0 + 0.05;
             let fp = Rect::new(c - half, c + half);
             let mut bands = ZBands::new();
             prim.z_bands(&fp, z, &mut bands);
@@ -292,7 +270,7 @@ proptest! {
                 let xy = if line < 4 {
                     Vec2::new(if line & 1 == 0 { fp.min.x } else { fp.max.x }, if line & 2 == 0 { fp.min.y } else { fp.max.y })
                 } else {
-                    fp.min + Vec2::new(rng.f(), rng.f()) * (fp.max - fp.min)
+                    fp.min + Vec2::new(rng.f32(), rng.f32()) * (fp.max - fp.min)
                 };
                 let n = 400;
                 let zs = |k: usize| z.lo + z.width() * k as f32 / n as f32;

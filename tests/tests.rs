@@ -22,6 +22,7 @@ mod main_job;
 mod mesh_cli;
 mod mesh_export;
 mod mesh_extract;
+mod optional_checks;
 mod primitives;
 mod render_cli;
 mod render_gpu;

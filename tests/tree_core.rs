@@ -4,6 +4,8 @@
 //! The leaves are a minimal exact ball field defined here, so these tests check the tree
 //! logic alone; `tests/primitives.rs` checks the real primitives.
 
+use crate::common::Rng;
+
 use std::sync::Arc;
 
 use glam::{Affine3A, Quat, Vec3};
@@ -176,18 +178,12 @@ fn tree(s: &Shape) -> Tree {
     b.build(root)
 }
 
-/// Deterministic points in a box.
+/// Deterministic points in a box: its corners, then uniform ones.
 fn points(b: &Aabb, n: usize, seed: u32) -> Vec<Vec3> {
-    let mut s = seed.wrapping_mul(2_654_435_761).wrapping_add(1);
-    let mut r = move || {
-        s ^= s << 13;
-        s ^= s >> 17;
-        s ^= s << 5;
-        (s >> 8) as f32 / (1u32 << 24) as f32
-    };
+    let mut rng = Rng(u64::from(seed));
     let mut v: Vec<Vec3> = b.corners().to_vec();
     while v.len() < n {
-        v.push(b.min + b.size() * Vec3::new(r(), r(), r()));
+        v.push(rng.in_box(b));
     }
     v
 }

@@ -2,10 +2,13 @@
 //! write glTF. `.ci/run` installs the package into `.node/`.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, Output};
 
-/// Runs the Khronos validator on `file`; `None` when Node or the package is missing.
-pub fn khronos_validate(file: &Path) -> Option<(bool, String)> {
+use crate::common::{REQUIRE_GLTF_VALIDATOR, unavailable};
+
+/// Runs `tests/gltf_validate.mjs` with `args`; `None` (after a notice, or a failure where
+/// [`REQUIRE_GLTF_VALIDATOR`] is set) when Node or the package is missing.
+fn run(args: &[&std::ffi::OsStr]) -> Option<Output> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut paths = vec![root.join(".node/node_modules")];
     if let Ok(out) = Command::new("npm").args(["root", "-g"]).output() {
@@ -13,36 +16,59 @@ pub fn khronos_validate(file: &Path) -> Option<(bool, String)> {
     }
     let out = Command::new("node")
         .arg(root.join("tests/gltf_validate.mjs"))
-        .arg(file)
+        .args(args)
         .env("NODE_PATH", std::env::join_paths(paths).unwrap())
         .output();
     let out = match out {
         Ok(o) => o,
-        Err(_) => {
-            println!("notice: node not found; skipping the Khronos glTF validator");
+        Err(e) => {
+            unavailable(
+                REQUIRE_GLTF_VALIDATOR,
+                &format!("the Khronos glTF validator: node cannot run ({e})"),
+            );
             return None;
         }
     };
-    let text =
-        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
     if out.status.code() == Some(3) {
-        println!(
-            "notice: {}; skipping the Khronos glTF validator",
-            text.trim()
+        unavailable(
+            REQUIRE_GLTF_VALIDATOR,
+            &format!(
+                "the Khronos glTF validator: {}",
+                String::from_utf8_lossy(&out.stdout).trim()
+            ),
         );
         return None;
     }
+    Some(out)
+}
+
+/// The validator's version; `None` when Node or the package is missing (see [`run`]).
+pub fn version() -> Option<String> {
+    let out = run(&["--version".as_ref()])?;
+    assert!(out.status.success(), "{out:?}");
+    Some(String::from_utf8_lossy(&out.stdout).trim().to_owned())
+}
+
+/// Runs the Khronos validator on `file`: whether it found neither errors nor warnings,
+/// and its report. `None` when Node or the package is missing (see [`run`]).
+pub fn khronos_validate(file: &Path) -> Option<(bool, String)> {
+    let out = run(&[file.as_os_str()])?;
+    let text =
+        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
     Some((out.status.success(), text))
 }
 
-/// Asserts that the validator (when available) reports no error and no warning on `file`.
+/// Asserts that the validator (when available) reports nothing on `file`: no error, no
+/// warning, and not even an info or a hint.
 pub fn assert_valid(file: &Path) {
     if let Some((ok, report)) = khronos_validate(file) {
         assert!(ok, "{report}");
-        assert!(
-            report.contains("\"numErrors\": 0") && report.contains("\"numWarnings\": 0"),
-            "{}: {report}",
-            file.display()
-        );
+        for count in ["numErrors", "numWarnings", "numInfos", "numHints"] {
+            assert!(
+                report.contains(&format!("\"{count}\": 0")),
+                "{}: {report}",
+                file.display()
+            );
+        }
     }
 }
