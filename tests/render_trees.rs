@@ -12,10 +12,10 @@ use indicatif::ProgressBar;
 use karstic::dem::{Heightfield, HeightfieldField, ImplicitParams, Interpolation};
 use karstic::field::{Aabb, Field, T, Tree, TreeBuilder};
 use karstic::mesh::{GridSpec, MeshOptions, polygonize};
-use karstic::render::gpu::{GpuError, Tape, tape_from_tree};
 use karstic::render::raycast::MeshRaycaster;
 use karstic::render::trace::TraceParams;
 use karstic::render::{Camera, Method, RenderSettings, cpu, render};
+use karstic::tape::{Tape, TapeError, tape_from_tree};
 
 /// The scenes `trees/*.ron` and `trees/curves/*.ron`, sorted.
 fn tree_files() -> Vec<PathBuf> {
@@ -470,7 +470,7 @@ fn nodes_without_an_encoding_are_named_errors() {
         let root = b.blend(vec![other, a], None);
         let e = tape_from_tree(&b.build(root)).unwrap_err();
         let msg = e.to_string();
-        assert!(matches!(e, GpuError::NoEncoding { .. }), "{msg}");
+        assert!(matches!(e, TapeError::NoEncoding { .. }), "{msg}");
         assert!(msg.contains(expect), "{msg} lacks {expect:?}");
     };
     refused(

@@ -486,7 +486,7 @@ pub mod tapes {
     //! The same scenes encoded as GPU tapes.
     use super::*;
     use karstic::dem::Interpolation;
-    use karstic::render::gpu::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder};
+    use karstic::tape::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder};
 
     /// The blobs as a blend under a BVH of guards.
     pub fn blobs(b: &Blobs) -> Tape {
@@ -722,7 +722,7 @@ pub fn gpu() -> Option<&'static karstic::render::gpu::GpuContext> {
 /// radius `r` at each point) equal the CPU tape's within float rounding.
 pub fn assert_probes_match(
     ctx: &karstic::render::gpu::GpuContext,
-    tape: &karstic::render::gpu::Tape,
+    tape: &karstic::tape::Tape,
     pts: &[(Vec3, f32)],
 ) {
     let got = ctx.probe(tape, pts).unwrap();
