@@ -24,6 +24,7 @@
 //!
 //! * [`mod@format`]: the instruction word, op codes, shape kinds, flags, limits and the named
 //!   offset of every parameter — the definitions.
+//! * [`header`]: `shaders/tape_consts.wgsl`, the WGSL constants generated from them.
 //! * [`builder`]: [`TapeBuilder`], which emits a tape and checks its balance and depth.
 //! * [`from_tree`]: a compiled [`crate::field::Tree`] as a tape ([`tape_from_tree`]).
 //! * [`interpreter`]: [`Tape`] and its CPU interpreter, the twin of `shaders/field.wgsl`:
@@ -38,6 +39,7 @@ pub mod builder;
 pub mod features;
 pub mod format;
 pub mod from_tree;
+pub mod header;
 pub mod height;
 pub mod interpreter;
 pub mod noise;
@@ -48,6 +50,7 @@ pub use builder::{Combine, Guard, TapeBuilder};
 pub use features::FEATURES;
 pub use format::Instr;
 pub use from_tree::tape_from_tree;
+pub use header::wgsl_header;
 pub use height::HeightGrid;
 pub use interpreter::Tape;
 pub use shape::{Profile, Shape};

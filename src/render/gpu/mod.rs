@@ -4,8 +4,10 @@
 //!
 //! * [`context`]: adapter, device, pipelines, buffers, dispatch and read-back.
 //!
-//! The WGSL lives in `shaders/` and is assembled by [`shader_source`]; the tests validate
-//! every module with naga so shader errors fail without a GPU.
+//! The WGSL lives in `shaders/` and is assembled by [`shader_source`], starting with the
+//! constant header generated from the tape's Rust definitions
+//! ([`crate::tape::header`]); the tests validate every module with naga so shader errors
+//! fail without a GPU.
 
 pub mod context;
 
@@ -37,12 +39,19 @@ pub enum GpuError {
 /// includes). The tests check that every file there belongs to some module.
 pub const SHADER_MODULES: &[(&str, &[&str])] = &[(
     "trace",
-    &["noise.wgsl", "sfield.wgsl", "field.wgsl", "trace.wgsl"],
+    &[
+        "tape_consts.wgsl",
+        "noise.wgsl",
+        "sfield.wgsl",
+        "field.wgsl",
+        "trace.wgsl",
+    ],
 )];
 
 /// The source of the tracing module.
 pub fn shader_source() -> String {
     [
+        include_str!("../../../shaders/tape_consts.wgsl"),
         include_str!("../../../shaders/noise.wgsl"),
         include_str!("../../../shaders/sfield.wgsl"),
         include_str!("../../../shaders/field.wgsl"),
