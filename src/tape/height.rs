@@ -97,6 +97,7 @@ pub(super) fn encode(
 /// `(value at p, Lipschitz bound over B(c, r))` of the `HEIGHT` with flags `flags` and
 /// parameters `q` over `heights`; `BOUND`: compute the bound (else the second component
 /// is 0).
+#[inline]
 pub(super) fn eval<const BOUND: bool>(
     heights: &[f32],
     flags: u32,
@@ -125,6 +126,7 @@ pub(super) fn eval<const BOUND: bool>(
 }
 
 /// The grid of `q`: origin x and y, cell, `nx`, `ny` (as the parameters hold them).
+#[inline(always)]
 fn grid(q: &[f32]) -> (f32, f32, f32, f32, f32) {
     (
         q[height::ORIGIN],
