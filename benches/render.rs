@@ -29,8 +29,9 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use indicatif::ProgressBar;
 use karstic::field::Field;
 use karstic::field::Tree;
-use karstic::render::gpu::{GpuContext, Tape, tape_from_tree};
+use karstic::render::gpu::GpuContext;
 use karstic::render::{Camera, Method, RenderSettings, render};
+use karstic::tape::{Tape, tape_from_tree};
 
 fn scene(
     f: &dyn Field,

@@ -1,50 +1,8 @@
-// The field tape evaluator: the GPU twin of `Tape::eval` in src/render/gpu/tape.rs.
+// The field tape evaluator: the GPU twin of `Tape::eval` in src/tape/interpreter.rs.
 // One pass at (p, c, r) returns vec2(f(p), Lipschitz bound of f over the ball B(c, r)).
-// Keep the op codes and parameter layouts in step with tape.rs.
-
-const T: f32 = 0.5;
-const MAX_STACK: u32 = 32u;
-const MAX_WARPS: u32 = 8u;
-
-const OP_CONST: u32 = 0u;
-const OP_PRIM: u32 = 1u;
-const OP_HEIGHT: u32 = 2u;
-const OP_NPRIM: u32 = 3u;
-const OP_SFIELD: u32 = 4u;
-const OP_BLEND: u32 = 16u;
-const OP_UNION: u32 = 17u;
-const OP_INTER: u32 = 18u;
-const OP_DIFF: u32 = 19u;
-const OP_GUARD: u32 = 32u;
-const OP_WARP: u32 = 33u;
-const OP_UNWARP: u32 = 34u;
-const OP_TWARP: u32 = 35u;
-
-const SHAPE_SPHERE: u32 = 0u;
-const SHAPE_CAPSULE: u32 = 1u;
-const SHAPE_BOX: u32 = 2u;
-const SHAPE_CONE: u32 = 4u;
-const SHAPE_ELLIPSOID: u32 = 5u;
-const ELLIPSOID_NEWTON: u32 = 64u;
-const SIGMA_FLAG: u32 = 256u;
-const BICUBIC_FLAG: u32 = 1u;
-
-// What the tape uses, set per pipeline (tape.rs Tape::features): code behind a false one
-// is dropped at compile time. llvmpipe runs every branch of the interpreter with masks,
-// so each tape instruction would otherwise pay for the code of every op. All true (the
-// defaults) is the full evaluator.
-override USE_NPRIM: bool = true;
-override USE_HEIGHT: bool = true;
-override USE_BICUBIC: bool = true;
-override USE_SFIELD: bool = true;
-override USE_SF_CUBIC: bool = true;
-override USE_SF_NOISE: bool = true;
-override USE_TWARP: bool = true;
-override USE_CONE: bool = true;
-override USE_ELLIPSOID: bool = true;
-
-const WYVILL_MAX_SLOPE: f32 = 1.7173008;
-const WYVILL_PEAK_X: f32 = 0.4472136;
+// The op codes, flags, limits and parameter offsets come from tape_consts.wgsl, generated
+// from src/tape/format.rs; the `USE_*` overrides there say which parts of this evaluator
+// a pipeline keeps (src/tape/features.rs).
 
 // x = op, y = flags, z = jump, w = param offset.
 @group(0) @binding(1) var<storage, read> instrs: array<vec4<u32>>;
@@ -105,13 +63,13 @@ struct Projection {
     d: f32,
 }
 
-// Cone [base, axis, height, radius] (tape.rs cone_projection): the closest point of the
-// triangle (0, 0), (r, 0), (0, h) in the half-plane (ρ, z) through the axis.
+// Cone (CONE_*; shape.rs cone_projection): the closest point of the triangle (0, 0),
+// (r, 0), (0, h) in the half-plane (ρ, z) through the axis.
 fn cone_projection(o: u32, p: vec3<f32>) -> Projection {
-    let base = param3(o);
-    let axis = param3(o + 3u);
-    let h = params[o + 6u];
-    let r = params[o + 7u];
+    let base = param3(o + CONE_BASE);
+    let axis = param3(o + CONE_AXIS);
+    let h = params[o + CONE_HEIGHT];
+    let r = params[o + CONE_RADIUS];
     let w = p - base;
     let z = dot(w, axis);
     let radial = w - axis * z;
@@ -139,11 +97,11 @@ fn cone_projection(o: u32, p: vec3<f32>) -> Projection {
     return Projection(base + axis * at.y + er * at.x, sqrt(d2));
 }
 
-// Axis-aligned ellipsoid [centre, radii] (tape.rs ellipsoid_projection): Newton on
+// Axis-aligned ellipsoid (ELLIPSOID_*; shape.rs ellipsoid_projection): Newton on
 // F(t) = Σ (eᵢyᵢ/(t + eᵢ²))² − 1 from the lower bound ‖e∘y‖ − e²_max of its root.
 fn ellipsoid_projection(o: u32, p: vec3<f32>) -> Projection {
-    let c = param3(o);
-    let e = param3(o + 3u);
+    let c = param3(o + ELLIPSOID_CENTER);
+    let e = param3(o + ELLIPSOID_RADII);
     let y = p - c;
     let ye = y / e;
     if dot(ye, ye) <= 1.0 {
@@ -173,16 +131,16 @@ fn ellipsoid_projection(o: u32, p: vec3<f32>) -> Projection {
 }
 
 // The closest point of the shape `kind` at `o` to `p` and the signed distance to it
-// (tape.rs project). Called at two sites only (p and c in eval_tape): every call site
+// (shape.rs project). Called at two sites only (p and c in eval_tape): every call site
 // inlines the ellipsoid's Newton loop, and on lavapipe every loop on the way costs
 // iterations of the invocation's shared loop budget, taken or not.
 fn project(kind: u32, o: u32, p: vec3<f32>) -> Projection {
     switch kind {
         case SHAPE_SPHERE: {
-            let c = param3(o);
+            let c = param3(o + SPHERE_CENTER);
             let w = p - c;
             let d = length(w);
-            let rho = params[o + 3u];
+            let rho = params[o + SPHERE_RADIUS];
             var at = p;
             if d > rho {
                 at = c + w * (rho / d);
@@ -190,8 +148,8 @@ fn project(kind: u32, o: u32, p: vec3<f32>) -> Projection {
             return Projection(at, d - rho);
         }
         case SHAPE_CAPSULE: {
-            let a = param3(o);
-            let ab = param3(o + 3u) - a;
+            let a = param3(o + CAPSULE_A);
+            let ab = param3(o + CAPSULE_B) - a;
             let ap = p - a;
             let l2 = dot(ab, ab);
             var h = 0.0;
@@ -201,7 +159,7 @@ fn project(kind: u32, o: u32, p: vec3<f32>) -> Projection {
             let s = a + ab * h;
             let w = ap - ab * h;
             let d = length(w);
-            let rho = params[o + 6u];
+            let rho = params[o + CAPSULE_RADIUS];
             var at = p;
             if d > rho {
                 at = s + (p - s) * (rho / d);
@@ -209,8 +167,8 @@ fn project(kind: u32, o: u32, p: vec3<f32>) -> Projection {
             return Projection(at, d - rho);
         }
         case SHAPE_BOX: {
-            let c = param3(o);
-            let half = param3(o + 3u);
+            let c = param3(o + CUBOID_CENTER);
+            let half = param3(o + CUBOID_HALF);
             let d = abs(p - c) - half;
             let sd = length(max(d, vec3<f32>(0.0))) + min(max(d.x, max(d.y, d.z)), 0.0);
             return Projection(c + clamp(p - c, -half, half), sd);
@@ -230,9 +188,9 @@ fn project(kind: u32, o: u32, p: vec3<f32>) -> Projection {
         default: {
             // SHAPE_PRISM: a heightfield's prism, the largest horizontal excess over
             // [lo, hi] combined with the vertical one; inside, minus the depth below the
-            // nearest face (tape.rs project; no closest point: never noisy).
-            let lo = param3(o);
-            let hi = param3(o + 3u);
+            // nearest face (shape.rs project; no closest point: never noisy).
+            let lo = param3(o + PRISM_MIN);
+            let hi = param3(o + PRISM_MAX);
             let e = max(lo - p, p - hi);
             let dxy = max(max(e.x, e.y), 0.0);
             let dz = max(e.z, 0.0);
@@ -244,9 +202,9 @@ fn project(kind: u32, o: u32, p: vec3<f32>) -> Projection {
 
 // A primitive at `o` from the signed distances of p and of the ball's centre c.
 fn primitive(flags: u32, o: u32, sd_p: f32, sd_c: f32, r: f32) -> vec2<f32> {
-    let rad = params[o];
-    let energy = params[o + 1u];
-    if (flags & SIGMA_FLAG) != 0u {
+    let rad = params[o + PRIM_RADIUS];
+    let energy = params[o + PRIM_ENERGY];
+    if (flags & FLAG_SIGMA) != 0u {
         return vec2<f32>(sigma(-sd_p, rad), sigma_slope(-sd_c - r, -sd_c + r, rad));
     }
     let v = energy * wyvill(max(sd_p, 0.0) / rad);
@@ -268,16 +226,16 @@ struct Cell {
 }
 
 fn grid_cell(o: u32, x: f32, y: f32) -> Cell {
-    let ox = params[o + 2u];
-    let oy = params[o + 3u];
-    let cell = params[o + 4u];
-    let nx = params[o + 5u];
-    let ny = params[o + 6u];
+    let ox = params[o + HEIGHT_ORIGIN];
+    let oy = params[o + HEIGHT_ORIGIN + 1u];
+    let cell = params[o + HEIGHT_CELL];
+    let nx = params[o + HEIGHT_NX];
+    let ny = params[o + HEIGHT_NY];
     let gx = clamp((x - ox) / cell, 0.0, nx - 1.0);
     let gy = clamp((y - oy) / cell, 0.0, ny - 1.0);
     let fi = min(floor(gx), nx - 2.0);
     let fj = min(floor(gy), ny - 2.0);
-    return Cell(i32(fi), i32(fj), gx - fi, gy - fj, i32(nx), i32(ny), u32(params[o + 7u]));
+    return Cell(i32(fi), i32(fj), gx - fi, gy - fj, i32(nx), i32(ny), u32(params[o + HEIGHT_OFFSET]));
 }
 
 fn bilinear(o: u32, x: f32, y: f32) -> f32 {
@@ -316,7 +274,7 @@ fn cr_row(base: u32, i: i32, w: i32, wx: vec4<f32>) -> f32 {
     return row;
 }
 
-// Bicubic elevation (tape.rs bicubic, grid.rs Heightfield::sample): the cell of bilinear,
+// Bicubic elevation (height.rs bicubic, grid.rs Heightfield::sample): the cell of bilinear,
 // its 4 × 4 stencil with indices clamped to the grid, rows summed first.
 fn bicubic(o: u32, x: f32, y: f32) -> f32 {
     let c = grid_cell(o, x, y);
@@ -331,7 +289,7 @@ fn bicubic(o: u32, x: f32, y: f32) -> f32 {
 }
 
 fn elevation(flags: u32, o: u32, x: f32, y: f32) -> f32 {
-    if USE_BICUBIC && (flags & BICUBIC_FLAG) != 0u {
+    if USE_BICUBIC && (flags & FLAG_BICUBIC) != 0u {
         return bicubic(o, x, y);
     }
     return bilinear(o, x, y);
@@ -343,7 +301,7 @@ fn high_bit(a: u32, b: u32) -> u32 {
     return select(firstLeadingBit(x), 0u, x == 0u);
 }
 
-// A bound of |∇h| over the disc B(c, r) from the heightfield's slope pyramid (tape.rs
+// A bound of |∇h| over the disc B(c, r) from the heightfield's slope pyramid (height.rs
 // slope_under): the cells under the disc's square lie in at most 2 × 2 blocks of level k.
 fn slope_under(o: u32, c: vec3<f32>, r: f32) -> f32 {
     let lo = grid_cell(o, c.x - r, c.y - r);
@@ -352,10 +310,10 @@ fn slope_under(o: u32, c: vec3<f32>, r: f32) -> f32 {
     let i1 = u32(hi.i);
     let j0 = u32(lo.j);
     let j1 = u32(hi.j);
-    let levels = u32(params[o + 1u]);
+    let levels = u32(params[o + HEIGHT_LEVELS]);
     let k = min(max(high_bit(i0, i1), high_bit(j0, j1)), levels - 1u);
     let w = (u32(lo.w) - 1u + (1u << k) - 1u) >> k;
-    let at = u32(params[o + 8u + k]);
+    let at = u32(params[o + HEIGHT_PYRAMID + k]);
     let a = heights[at + (i0 >> k) + w * (j0 >> k)];
     let b = heights[at + (i1 >> k) + w * (j0 >> k)];
     let d = heights[at + (i0 >> k) + w * (j1 >> k)];
@@ -364,7 +322,7 @@ fn slope_under(o: u32, c: vec3<f32>, r: f32) -> f32 {
 }
 
 fn heightfield(flags: u32, o: u32, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
-    let fall = params[o];
+    let fall = params[o + HEIGHT_FALLOFF];
     let slope = slope_under(o, c, r);
     let value = sigma(elevation(flags, o, p.x, p.y) - p.z, fall);
     let hc = elevation(flags, o, c.x, c.y);
@@ -372,11 +330,13 @@ fn heightfield(flags: u32, o: u32, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f
     return vec2<f32>(value, l);
 }
 
+// M⁻¹p of the warp at `o`: WARP_MATRIX holds 3 rows of 4.
 fn affine(o: u32, p: vec3<f32>) -> vec3<f32> {
+    let m = o + WARP_MATRIX;
     return vec3<f32>(
-        params[o] * p.x + params[o + 1u] * p.y + params[o + 2u] * p.z + params[o + 3u],
-        params[o + 4u] * p.x + params[o + 5u] * p.y + params[o + 6u] * p.z + params[o + 7u],
-        params[o + 8u] * p.x + params[o + 9u] * p.y + params[o + 10u] * p.z + params[o + 11u],
+        params[m] * p.x + params[m + 1u] * p.y + params[m + 2u] * p.z + params[m + 3u],
+        params[m + 4u] * p.x + params[m + 5u] * p.y + params[m + 6u] * p.z + params[m + 7u],
+        params[m + 8u] * p.x + params[m + 9u] * p.y + params[m + 10u] * p.z + params[m + 11u],
     );
 }
 
@@ -388,7 +348,7 @@ fn box_distance(lo: vec3<f32>, hi: vec3<f32>, q: vec3<f32>) -> f32 {
 fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
     var stack: array<vec2<f32>, MAX_STACK>;
     var sp = 0u;
-    var frames: array<vec4<f32>, 16>; // two per warp: (p, r) and (c, 0)
+    var frames: array<vec4<f32>, WARP_FRAMES>; // two per warp: (p, r) and (c, 0)
     var fp = 0u;
     var p = p_in;
     var c = c_in;
@@ -403,15 +363,15 @@ fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
         let o = ins.w;
         switch ins.x {
             case OP_CONST: {
-                stack[sp] = vec2<f32>(params[o], 0.0);
+                stack[sp] = vec2<f32>(params[o + CONST_VALUE], 0.0);
                 sp += 1u;
             }
             case OP_PRIM, OP_NPRIM: {
-                var shape_at = o + 2u;
+                var shape_at = o + PRIM_SHAPE;
                 if ins.x == OP_NPRIM {
-                    shape_at = o + NPRIM_HEAD;
+                    shape_at = o + NPRIM_SHAPE;
                 }
-                let kind = ins.y & 255u;
+                let kind = ins.y & FLAG_SHAPE_MASK;
                 let pp = project(kind, shape_at, p);
                 let pc = project(kind, shape_at, c);
                 if ins.x == OP_PRIM {
@@ -450,8 +410,8 @@ fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
                 stack[sp - 1u] = v;
             }
             case OP_GUARD: {
-                let lo = param3(o);
-                let hi = param3(o + 3u);
+                let lo = param3(o + GUARD_MIN);
+                let hi = param3(o + GUARD_MAX);
                 let inside = all(lo <= p) && all(p <= hi);
                 if !inside && box_distance(lo, hi, c) > r {
                     stack[sp] = vec2<f32>(0.0, 0.0);
@@ -466,7 +426,7 @@ fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
                 fp += 1u;
                 p = affine(o, p);
                 c = affine(o, c);
-                r *= params[o + 12u];
+                r *= params[o + WARP_NORM];
             }
             case OP_TWARP: {
                 frames[2u * fp] = vec4<f32>(p, r);
@@ -475,14 +435,14 @@ fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
                 if USE_TWARP {
                     p = twarp_apply(o, p);
                 }
-                r += params[o + 1u];
+                r += params[o + TWARP_REACH];
             }
             case OP_UNWARP: {
                 fp -= 1u;
                 p = frames[2u * fp].xyz;
                 r = frames[2u * fp].w;
                 c = frames[2u * fp + 1u].xyz;
-                stack[sp - 1u].y *= params[o];
+                stack[sp - 1u].y *= params[o + UNWARP_SCALE];
             }
             default: {}
         }

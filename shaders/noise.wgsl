@@ -1,15 +1,7 @@
 // Seeded 3D simplex noise and fBm: the GPU twin of src/field/noise.rs (same hash, same
-// gradients, same corner order, f32), and the noisy primitive and turbulence warp of the
-// tape (src/render/gpu/noise.rs). An encoded fBm at `o` in `params` is
-// [index, seed & 0xffff, seed >> 16, 1/λ, octaves, norm, Lipschitz].
-
-const F3: f32 = 1.0 / 3.0;
-const G3: f32 = 1.0 / 6.0;
-const R2: f32 = 0.5;
-const SIMPLEX_SCALE: f32 = 76.0;
-const OCTAVE_SHIFT: vec3<f32> = vec3<f32>(0.5477, 0.3127, 0.7531);
-const FBM_PARAMS: u32 = 7u;
-const NPRIM_HEAD: u32 = 11u;
+// gradients, same corner order, f32, its constants from tape_consts.wgsl), and the noisy
+// primitive and turbulence warp of the tape (src/tape/noise.rs). An encoded fBm at `o` in
+// `params` is FBM_*: [index, seed & 0xffff, seed >> 16, 1/λ, octaves, norm, Lipschitz].
 
 // Gradient `n` of noise.rs GRADIENTS (the 12 cube-edge midpoints, `|g| = √2`; 12..15
 // repeat 0, 9, 1 and 11), computed rather than indexed: pair of axes `n >> 2` (xy, xz,
@@ -101,25 +93,25 @@ fn simplex(seed: u32, p: vec3<f32>) -> f32 {
 
 // fBm t(p) in [-1, 1] of the fBm encoded at `o` (noise.rs Fbm::value).
 fn fbm(o: u32, p: vec3<f32>) -> f32 {
-    let seed = u32(params[o + 1u]) | (u32(params[o + 2u]) << 16u);
-    let octaves = u32(params[o + 4u]);
-    var q = p * params[o + 3u];
+    let seed = u32(params[o + FBM_SEED_LO]) | (u32(params[o + FBM_SEED_HI]) << 16u);
+    let octaves = u32(params[o + FBM_OCTAVES]);
+    var q = p * params[o + FBM_INV_WAVELENGTH];
     var amp = 1.0;
     var value = 0.0;
     for (var k = 0u; k < octaves; k += 1u) {
         value += amp * simplex(seed + k * 0x9e3779b9u, q + f32(k) * OCTAVE_SHIFT);
-        amp *= 0.5;
-        q *= 2.0;
+        amp *= GAIN;
+        q *= LACUNARITY;
     }
-    return value * params[o + 5u];
+    return value * params[o + FBM_NORM];
 }
 
 // d̃ of a noisy primitive at `o` at a point whose projection `pr` on the shape is known,
 // given t, the turbulence read at s + R·u (noise.rs noisy_distance): 0 inside, 1 beyond
 // R + A.
 fn noisy_d(o: u32, pr: Projection, t: f32) -> f32 {
-    let r = params[o];
-    let a = params[o + 2u];
+    let r = params[o + NPRIM_RADIUS];
+    let a = params[o + NPRIM_AMPLITUDE];
     let rho = max(pr.d, 0.0);
     if rho >= r + a {
         return 1.0;
@@ -132,21 +124,21 @@ fn noisy_d(o: u32, pr: Projection, t: f32) -> f32 {
 
 // The point s + R·(q − s)/ρ the turbulence of a noisy primitive is read at for q.
 fn noise_point(o: u32, q: vec3<f32>, pr: Projection) -> vec3<f32> {
-    return pr.at + (q - pr.at) * (params[o] / pr.d);
+    return pr.at + (q - pr.at) * (params[o + NPRIM_RADIUS] / pr.d);
 }
 
 // (value at p, Lipschitz bound over B(c, rb)) of the noisy primitive at `o` from the
 // projections of p and c (noise.rs noisy_primitive). Two fBm call sites (see project).
 fn noisy_primitive(o: u32, p: vec3<f32>, pp: Projection, c: vec3<f32>, pc: Projection, rb: f32) -> vec2<f32> {
-    let r = params[o];
-    let e = params[o + 1u];
-    let a = params[o + 2u];
-    let slope = params[o + 3u];
-    let lt = params[o + 4u + 6u];
+    let r = params[o + NPRIM_RADIUS];
+    let e = params[o + NPRIM_ENERGY];
+    let a = params[o + NPRIM_AMPLITUDE];
+    let slope = params[o + NPRIM_SLOPE];
+    let lt = params[o + NPRIM_FBM + FBM_LIPSCHITZ];
     let reach = r + a;
     var tp = 0.0;
     if pp.d > 0.0 && pp.d < reach {
-        tp = fbm(o + 4u, noise_point(o, p, pp));
+        tp = fbm(o + NPRIM_FBM, noise_point(o, p, pp));
     }
     let dp = noisy_d(o, pp, tp);
     let v = e * wyvill(dp);
@@ -160,7 +152,7 @@ fn noisy_primitive(o: u32, p: vec3<f32>, pp: Projection, c: vec3<f32>, pc: Proje
     if rho_lo < reach {
         var tc = 0.0;
         if dc > 0.0 {
-            tc = fbm(o + 4u, noise_point(o, c, pc));
+            tc = fbm(o + NPRIM_FBM, noise_point(o, c, pc));
         }
         let xc = noisy_d(o, pc, tc);
         if rho_lo > 0.0 {
@@ -186,11 +178,11 @@ fn noisy_primitive(o: u32, p: vec3<f32>, pp: Projection, c: vec3<f32>, pc: Proje
 // ω⁻¹(p) of the turbulence warp at `o` (warp.rs Warp::apply).
 fn twarp_apply(o: u32, p: vec3<f32>) -> vec3<f32> {
     var fd = 1.0;
-    if params[o + 3u] != 0.0 {
-        let q = clamp(p, param3(o + 4u), param3(o + 7u));
+    if params[o + TWARP_HAS_REGION] != 0.0 {
+        let q = clamp(p, param3(o + TWARP_REGION_MIN), param3(o + TWARP_REGION_MAX));
         let d = length(p - q);
         if d != 0.0 {
-            fd = wyvill(d / params[o + 10u]);
+            fd = wyvill(d / params[o + TWARP_FALLOFF]);
         }
     }
     if fd == 0.0 {
@@ -199,7 +191,7 @@ fn twarp_apply(o: u32, p: vec3<f32>) -> vec3<f32> {
     // One fBm call site in a loop over the axes (see project).
     var t = vec3<f32>(0.0);
     for (var k = 0u; k < 3u; k += 1u) {
-        t[k] = fbm(o + 11u + k * FBM_PARAMS, p);
+        t[k] = fbm(o + TWARP_TURBULENCE + k * FBM_LEN, p);
     }
-    return p + t * (params[o] * fd);
+    return p + t * (params[o + TWARP_AMPLITUDE] * fd);
 }

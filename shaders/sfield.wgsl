@@ -1,32 +1,30 @@
 // S-field leaves: the GPU twin of SField::value (src/voxel/sfield.rs, sparse.rs locate and
-// trilinear, tricubic.rs blend) and of the ball bound of src/render/gpu/sfield.rs, on the
-// buffers laid out there. Parameters at `o`: domain min, max, R, R_f, ±1, noisy, levels,
-// L_S', tricubic, weights offset, fbm[7], then 11 per level: origin, h, dims, offsets of
-// its table, S, α, β.
+// trilinear, tricubic.rs blend) and of the ball bound of src/tape/sfield.rs, on the
+// buffers laid out there. Parameters at `o` (SF_*): domain min, max, R, R_f, ±1, noisy,
+// levels, L_S', tricubic, weights offset, fbm, then from SF_HEAD one block of SF_LEVEL_LEN
+// per level (SF_LEVEL_*): origin, h, dims, offsets of its table, S, α, β.
 
 @group(0) @binding(11) var<storage, read> sf_table: array<u32>;
 @group(0) @binding(12) var<storage, read> sf_data: array<f32>;
 
-const SF_HEAD: u32 = 21u;
-const SF_LEVEL: u32 = 11u;
-const SF_NONE: u32 = 0xffffffffu;
+// What S' reads where no level is complete.
 const SF_BIG: f32 = 3.4028235e38;
 
 // Data index of node `g` of the level at `lv` (sparse.rs Bricks::node), SF_NONE when its
 // brick is missing.
 fn sf_node(lv: u32, g: vec3<i32>) -> u32 {
-    let dims = vec3<i32>(param3(lv + 4u));
-    let bd = (dims + vec3<i32>(7)) / 8;
-    let b = g >> vec3<u32>(3u);
+    let dims = vec3<i32>(param3(lv + SF_LEVEL_DIMS));
+    let bd = (dims + vec3<i32>(SF_BRICK - 1)) / SF_BRICK;
+    let b = g >> vec3<u32>(SF_BRICK_BITS);
     if any(b < vec3<i32>(0)) || any(b >= bd) {
         return SF_NONE;
     }
-    let k = sf_table[u32(params[lv + 7u]) + u32(b.x + bd.x * (b.y + bd.y * b.z))];
+    let k = sf_table[u32(params[lv + SF_LEVEL_TABLE]) + u32(b.x + bd.x * (b.y + bd.y * b.z))];
     if k == SF_NONE {
         return SF_NONE;
     }
-    let l = g & vec3<i32>(7);
-    return k * 512u + u32(l.x + 8 * (l.y + 8 * l.z));
+    let l = g & vec3<i32>(SF_BRICK - 1);
+    return k * SF_BRICK_NODES + u32(l.x + SF_BRICK * (l.y + SF_BRICK * l.z));
 }
 
 // Trilinear interpolation of the channel at `at` (sparse.rs trilinear_grad's value).
@@ -43,7 +41,7 @@ fn sf_trilinear(at: u32, idx: array<u32, 8>, f: vec3<f32>) -> f32 {
 // One row of the tricubic stencil at (y, z) = (gy, gz) from x = cx − 1, clamped to the
 // level (tricubic.rs stencil), weighted by wx; SF_BIG when a node is missing.
 fn sf_cubic_row(lv: u32, at: u32, cx: i32, gy: i32, gz: i32, wx: vec4<f32>) -> f32 {
-    let dmax = i32(params[lv + 4u]) - 1;
+    let dmax = i32(params[lv + SF_LEVEL_DIMS]) - 1;
     let n0 = sf_node(lv, vec3<i32>(clamp(cx - 1, 0, dmax), gy, gz));
     let n1 = sf_node(lv, vec3<i32>(clamp(cx, 0, dmax), gy, gz));
     let n2 = sf_node(lv, vec3<i32>(clamp(cx + 1, 0, dmax), gy, gz));
@@ -63,17 +61,17 @@ fn sf_cubic_row(lv: u32, at: u32, cx: i32, gy: i32, gz: i32, wx: vec4<f32>) -> f
 // whose cell around q is complete, trilinear, blended with the tricubic stencil on the
 // finest level, minus the displacement; SF_BIG when no level is complete there.
 fn sf_s(o: u32, q_in: vec3<f32>) -> f32 {
-    let q = clamp(q_in, param3(o), param3(o + 3u));
-    let levels = u32(params[o + 10u]);
+    let q = clamp(q_in, param3(o + SF_MIN), param3(o + SF_MAX));
+    let levels = u32(params[o + SF_LEVELS]);
     var level = levels;
     var lv = 0u;
     var idx: array<u32, 8>;
     var f = vec3<f32>(0.0);
     var cell = vec3<i32>(0);
     for (var l = levels; l > 0u; l -= 1u) {
-        lv = o + SF_HEAD + (l - 1u) * SF_LEVEL;
-        let dims = vec3<i32>(param3(lv + 4u));
-        let g = clamp((q - param3(lv)) / params[lv + 3u], vec3<f32>(0.0), vec3<f32>(dims - vec3<i32>(1)));
+        lv = o + SF_HEAD + (l - 1u) * SF_LEVEL_LEN;
+        let dims = vec3<i32>(param3(lv + SF_LEVEL_DIMS));
+        let g = clamp((q - param3(lv + SF_LEVEL_ORIGIN)) / params[lv + SF_LEVEL_H], vec3<f32>(0.0), vec3<f32>(dims - vec3<i32>(1)));
         cell = min(vec3<i32>(floor(g)), dims - vec3<i32>(2));
         f = g - vec3<f32>(cell);
         idx[0] = sf_node(lv, cell);
@@ -93,19 +91,19 @@ fn sf_s(o: u32, q_in: vec3<f32>) -> f32 {
     if level == levels {
         return SF_BIG;
     }
-    let s_at = u32(params[lv + 8u]);
+    let s_at = u32(params[lv + SF_LEVEL_S]);
     var s = sf_trilinear(s_at, idx, f);
-    if USE_SF_CUBIC && params[o + 12u] != 0.0 && level + 1u == levels {
+    if USE_SF_CUBIC && params[o + SF_TRICUBIC] != 0.0 && level + 1u == levels {
         // The blend L + w·(C − L) (tricubic.rs Cubic::eval), where a corner's weight (0 or
         // 1) is set.
-        let w_at = u32(params[o + 13u]);
+        let w_at = u32(params[o + SF_WEIGHTS]);
         let w0 = sf_data[w_at + idx[0]] + sf_data[w_at + idx[1]] + sf_data[w_at + idx[2]] + sf_data[w_at + idx[3]];
         let w1 = sf_data[w_at + idx[4]] + sf_data[w_at + idx[5]] + sf_data[w_at + idx[6]] + sf_data[w_at + idx[7]];
         if w0 + w1 != 0.0 {
             let wx = cr_weights(f.x);
             let wy = cr_weights(f.y);
             let wz = cr_weights(f.z);
-            let dims = vec3<i32>(param3(lv + 4u));
+            let dims = vec3<i32>(param3(lv + SF_LEVEL_DIMS));
             var val = 0.0;
             var plane = 0.0;
             var complete = true;
@@ -127,10 +125,10 @@ fn sf_s(o: u32, q_in: vec3<f32>) -> f32 {
             }
         }
     }
-    if USE_SF_NOISE && params[o + 9u] != 0.0 {
-        let a = sf_trilinear(u32(params[lv + 9u]), idx, f);
-        let b = sf_trilinear(u32(params[lv + 10u]), idx, f);
-        s -= a * fbm(o + 14u, (q - param3(o)) * b);
+    if USE_SF_NOISE && params[o + SF_NOISY] != 0.0 {
+        let a = sf_trilinear(u32(params[lv + SF_LEVEL_ALPHA]), idx, f);
+        let b = sf_trilinear(u32(params[lv + SF_LEVEL_BETA]), idx, f);
+        s -= a * fbm(o + SF_FBM, (q - param3(o + SF_MIN)) * b);
     }
     return s;
 }
@@ -138,8 +136,8 @@ fn sf_s(o: u32, q_in: vec3<f32>) -> f32 {
 // (f(p), Lipschitz bound over B(c, r)) of the S-field leaf at `o` (sfield.rs eval and
 // bound): S' read at p and at c through one call site.
 fn sfield(o: u32, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
-    let lo = param3(o);
-    let hi = param3(o + 3u);
+    let lo = param3(o + SF_MIN);
+    let hi = param3(o + SF_MAX);
     let inside = all(lo <= p) && all(p <= hi);
     let bmin = c - vec3<f32>(r);
     let bmax = c + vec3<f32>(r);
@@ -156,9 +154,9 @@ fn sfield(o: u32, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
             s_at[k] = sf_s(o, q);
         }
     }
-    let trans = params[o + 6u];
-    let fall = params[o + 7u];
-    let sign = params[o + 8u];
+    let trans = params[o + SF_TRANSITION];
+    let fall = params[o + SF_FALLOFF];
+    let sign = params[o + SF_SIGN];
     var v = 0.0;
     if inside {
         let e = min(p - lo, hi - p);
@@ -168,7 +166,7 @@ fn sfield(o: u32, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
     if !overlaps {
         return vec2<f32>(v, 0.0);
     }
-    let ls = params[o + 11u];
+    let ls = params[o + SF_S_LIPSCHITZ];
     let x = sign * s_at.y;
     let sig = sigma_slope(x - ls * r, x + ls * r, trans) * ls;
     let cmin = max(bmin, lo);

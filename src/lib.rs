@@ -16,4 +16,5 @@ pub mod job;
 pub mod mesh;
 pub mod render;
 pub mod scene;
+pub mod tape;
 pub mod voxel;

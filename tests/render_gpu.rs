@@ -11,10 +11,9 @@ use glam::{Affine3A, Quat, Vec3};
 use indicatif::ProgressBar;
 use karstic::field::falloff::{sigma, wyvill};
 use karstic::field::{Aabb, Fbm, Field, T};
-use karstic::render::gpu::{
-    Combine, FEATURES, GpuContext, Profile, SHADER_MODULES, Shape, Tape, TapeBuilder, shader_source,
-};
+use karstic::render::gpu::{GpuContext, SHADER_MODULES, shader_source};
 use karstic::render::{Camera, Method, RenderSettings, render};
+use karstic::tape::{Combine, FEATURES, Profile, Shape, Tape, TapeBuilder};
 
 #[test]
 fn every_shader_parses_and_validates_with_naga() {

@@ -28,6 +28,8 @@ mod render_cli;
 mod render_gpu;
 mod render_trace;
 mod render_trees;
+mod tape_conformance;
+mod tape_header;
 mod tree_core;
 mod tree_files;
 mod trees_build;

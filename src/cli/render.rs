@@ -8,8 +8,9 @@ use glam::Vec3;
 
 use crate::field::Field;
 use crate::io::{DEFAULT_MEMORY_BUDGET, progress};
-use crate::render::gpu::{self, GpuError, Tape};
+use crate::render::gpu;
 use crate::render::{Camera, Frame, Method, RenderSettings, cpu};
+use crate::tape::{Tape, TapeError, tape_from_tree};
 
 /// Arguments of `karstic render`.
 #[derive(clap::Args, Debug, Clone)]
@@ -56,14 +57,14 @@ pub struct LoadedTree {
     pub field: Box<dyn Field>,
     /// When the GPU was asked for: its encoding, or why there is none (a node without an
     /// encoding). Not built for CPU renders: it copies every DEM and its slope pyramid.
-    pub tape: Option<Result<Tape, GpuError>>,
+    pub tape: Option<Result<Tape, TapeError>>,
 }
 
 /// Loads and compiles a tree file for rendering, with its GPU tape when `gpu` and every
-/// node has an encoding ([`gpu::tape_from_tree`]).
+/// node has an encoding ([`tape_from_tree`]).
 pub fn load_tree(path: &Path, gpu: bool) -> anyhow::Result<LoadedTree> {
     let tree = super::load_tree(path)?;
-    let tape = gpu.then(|| gpu::tape_from_tree(&tree));
+    let tape = gpu.then(|| tape_from_tree(&tree));
     Ok(LoadedTree {
         field: Box::new(tree),
         tape,

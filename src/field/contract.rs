@@ -68,7 +68,7 @@ pub trait Field: Send + Sync {
     }
 
     /// The concrete leaf as [`std::any::Any`], for encoders that translate known leaf
-    /// kinds (the GPU tape, `render::gpu::tape_from_tree`). Leaves that want to be
+    /// kinds (the GPU tape, `tape::tape_from_tree`). Leaves that want to be
     /// recognised return `Some(self)`; the default is opaque.
     fn as_any(&self) -> Option<&dyn std::any::Any> {
         None

@@ -23,11 +23,11 @@ use super::bounds::{Aabb, Interval};
 use crate::scene::{NonNegative, Positive};
 
 /// Skew factor to the simplex lattice in 3D: `(√4 − 1) / 3`.
-const F3: f32 = 1.0 / 3.0;
+pub(crate) const F3: f32 = 1.0 / 3.0;
 /// Unskew factor: `(1 − 1/√4) / 3`.
-const G3: f32 = 1.0 / 6.0;
+pub(crate) const G3: f32 = 1.0 / 6.0;
 /// Squared kernel radius `r²`.
-const R2: f32 = 0.5;
+pub(crate) const R2: f32 = 0.5;
 
 /// Value scale `S`: `n = S · Σ_v (r² − |p − v|²)⁴₊ (g_v · (p − v))`.
 ///
@@ -226,7 +226,7 @@ pub struct Fbm {
 }
 
 /// Shift of octave `k` in lattice units: `k · OCTAVE_SHIFT`.
-const OCTAVE_SHIFT: Vec3 = Vec3::new(0.547_7, 0.312_7, 0.753_1);
+pub(crate) const OCTAVE_SHIFT: Vec3 = Vec3::new(0.547_7, 0.312_7, 0.753_1);
 
 impl Fbm {
     /// The turbulence of a tree-file spec; `scene_seed` is the tree's global seed.

@@ -25,7 +25,7 @@ pub fn gpu() -> Option<&'static karstic::render::gpu::GpuContext> {
 /// radius `r` at each point) equal the CPU tape's within float rounding.
 pub fn assert_probes_match(
     ctx: &karstic::render::gpu::GpuContext,
-    tape: &karstic::render::gpu::Tape,
+    tape: &karstic::tape::Tape,
     pts: &[(Vec3, f32)],
 ) {
     let got = ctx.probe(tape, pts).unwrap();

@@ -3,7 +3,7 @@
 use glam::{Vec2, Vec3};
 use karstic::dem::Interpolation;
 use karstic::field::Aabb;
-use karstic::render::gpu::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder};
+use karstic::tape::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder};
 
 use super::dem::Dem;
 use super::{Blobs, SigmaSphere, Terrain};

@@ -8,14 +8,14 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 use wgpu::util::DeviceExt;
 
-use super::noise::encode_fbm;
-use super::tape::Tape;
 use super::{GpuError, shader_source};
 use crate::field::{Fbm, Field};
 use crate::render::camera::Camera;
 use crate::render::cpu::RenderSettings;
 use crate::render::image::Frame;
 use crate::render::trace::Method;
+use crate::tape::Tape;
+use crate::tape::noise::encode_fbm;
 
 /// Uniform block of `trace.wgsl` (`struct Uniforms`); see the comments there.
 #[repr(C)]

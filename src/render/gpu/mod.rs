@@ -1,24 +1,19 @@
 //! The tracer on the GPU: a wgpu compute shader, headless (no window), one primary ray per
-//! invocation, running the same march and shading as the CPU path over a [`Tape`].
+//! invocation, running the same march and shading as the CPU path over a
+//! [`crate::tape::Tape`] (the field lowered for the GPU, which this module uploads).
 //!
-//! * [`tape`]: the GPU encoding of a field and its CPU reference evaluator.
-//! * [`from_tree`]: a compiled tree as a tape ([`tape_from_tree`]).
-//! * [`noise`]: the fBm encoding, noisy primitives and turbulence warps on the tape.
-//! * [`sfield`]: S-field leaves (sparse bricks) on the tape.
-//! * [`context`]: adapter, device, pipelines, buffers and read-back.
+//! * [`context`]: adapter, device, pipelines, buffers, dispatch and read-back.
 //!
-//! The WGSL lives in `shaders/` and is assembled by [`shader_source`]; the tests validate
-//! every module with naga so shader errors fail without a GPU.
+//! The WGSL lives in `shaders/` and is assembled by [`shader_source`], starting with the
+//! constant header generated from the tape's Rust definitions
+//! ([`crate::tape::header`]); the tests validate every module with naga so shader errors
+//! fail without a GPU.
 
 pub mod context;
-pub mod from_tree;
-pub mod noise;
-pub mod sfield;
-pub mod tape;
 
 pub use context::{GpuContext, render};
-pub use from_tree::tape_from_tree;
-pub use tape::{Combine, FEATURES, HeightGrid, Profile, Shape, Tape, TapeBuilder};
+
+use crate::tape::TapeError;
 
 /// Errors of the GPU path.
 #[derive(Debug, thiserror::Error)]
@@ -30,16 +25,8 @@ pub enum GpuError {
     #[error("cannot open the GPU device: {0}")]
     Device(String),
     /// The tree cannot be encoded for the GPU.
-    #[error("cannot encode the tree for the GPU: {0}")]
-    Tape(String),
-    /// A node of the tree has no GPU encoding (yet).
-    #[error("{node} has no GPU encoding: {why}")]
-    NoEncoding {
-        /// The node, by user name or arena index, and its kind.
-        node: String,
-        /// What is missing.
-        why: String,
-    },
+    #[error(transparent)]
+    Tape(#[from] TapeError),
     /// The work exceeds what the device allows.
     #[error("{0}")]
     Limits(String),
@@ -52,12 +39,19 @@ pub enum GpuError {
 /// includes). The tests check that every file there belongs to some module.
 pub const SHADER_MODULES: &[(&str, &[&str])] = &[(
     "trace",
-    &["noise.wgsl", "sfield.wgsl", "field.wgsl", "trace.wgsl"],
+    &[
+        "tape_consts.wgsl",
+        "noise.wgsl",
+        "sfield.wgsl",
+        "field.wgsl",
+        "trace.wgsl",
+    ],
 )];
 
 /// The source of the tracing module.
 pub fn shader_source() -> String {
     [
+        include_str!("../../../shaders/tape_consts.wgsl"),
         include_str!("../../../shaders/noise.wgsl"),
         include_str!("../../../shaders/sfield.wgsl"),
         include_str!("../../../shaders/field.wgsl"),

@@ -12,8 +12,10 @@
 //! | --- | --- |
 //! | `min.xyz, max.xyz` | the domain box |
 //! | `R, R_f, ±1, noisy, levels, L_S', tricubic, weights` | sigmoid width, face falloff, orientation (`−1` solid, `+1` air), displacement noise (0/1), level count, the global Lipschitz bound of `S'`, tricubic blend (0/1), offset of its weights |
-//! | `fbm[7]` | the displacement noise ([`super::noise::encode_fbm`]) |
-//! | per level, 11 | `origin.xyz, h, dims.xyz`, offsets of its table, S, α, β |
+//! | `fbm` | the displacement noise ([`super::noise::encode_fbm`]) |
+//! | per level ([`sf_level`]) | `origin.xyz, h, dims.xyz`, offsets of its table, S, α, β |
+//!
+//! The offsets of all of them are named in [`sfield`].
 //!
 //! **Value**: [`SField`]'s own, `min(σ(∓S'), 2T(1 − g(d_in/R_f)))` in the domain and 0
 //! outside, with `S'` sampled as [`SField::s_value`] samples it: on the finest level whose
@@ -29,24 +31,18 @@
 //! the surface σ' vanishes over the range and steps are long; near it the bound is the
 //! global one. The CPU twin evaluates the [`SField`] itself with this bound, so both
 //! tracers step alike. Offsets travel as f32, exact below 2²⁴: larger grids are refused
-//! with [`GpuError::Limits`].
+//! with [`TapeError::Limits`].
 
 use glam::Vec3;
 
-use super::GpuError;
-use super::noise::{FBM_PARAMS, encode_fbm};
+use super::TapeError;
+use super::format::{fbm, limit, set3, sf_level, sfield};
+use super::noise::encode_fbm;
 use crate::curves::Orientation;
 use crate::field::falloff::{T, sigma_slope, wyvill_slope};
 use crate::field::{Aabb, Interval};
 use crate::voxel::SField;
 use crate::voxel::sparse::BRICK_NODES;
-
-/// Floats of the parameters before the levels.
-pub const SFIELD_HEAD: usize = 14 + FBM_PARAMS;
-/// Floats per level.
-pub const LEVEL_PARAMS: usize = 11;
-/// Largest offset or index carried in an f32 parameter.
-const MAX_OFFSET: usize = 1 << 24;
 
 /// `−1` for a solid, `+1` for an air orientation: the field is `σ(sign·S')`.
 fn sign(sf: &SField) -> f32 {
@@ -63,19 +59,20 @@ pub fn encode(
     table: &mut Vec<u32>,
     data: &mut Vec<f32>,
     what: &str,
-) -> Result<Vec<f32>, GpuError> {
+) -> Result<Vec<f32>, TapeError> {
     let p = sf.params();
     let vol = sf.volume();
     let noisy = sf.noise_amplitude() > 0.0;
-    let offset = |n: usize| -> Result<f32, GpuError> {
-        if n > MAX_OFFSET {
-            return Err(GpuError::Limits(format!(
-                "{what}: its bricks need {n} table entries or samples; the GPU encoding addresses at most {MAX_OFFSET}"
+    let offset = |n: usize| -> Result<f32, TapeError> {
+        if n > limit::MAX_OFFSET {
+            return Err(TapeError::Limits(format!(
+                "{what}: its bricks need {n} table entries or samples; the GPU encoding addresses at most {}",
+                limit::MAX_OFFSET
             )));
         }
         Ok(n as f32)
     };
-    let mut levels = Vec::with_capacity(LEVEL_PARAMS * vol.levels.len());
+    let mut q = vec![0.0; sfield::HEAD + sf_level::LEN * vol.levels.len()];
     for (l, bricks) in vol.levels.iter().enumerate() {
         let g = bricks.geom;
         let bd = g.bdims();
@@ -88,7 +85,7 @@ pub fn encode(
             }
         }
         let nodes = bricks.len() * BRICK_NODES;
-        let mut channel = |c: &[f32]| -> Result<f32, GpuError> {
+        let mut channel = |c: &[f32]| -> Result<f32, TapeError> {
             let at = offset(data.len())?;
             data.extend_from_slice(&c[..nodes]);
             Ok(at)
@@ -99,19 +96,14 @@ pub fn encode(
         } else {
             (0.0, 0.0)
         };
-        levels.extend([
-            g.origin.x,
-            g.origin.y,
-            g.origin.z,
-            g.h,
-            g.dims.x as f32,
-            g.dims.y as f32,
-            g.dims.z as f32,
-            table_at,
-            s_at,
-            a_at,
-            b_at,
-        ]);
+        let lv = &mut q[sfield::HEAD + l * sf_level::LEN..][..sf_level::LEN];
+        set3(lv, sf_level::ORIGIN, g.origin);
+        lv[sf_level::H] = g.h;
+        set3(lv, sf_level::DIMS, g.dims.as_vec3());
+        lv[sf_level::TABLE] = table_at;
+        lv[sf_level::S] = s_at;
+        lv[sf_level::ALPHA] = a_at;
+        lv[sf_level::BETA] = b_at;
     }
     let weights_at = match sf.cubic() {
         Some(c) => {
@@ -123,25 +115,17 @@ pub fn encode(
     };
     offset(table.len().max(data.len()))?;
     let d = p.domain;
-    let mut q = vec![
-        d.min.x,
-        d.min.y,
-        d.min.z,
-        d.max.x,
-        d.max.y,
-        d.max.z,
-        p.transition,
-        p.falloff,
-        sign(sf),
-        if noisy { 1.0 } else { 0.0 },
-        vol.levels.len() as f32,
-        sf.s_lipschitz(),
-        if sf.cubic().is_some() { 1.0 } else { 0.0 },
-        weights_at,
-    ];
-    q.extend(encode_fbm(0, &p.fbm));
-    q.extend(levels);
-    debug_assert_eq!(q.len(), SFIELD_HEAD + LEVEL_PARAMS * vol.levels.len());
+    set3(&mut q, sfield::MIN, d.min);
+    set3(&mut q, sfield::MAX, d.max);
+    q[sfield::TRANSITION] = p.transition;
+    q[sfield::FALLOFF] = p.falloff;
+    q[sfield::SIGN] = sign(sf);
+    q[sfield::NOISY] = if noisy { 1.0 } else { 0.0 };
+    q[sfield::LEVELS] = vol.levels.len() as f32;
+    q[sfield::S_LIPSCHITZ] = sf.s_lipschitz();
+    q[sfield::TRICUBIC] = if sf.cubic().is_some() { 1.0 } else { 0.0 };
+    q[sfield::WEIGHTS] = weights_at;
+    q[sfield::FBM..sfield::FBM + fbm::LEN].copy_from_slice(&encode_fbm(0, &p.fbm));
     Ok(q)
 }
 

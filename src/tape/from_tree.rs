@@ -1,4 +1,4 @@
-//! Encoding a compiled [`Tree`] as a GPU [`Tape`]: a depth-first walk of its arena that
+//! The builder from a compiled [`Tree`]: encoding it as a GPU [`Tape`]: a depth-first walk of its arena that
 //! emits every node through the [`TapeBuilder`], reproducing the tree's values exactly
 //! (up to float rounding).
 //!
@@ -20,21 +20,21 @@
 //! S-field volumes and noisy primitives get a guard of their own (their evaluation is
 //! long, and rays away from them jump over it).
 //! A node with no encoding — a disc, plane or prism skeleton, a turned box, a
-//! heightfield with nodata or a domain polygon, any other leaf — is a [`GpuError::NoEncoding`] naming it, and
+//! heightfield with nodata or a domain polygon, any other leaf — is a
+//! [`TapeError::NoEncoding`] naming it, and
 //! `karstic render --gpu` falls back to the CPU with that message. An instanced subtree
 //! (one node with several parents) is emitted once per use: a tape is a tree.
 
 use glam::Vec3;
 
-use super::GpuError;
-use super::tape::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder};
+use super::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder, TapeError};
 use crate::dem::HeightfieldField;
 use crate::field::skeleton::Project;
 use crate::field::{Field, Node, NodeId, Primitive, Skeleton, T, Tree};
 use crate::voxel::SField;
 
 /// The GPU tape of a compiled tree, or the first node without an encoding.
-pub fn tape_from_tree(tree: &Tree) -> Result<Tape, GpuError> {
+pub fn tape_from_tree(tree: &Tree) -> Result<Tape, TapeError> {
     let mut b = TapeBuilder::new();
     emit(tree, &mut b, tree.root())?;
     b.finish()
@@ -42,7 +42,7 @@ pub fn tape_from_tree(tree: &Tree) -> Result<Tape, GpuError> {
 
 impl Tape {
     /// [`tape_from_tree`].
-    pub fn from_tree(tree: &Tree) -> Result<Tape, GpuError> {
+    pub fn from_tree(tree: &Tree) -> Result<Tape, TapeError> {
         tape_from_tree(tree)
     }
 }
@@ -55,8 +55,8 @@ fn describe(tree: &Tree, id: NodeId, kind: &str) -> String {
     }
 }
 
-fn no_encoding(tree: &Tree, id: NodeId, kind: &str, why: &str) -> GpuError {
-    GpuError::NoEncoding {
+fn no_encoding(tree: &Tree, id: NodeId, kind: &str, why: &str) -> TapeError {
+    TapeError::NoEncoding {
         node: describe(tree, id, kind),
         why: why.into(),
     }
@@ -79,7 +79,7 @@ fn costly(node: &Node) -> bool {
 }
 
 /// Emits node `id`, leaving one entry on the builder's stack.
-fn emit(tree: &Tree, b: &mut TapeBuilder, id: NodeId) -> Result<(), GpuError> {
+fn emit(tree: &Tree, b: &mut TapeBuilder, id: NodeId) -> Result<(), TapeError> {
     let node = &tree.nodes()[id as usize];
     let support = tree.info(id).support;
     if costly(node) && !support.is_empty() && support.size().is_finite() {
@@ -94,7 +94,7 @@ fn emit(tree: &Tree, b: &mut TapeBuilder, id: NodeId) -> Result<(), GpuError> {
 }
 
 /// Emits `node` (node `id`) without a guard of its own.
-fn emit_node(tree: &Tree, b: &mut TapeBuilder, id: NodeId, node: &Node) -> Result<(), GpuError> {
+fn emit_node(tree: &Tree, b: &mut TapeBuilder, id: NodeId, node: &Node) -> Result<(), TapeError> {
     match node {
         Node::Constant(v) => b.constant(*v),
         Node::Primitive(p) => primitive(tree, b, id, p)?,
@@ -143,7 +143,7 @@ fn chain(
     b: &mut TapeBuilder,
     how: Combine,
     children: &[NodeId],
-) -> Result<(), GpuError> {
+) -> Result<(), TapeError> {
     let Some((&first, rest)) = children.split_first() else {
         b.constant(0.0);
         return Ok(());
@@ -156,7 +156,7 @@ fn chain(
     Ok(())
 }
 
-fn leaf(tree: &Tree, b: &mut TapeBuilder, id: NodeId, f: &dyn Field) -> Result<(), GpuError> {
+fn leaf(tree: &Tree, b: &mut TapeBuilder, id: NodeId, f: &dyn Field) -> Result<(), TapeError> {
     let any = f.as_any();
     if let Some(p) = any.and_then(|a| a.downcast_ref::<Primitive>()) {
         return primitive(tree, b, id, p);
@@ -175,7 +175,7 @@ fn leaf(tree: &Tree, b: &mut TapeBuilder, id: NodeId, f: &dyn Field) -> Result<(
     ))
 }
 
-fn primitive(tree: &Tree, b: &mut TapeBuilder, id: NodeId, p: &Primitive) -> Result<(), GpuError> {
+fn primitive(tree: &Tree, b: &mut TapeBuilder, id: NodeId, p: &Primitive) -> Result<(), TapeError> {
     let skeleton = p.skeleton();
     let kind = format!("{} primitive", skeleton.kind());
     let profile = Profile::Wyvill {
@@ -284,7 +284,7 @@ fn heightfield(
     b: &mut TapeBuilder,
     id: NodeId,
     h: &HeightfieldField,
-) -> Result<(), GpuError> {
+) -> Result<(), TapeError> {
     let params = h.params();
     let grid = h.heightfield();
     let cell = grid.cell();

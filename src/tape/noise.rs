@@ -9,39 +9,34 @@
 //!
 //! | op | params | meaning |
 //! | --- | --- | --- |
-//! | `NPRIM` | `R, E, A, λ_d̃, fbm[7], shape…` | `E·g(d̃)`, `d̃ = min(ρ/(R + A·t(s + R·u)), 1)`, `ρ` the distance to the convex shape, `s` its projection, `u = (p − s)/ρ` |
-//! | `TWARP` | `A, reach, L_ω, region?, min.xyz, max.xyz, falloff, fbm[7] × 3` | `p ← p + A·f_D(p)·(t₀, t₁, t₂)(p)`, `r ← r + reach`; the matching `UNWARP` scales the bound by `L_ω` |
+//! | `NPRIM` | [`nprim`]: `R, E, A, λ_d̃, fbm, shape…` | `E·g(d̃)`, `d̃ = min(ρ/(R + A·t(s + R·u)), 1)`, `ρ` the distance to the convex shape, `s` its projection, `u = (p − s)/ρ` |
+//! | `TWARP` | [`twarp`]: `A, reach, L_ω, region?, min.xyz, max.xyz, falloff, fbm × 3` | `p ← p + A·f_D(p)·(t₀, t₁, t₂)(p)`, `r ← r + reach`; the matching `UNWARP` scales the bound by `L_ω` |
 //!
-//! An encoded fBm is `index, seed & 0xffff, seed >> 16, 1/λ, octaves, norm, L_t` (the seed
-//! split in halves, each exact in f32).
+//! An encoded fBm ([`fbm`]) is `index, seed & 0xffff, seed >> 16, 1/λ, octaves, norm,
+//! L_t` (the seed split in halves, each exact in f32).
 //!
 //! [`Tape::noises`]: super::Tape::noises
 
 use glam::Vec3;
 
-use super::tape::project;
+use super::format::{fbm, get3, nprim, set3, twarp};
+use super::shape::project;
 use crate::field::falloff::{wyvill, wyvill_slope};
 use crate::field::{Aabb, Fbm, Interval, Noise, Warp};
 
-/// Floats of an encoded fBm.
-pub const FBM_PARAMS: usize = 7;
-/// Floats of a noisy primitive's parameters before its shape.
-pub const NPRIM_HEAD: usize = 4 + FBM_PARAMS;
-/// Floats of a turbulence warp's parameters.
-pub const TWARP_PARAMS: usize = 11 + 3 * FBM_PARAMS;
-
-/// `fbm` as `shaders/noise.wgsl` reads it; `index` is its place in [`super::Tape::noises`].
-pub fn encode_fbm(index: usize, fbm: &Fbm) -> [f32; FBM_PARAMS] {
-    let seed = fbm.seed();
-    [
-        index as f32,
-        (seed & 0xffff) as f32,
-        (seed >> 16) as f32,
-        fbm.inv_wavelength(),
-        fbm.octaves() as f32,
-        fbm.norm(),
-        fbm.lipschitz(),
-    ]
+/// `f` as `shaders/noise.wgsl` reads it ([`fbm`]); `index` is its place in
+/// [`super::Tape::noises`].
+pub fn encode_fbm(index: usize, f: &Fbm) -> [f32; fbm::LEN] {
+    let seed = f.seed();
+    let mut q = [0.0; fbm::LEN];
+    q[fbm::INDEX] = index as f32;
+    q[fbm::SEED_LO] = (seed & 0xffff) as f32;
+    q[fbm::SEED_HI] = (seed >> 16) as f32;
+    q[fbm::INV_WAVELENGTH] = f.inv_wavelength();
+    q[fbm::OCTAVES] = f.octaves() as f32;
+    q[fbm::NORM] = f.norm();
+    q[fbm::LIPSCHITZ] = f.lipschitz();
+    q
 }
 
 /// The global bound of `|∇d̃|` where `d̃ < 1`, as [`crate::field::Primitive`] computes it:
@@ -61,38 +56,36 @@ fn dt_slope(r: f32, a: f32, lt: f32, x_hi: f32, den_lo: f32) -> f32 {
     (1.0 + a * lt * (x_hi.min(1.0) + r / den_lo)) / den_lo
 }
 
-/// The parameters of a noisy primitive (`noise` is the fBm's index in the tape's list).
-pub fn nprim_head(radius: f32, energy: f32, noise: &Noise, index: usize) -> [f32; NPRIM_HEAD] {
-    let mut h = [0.0; NPRIM_HEAD];
-    h[..4].copy_from_slice(&[radius, energy, noise.amplitude, noisy_slope(radius, noise)]);
-    h[4..].copy_from_slice(&encode_fbm(index, &noise.fbm));
+/// The parameters of a noisy primitive before its shape (`index` is the fBm's index in the
+/// tape's list).
+pub fn nprim_head(radius: f32, energy: f32, noise: &Noise, index: usize) -> [f32; nprim::SHAPE] {
+    let mut h = [0.0; nprim::SHAPE];
+    h[nprim::RADIUS] = radius;
+    h[nprim::ENERGY] = energy;
+    h[nprim::AMPLITUDE] = noise.amplitude;
+    h[nprim::SLOPE] = noisy_slope(radius, noise);
+    h[nprim::FBM..nprim::FBM + fbm::LEN].copy_from_slice(&encode_fbm(index, &noise.fbm));
     h
 }
 
 /// The parameters of a turbulence warp; `first` is the index of its x turbulence (the y
 /// and z ones follow).
-pub fn twarp_params(w: &Warp, first: usize) -> [f32; TWARP_PARAMS] {
-    let mut q = [0.0; TWARP_PARAMS];
+pub fn twarp_params(w: &Warp, first: usize) -> [f32; twarp::LEN] {
+    let mut q = [0.0; twarp::LEN];
     let (has, b, fall) = match w.region() {
         Some((b, f)) => (1.0, b, f),
         None => (0.0, Aabb::new(Vec3::ZERO, Vec3::ZERO), 1.0),
     };
-    q[..11].copy_from_slice(&[
-        w.amplitude(),
-        w.reach(),
-        w.lipschitz(),
-        has,
-        b.min.x,
-        b.min.y,
-        b.min.z,
-        b.max.x,
-        b.max.y,
-        b.max.z,
-        fall,
-    ]);
+    q[twarp::AMPLITUDE] = w.amplitude();
+    q[twarp::REACH] = w.reach();
+    q[twarp::LIPSCHITZ] = w.lipschitz();
+    q[twarp::HAS_REGION] = has;
+    set3(&mut q, twarp::REGION_MIN, b.min);
+    set3(&mut q, twarp::REGION_MAX, b.max);
+    q[twarp::FALLOFF] = fall;
     for (k, f) in w.turbulence().iter().enumerate() {
-        let at = 11 + k * FBM_PARAMS;
-        q[at..at + FBM_PARAMS].copy_from_slice(&encode_fbm(first + k, f));
+        let at = twarp::TURBULENCE + k * fbm::LEN;
+        q[at..at + fbm::LEN].copy_from_slice(&encode_fbm(first + k, f));
     }
     q
 }
@@ -100,21 +93,25 @@ pub fn twarp_params(w: &Warp, first: usize) -> [f32; TWARP_PARAMS] {
 /// `ω⁻¹(p)` of the turbulence warp with parameters `q` ([`twarp_params`]), as
 /// [`Warp::apply`] computes it.
 pub fn twarp_apply(q: &[f32], noises: &[Fbm], p: Vec3) -> Vec3 {
-    let fd = if q[3] != 0.0 {
+    let fd = if q[twarp::HAS_REGION] != 0.0 {
         let b = Aabb {
-            min: Vec3::new(q[4], q[5], q[6]),
-            max: Vec3::new(q[7], q[8], q[9]),
+            min: get3(q, twarp::REGION_MIN),
+            max: get3(q, twarp::REGION_MAX),
         };
         let d = (p - b.clamp(p)).length();
-        if d == 0.0 { 1.0 } else { wyvill(d / q[10]) }
+        if d == 0.0 {
+            1.0
+        } else {
+            wyvill(d / q[twarp::FALLOFF])
+        }
     } else {
         1.0
     };
     if fd == 0.0 {
         return p;
     }
-    let t = |k: usize| noises[q[11 + k * FBM_PARAMS] as usize].value(p);
-    p + Vec3::new(t(0), t(1), t(2)) * (q[0] * fd)
+    let t = |k: usize| noises[q[twarp::TURBULENCE + k * fbm::LEN + fbm::INDEX] as usize].value(p);
+    p + Vec3::new(t(0), t(1), t(2)) * (q[twarp::AMPLITUDE] * fd)
 }
 
 /// `d̃` at a point at signed distance `sd` from the shape, `t` the turbulence read for it:
@@ -146,9 +143,14 @@ pub fn noisy_primitive(
     (p, c, rb): (Vec3, Vec3, f32),
     bound: bool,
 ) -> (f32, f32) {
-    let (r, e, a, slope) = (q[0], q[1], q[2], q[3]);
-    let t = &noises[q[4] as usize];
-    let shape = &q[NPRIM_HEAD..];
+    let (r, e, a, slope) = (
+        q[nprim::RADIUS],
+        q[nprim::ENERGY],
+        q[nprim::AMPLITUDE],
+        q[nprim::SLOPE],
+    );
+    let t = &noises[q[nprim::FBM + fbm::INDEX] as usize];
+    let shape = &q[nprim::SHAPE..];
     let reach = r + a;
     let pp = project(kind, shape, p);
     let tp = if pp.1 > 0.0 && pp.1 < reach {
