@@ -40,7 +40,7 @@ fn wyvill_slope(lo_in: f32, hi_in: f32) -> f32 {
 
 fn sigma(x: f32, r: f32) -> f32 {
     let u = clamp(x / r, -1.0, 1.0);
-    return T * (1.0 + 1.5 * u - 0.5 * u * u * u);
+    return clamp(T * (1.0 + 1.5 * u - 0.5 * u * u * u), 0.0, 2.0 * T);
 }
 
 // max σ' over [lo, hi]: the slope is largest where |x| is smallest.
@@ -345,6 +345,38 @@ fn box_distance(lo: vec3<f32>, hi: vec3<f32>, q: vec3<f32>) -> f32 {
 }
 
 // (f(p), Lipschitz bound of f over the ball B(c, r)).
+// The depth of `q` in the box `[lo, hi]`: the distance to its nearest face, negative
+// outside (`Transition::depth`).
+fn face_depth(lo: vec3<f32>, hi: vec3<f32>, q: vec3<f32>) -> f32 {
+    let d = min(q - lo, hi - q);
+    return min(d.x, min(d.y, d.z));
+}
+
+// The replace weight at depth `d` (`Transition::ramp`).
+fn replace_ramp(d: f32, width: f32) -> f32 {
+    if d <= 0.0 {
+        return 0.0;
+    }
+    return 1.0 - wyvill(d / width);
+}
+
+// `REPLACE` of the entries `a` (the base) and `b` (`interpreter::replace`).
+fn replace(o: u32, a: vec2<f32>, b: vec2<f32>, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
+    let lo = param3(o + REPLACE_MIN);
+    let hi = param3(o + REPLACE_MAX);
+    let width = params[o + REPLACE_WIDTH];
+    let value = a.x + replace_ramp(face_depth(lo, hi, p), width) * (b.x - a.x);
+    let dc = face_depth(lo, hi, c);
+    var bound = a.y;
+    if replace_ramp(dc - r, width) >= 1.0 {
+        bound = b.y;
+    } else if replace_ramp(dc + r, width) > 0.0 {
+        let gap = min(abs(b.x - a.x) + (a.y + b.y) * (distance(p, c) + r), params[o + REPLACE_GAP]);
+        bound = max(a.y, b.y) + gap * (WYVILL_MAX_SLOPE / width);
+    }
+    return vec2<f32>(value, bound);
+}
+
 fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
     var stack: array<vec2<f32>, MAX_STACK>;
     var sp = 0u;
@@ -408,6 +440,12 @@ fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
                     v = vec2<f32>(min(a.x, 2.0 * T - b.x), max(a.y, b.y));
                 }
                 stack[sp - 1u] = v;
+            }
+            case OP_REPLACE: {
+                let b = stack[sp - 1u];
+                let a = stack[sp - 2u];
+                sp -= 1u;
+                stack[sp - 1u] = replace(o, a, b, p, c, r);
             }
             case OP_GUARD: {
                 let lo = param3(o + GUARD_MIN);

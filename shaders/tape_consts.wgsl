@@ -39,6 +39,7 @@ const OP_BLEND: u32 = 16u; // Sum of the two top entries.
 const OP_UNION: u32 = 17u; // Maximum.
 const OP_INTER: u32 = 18u; // Minimum.
 const OP_DIFF: u32 = 19u; // `min(a, 2T − b)`.
+const OP_REPLACE: u32 = 20u; // `a + w·(b − a)`, `w` the partition of unity of a region (`replace`).
 const OP_GUARD: u32 = 32u; // Skip a subtree whose support box is out of reach (`guard`).
 const OP_WARP: u32 = 33u; // Enter an affine warp (`warp`).
 const OP_UNWARP: u32 = 34u; // Leave an affine or turbulence warp (`unwarp`).
@@ -130,6 +131,13 @@ const NPRIM_SHAPE: u32 = 11u; // Where the shape's parameters start.
 const GUARD_MIN: u32 = 0u; // Lower corner of the box (3 floats).
 const GUARD_MAX: u32 = 3u; // Upper corner (3 floats).
 const GUARD_LEN: u32 = 6u; // Floats in all.
+
+// `REPLACE` parameters: the region, its transition width and a bound of `|b − a|` (from the children's ranges).
+const REPLACE_MIN: u32 = 0u; // Lower corner of the region (3 floats).
+const REPLACE_MAX: u32 = 3u; // Upper corner (3 floats).
+const REPLACE_WIDTH: u32 = 6u; // Transition width.
+const REPLACE_GAP: u32 = 7u; // `max |b − a|` anywhere.
+const REPLACE_LEN: u32 = 8u; // Floats in all.
 
 // `WARP` parameters.
 const WARP_MATRIX: u32 = 0u; // `M⁻¹`, 3 rows of 4 (12 floats).

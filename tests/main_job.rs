@@ -178,7 +178,7 @@ fn main_job_mesh_is_watertight_valid_caved_and_on_the_dem() {
     // interpolant, as the tree defines it) within 1% of a cell.
     let t = &r.tree;
     let dem = dem_of(t);
-    let features: Vec<Aabb> = ["arch_clip", "cave", "grotto", "chamber"]
+    let features: Vec<Aabb> = ["arch", "cave", "grotto", "chamber"]
         .iter()
         .map(|n| t.info(t.find(n).unwrap()).support.dilate(2.0 * cell))
         .collect();

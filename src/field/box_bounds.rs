@@ -7,6 +7,7 @@ use super::contract::Field;
 use super::falloff::T;
 use super::line::{Anywhere, Candidates};
 use super::node::{Node, NodeId};
+use super::replace::gap;
 use super::tree::Tree;
 
 /// The box of `b`'s corners mapped by `m`: contains the image of `b`.
@@ -113,11 +114,8 @@ impl Tree {
                 if w.hi <= 0.0 {
                     return lb;
                 }
-                mix.mix_lipschitz(
-                    w,
-                    (lb, self.interval_at(*base, b)),
-                    (self.lipschitz_box_at(*by, b), self.interval_at(*by, b)),
-                )
+                let gap = gap(self.interval_at(*base, b), self.interval_at(*by, b));
+                mix.mix_lipschitz(w, lb, self.lipschitz_box_at(*by, b), gap)
             }
             Node::Affine {
                 child,
@@ -175,14 +173,8 @@ impl Tree {
                 if w.hi <= 0.0 {
                     return lb;
                 }
-                mix.mix_lipschitz(
-                    w,
-                    (lb, self.interval_at(*base, &bx)),
-                    (
-                        self.lipschitz_segment_with(*by, a, b, at),
-                        self.interval_at(*by, &bx),
-                    ),
-                )
+                let gap = gap(self.interval_at(*base, &bx), self.interval_at(*by, &bx));
+                mix.mix_lipschitz(w, lb, self.lipschitz_segment_with(*by, a, b, at), gap)
             }
             Node::Affine {
                 child,

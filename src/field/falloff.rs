@@ -66,20 +66,19 @@ pub fn wyvill_slope(xs: Interval) -> f32 {
 }
 
 /// The sigmoid `σ_R(x)`, from 0 (`x ≤ −R`) through `T` (`x = 0`) to `2T` (`x ≥ R`).
+/// The cubic is clamped to `[0, 2T]`: in f32 it rounds a hair below 0 just inside `−R`,
+/// which would make it non-monotone there (and intervals of it inverted).
 #[inline]
 pub fn sigma(x: f32, r: f32) -> f32 {
     let u = (x / r).clamp(-1.0, 1.0);
-    T * (1.0 + 1.5 * u - 0.5 * u * u * u)
+    (T * (1.0 + 1.5 * u - 0.5 * u * u * u)).clamp(0.0, 2.0 * T)
 }
 
 /// `(σ_R(x), σ_R'(x))`.
 #[inline]
 pub fn sigma_d(x: f32, r: f32) -> (f32, f32) {
     let u = (x / r).clamp(-1.0, 1.0);
-    (
-        T * (1.0 + 1.5 * u - 0.5 * u * u * u),
-        1.5 * T / r * (1.0 - u * u),
-    )
+    (sigma(x, r), 1.5 * T / r * (1.0 - u * u))
 }
 
 /// `max σ_R'` over all `x`: `3T / (2R)`.

@@ -61,15 +61,29 @@ impl Transition {
         (p - self.region.min).min(self.region.max - p)
     }
 
-    /// `w(p)`.
+    /// `d(p)`: the distance to the region's nearest face, positive inside, negative
+    /// outside (where it is a lower bound of minus the distance to the box). It is
+    /// 1-Lipschitz: over a ball `B(c, r)` it lies in `d(c) ± r`.
     #[inline]
-    pub fn weight(&self, p: Vec3) -> f32 {
-        let d = self.face_distances(p).min_element();
+    pub fn depth(&self, p: Vec3) -> f32 {
+        self.face_distances(p).min_element()
+    }
+
+    /// The weight at depth `d`: 0 outside, `1 − g(d / W)` across the transition, 1 in
+    /// the core; non-decreasing.
+    #[inline]
+    pub fn ramp(&self, d: f32) -> f32 {
         if d <= 0.0 {
             0.0
         } else {
             1.0 - wyvill(d / self.width)
         }
+    }
+
+    /// `w(p)`.
+    #[inline]
+    pub fn weight(&self, p: Vec3) -> f32 {
+        self.ramp(self.depth(p))
     }
 
     /// `(w(p), ∇w(p))`; the gradient of the nearest face's distance at the creases.
@@ -101,14 +115,7 @@ impl Transition {
             let mid = 0.5 * (r0 + r1);
             hi = hi.min(tent(mid.clamp(b0, b1)));
         }
-        let w = |d: f32| {
-            if d <= 0.0 {
-                0.0
-            } else {
-                1.0 - wyvill(d / self.width)
-            }
-        };
-        Interval::new(w(lo), w(hi))
+        Interval::new(self.ramp(lo), self.ramp(hi))
     }
 
     /// The range of `(1 − w)·a + w·b` for `a ∈ base`, `b ∈ by` and `w` over the box `bx`.
@@ -124,23 +131,25 @@ impl Transition {
         at(w.lo).hull(at(w.hi))
     }
 
-    /// The Lipschitz bound of the mix over a box where the weight ranges over `w`, the
-    /// children's bounds are `l_base`, `l_by` and their values lie in `base`, `by`.
-    pub fn mix_lipschitz(
-        &self,
-        w: Interval,
-        (l_base, base): (f32, Interval),
-        (l_by, by): (f32, Interval),
-    ) -> f32 {
+    /// The Lipschitz bound of the mix over a region where the weight ranges over `w`,
+    /// the children's bounds are `l_base` and `l_by`, and `|f_by − f_base| ≤ gap`.
+    pub fn mix_lipschitz(&self, w: Interval, l_base: f32, l_by: f32, gap: f32) -> f32 {
         if w.hi <= 0.0 {
             l_base
         } else if w.lo >= 1.0 {
             l_by
         } else {
-            let gap = (by.hi - base.lo).max(base.hi - by.lo).max(0.0);
             l_base.max(l_by) + gap * self.lipschitz()
         }
     }
+}
+
+/// `max |b − a|` for `a ∈ base`, `b ∈ by`.
+pub fn gap(base: Interval, by: Interval) -> f32 {
+    (by.hi - base.lo).max(base.hi - by.lo).max(0.0)
+}
+
+impl Transition {
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@ use super::contract::{Elevation, Field};
 use super::falloff::T;
 use super::node::{Node, NodeId, spectral_norm};
 use super::primitive::Primitive;
-use super::replace::Transition;
+use super::replace::{Transition, gap};
 use super::slope_grid::blend_lipschitz;
 use super::warp::Warp;
 
@@ -278,8 +278,12 @@ impl TreeBuilder {
                     .support
                     .union(v.support.intersection(*mix.region()));
                 let everywhere = Interval::new(0.0, 1.0);
-                let lipschitz =
-                    mix.mix_lipschitz(everywhere, (b.lipschitz, b.range), (v.lipschitz, v.range));
+                let lipschitz = mix.mix_lipschitz(
+                    everywhere,
+                    b.lipschitz,
+                    v.lipschitz,
+                    gap(b.range, v.range),
+                );
                 (support, b.range.hull(v.range), lipschitz)
             }
             Node::Affine {

@@ -66,6 +66,33 @@ impl Topology {
 }
 
 impl Mesh {
+    /// The face count of each connected component (triangles sharing a vertex are
+    /// connected), largest first: floating debris shows up as small components.
+    pub fn component_sizes(&self) -> Vec<usize> {
+        let mut parent: Vec<u32> = (0..self.positions.len() as u32).collect();
+        fn root(parent: &mut [u32], mut v: u32) -> u32 {
+            while parent[v as usize] != v {
+                parent[v as usize] = parent[parent[v as usize] as usize];
+                v = parent[v as usize];
+            }
+            v
+        }
+        for t in &self.triangles {
+            let a = root(&mut parent, t[0]);
+            for &v in &t[1..] {
+                let b = root(&mut parent, v);
+                parent[b as usize] = a;
+            }
+        }
+        let mut faces = vec![0usize; self.positions.len()];
+        for t in &self.triangles {
+            faces[root(&mut parent, t[0]) as usize] += 1;
+        }
+        let mut sizes: Vec<usize> = faces.into_iter().filter(|&n| n > 0).collect();
+        sizes.sort_unstable_by(|a, b| b.cmp(a));
+        sizes
+    }
+
     /// Number of vertices.
     pub fn vertex_count(&self) -> usize {
         self.positions.len()
@@ -246,5 +273,17 @@ mod tests {
             m.check_topology(None),
             Err(TopologyError::Boundary(..))
         ));
+    }
+
+    #[test]
+    fn components_count_faces_of_connected_pieces() {
+        let mut m = tetra();
+        // A second, smaller piece: one triangle away from the tetrahedron.
+        m.positions
+            .extend([[5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [5.0, 1.0, 0.0]]);
+        m.normals.extend([[0.0, 0.0, 1.0]; 3]);
+        m.triangles.push([4, 5, 6]);
+        assert_eq!(m.component_sizes(), vec![4, 1]);
+        assert_eq!(tetra().component_sizes(), vec![4]);
     }
 }

@@ -7,12 +7,15 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Vec3};
 
-use super::format::{Instr, constant, flag, get3, guard, limit, op, prim, set3, unwarp, warp};
+use super::format::{
+    Instr, constant, flag, get3, guard, limit, op, prim, replace, set3, unwarp, warp,
+};
 use super::height::{self, HeightGrid};
 use super::noise::{nprim_head, twarp_params};
 use super::shape::{Profile, Shape};
 use super::{Tape, TapeError, sfield};
-use crate::field::{Aabb, Fbm, Field, Interval, Noise, T, Warp};
+use crate::field::replace::gap;
+use crate::field::{Aabb, Fbm, Field, Interval, Noise, T, Transition, Warp};
 use crate::voxel::SField;
 
 /// Ball radius standing for "everywhere" when computing the global bound.
@@ -243,6 +246,25 @@ impl TapeBuilder {
         };
         self.emit(code, 0, &[]);
         self.push(e);
+        Ok(())
+    }
+
+    /// Replaces the entry below the top (the base) by the top one (`by`) inside `mix`'s
+    /// region, with its smooth transition ([`Transition`]).
+    pub fn replace(&mut self, mix: &Transition) -> Result<(), TapeError> {
+        let by = self.pop("a replacement")?;
+        let base = self.pop("a replacement")?;
+        let region = *mix.region();
+        let mut q = [0.0; replace::LEN];
+        set3(&mut q, replace::MIN, region.min);
+        set3(&mut q, replace::MAX, region.max);
+        q[replace::WIDTH] = mix.width();
+        q[replace::GAP] = gap(base.range, by.range);
+        self.emit(op::REPLACE, 0, &q);
+        self.push(Entry {
+            support: base.support.union(by.support.intersection(region)),
+            range: base.range.hull(by.range),
+        });
         Ok(())
     }
 

@@ -114,6 +114,8 @@ layout! {
         INTER = 18;
         /// `min(a, 2T − b)`.
         DIFF = 19;
+        /// `a + w·(b − a)`, `w` the partition of unity of a region ([`replace`]).
+        REPLACE = 20;
         /// Skip a subtree whose support box is out of reach ([`guard`]).
         GUARD = 32;
         /// Enter an affine warp ([`warp`]).
@@ -298,6 +300,21 @@ layout! {
         MAX = 3;
         /// Floats in all.
         LEN = 6;
+    }
+
+    /// `REPLACE` parameters: the region, its transition width and a bound of
+    /// `|b − a|` (from the children's ranges).
+    pub mod replace: usize = "REPLACE_" {
+        /// Lower corner of the region (3 floats).
+        MIN = 0;
+        /// Upper corner (3 floats).
+        MAX = 3;
+        /// Transition width.
+        WIDTH = 6;
+        /// `max |b − a|` anywhere.
+        GAP = 7;
+        /// Floats in all.
+        LEN = 8;
     }
 
     /// `WARP` parameters.

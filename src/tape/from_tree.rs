@@ -118,8 +118,10 @@ fn emit_node(tree: &Tree, b: &mut TapeBuilder, id: NodeId, node: &Node) -> Resul
                 b.combine(Combine::Difference)?;
             }
         }
-        Node::Replace { .. } => {
-            return Err(no_encoding(tree, id, "replace", "no tape op yet"));
+        Node::Replace { base, by, mix } => {
+            emit(tree, b, *base)?;
+            emit(tree, b, *by)?;
+            b.replace(mix)?;
         }
         Node::Affine {
             child, to_child, ..

@@ -6,10 +6,10 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::format::{Instr, constant, get3, guard, limit, op, twarp, unwarp, warp};
+use super::format::{Instr, constant, get3, guard, limit, op, replace, twarp, unwarp, warp};
 use super::noise::{noisy_primitive, twarp_apply};
 use super::{height, sfield, shape};
-use crate::field::{Aabb, Fbm, Field, Interval, T};
+use crate::field::{Aabb, Fbm, Field, Interval, T, Transition};
 use crate::voxel::SField;
 
 /// A compiled tape: what the GPU uploads, and a [`Field`] on the CPU.
@@ -94,6 +94,11 @@ impl Tape {
                         _ => (a.0.min(2.0 * T - b.0), a.1.max(b.1)),
                     };
                 }
+                op::REPLACE => {
+                    let (b, a) = (stack[sp - 1], stack[sp - 2]);
+                    sp -= 1;
+                    stack[sp - 1] = replace(&prm[o..], a, b, (p, c, r));
+                }
                 op::GUARD => {
                     let bx = Aabb {
                         min: get3(prm, o + guard::MIN),
@@ -130,6 +135,24 @@ impl Tape {
         }
         stack[0]
     }
+}
+
+/// `REPLACE` of the entries `a` (the base) and `b` at `p`, with its bound over the ball
+/// `B(c, r)`: the weight's range there comes from its depth, which is 1-Lipschitz.
+fn replace(q: &[f32], a: (f32, f32), b: (f32, f32), (p, c, r): (Vec3, Vec3, f32)) -> (f32, f32) {
+    let mix = Transition::new(
+        Aabb {
+            min: get3(q, replace::MIN),
+            max: get3(q, replace::MAX),
+        },
+        q[replace::WIDTH],
+    );
+    let value = a.0 + mix.weight(p) * (b.0 - a.0);
+    let dc = mix.depth(c);
+    let w = Interval::new(mix.ramp(dc - r), mix.ramp(dc + r));
+    // |b − a| over the ball: from the values at p and the slopes, or the ranges.
+    let gap = ((b.0 - a.0).abs() + (a.1 + b.1) * (p.distance(c) + r)).min(q[replace::GAP]);
+    (value, mix.mix_lipschitz(w, a.1, b.1, gap))
 }
 
 /// `M⁻¹p` for the `WARP` parameters `q` ([`warp::MATRIX`]: 3 rows of 4).

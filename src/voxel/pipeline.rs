@@ -592,6 +592,9 @@ fn band_bricks(
             coords.push(c + IVec3::new(k % 3, (k / 3) % 3, k / 9) - IVec3::ONE);
         }
     }
+    // Each brick once, so the budget check counts what is allocated.
+    coords.par_sort_unstable_by_key(|c| (c.z, c.y, c.x));
+    coords.dedup();
     coords
 }
 
