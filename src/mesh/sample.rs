@@ -7,7 +7,8 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::MeshError;
-use crate::field::{Aabb, Grid, T};
+use crate::field::{Aabb, Field, Grid, T, eval_grid};
+use crate::io::check_budget;
 
 /// `dims` samples spanning `b` corner to corner (each axis needs at least 2).
 pub fn grid_spanning(b: &Aabb, dims: [usize; 3]) -> Result<Grid, MeshError> {
@@ -34,6 +35,20 @@ pub fn grid_spanning(b: &Aabb, dims: [usize; 3]) -> Result<Grid, MeshError> {
         step: size / steps,
         dims,
     })
+}
+
+/// The values of `field` on `grid` ([`eval_grid`]: x fastest, then y, then z), refused
+/// before anything is allocated when they would take more than `budget` bytes.
+/// `progress` advances once per slab ([`crate::field::slab_count`]).
+pub fn sample_grid(
+    field: &dyn Field,
+    grid: &Grid,
+    budget: u64,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<Vec<f32>, MeshError> {
+    let [nx, ny, nz] = grid.dims;
+    check_budget(format!("a {nx}×{ny}×{nz} grid"), grid.bytes(), budget)?;
+    Ok(eval_grid(field, grid, progress))
 }
 
 /// The JSON sidecar of a sampled `.npy` grid.
