@@ -7,22 +7,16 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::georef::{Crs, Georef, RasterType};
-use super::geotiff::{finish_samples, read_file, reorder};
+use super::geotiff::{finish_samples, read_file, read_text, reorder};
 use super::{Dem, DemError, ReadOptions, check_grid_size};
 
 /// Reads an ESRI ASCII grid, and its `.prj` when there is one.
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<Dem, DemError> {
     let bytes = read_file(path, opts.memory_budget)?;
     let prj_path = path.with_extension("prj");
-    let prj = match std::fs::read_to_string(&prj_path) {
-        Ok(s) => Some(s),
+    let prj = match std::fs::symlink_metadata(&prj_path) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
-        Err(source) => {
-            return Err(DemError::Read {
-                path: prj_path,
-                source,
-            });
-        }
+        _ => Some(read_text(&prj_path, opts.memory_budget)?),
     };
     read_bytes(path, &bytes, prj.as_deref(), opts)
 }
@@ -325,13 +319,9 @@ pub fn write(dem: &Dem, path: &Path) -> Result<(), DemError> {
         }
         s.push('\n');
     }
-    let io = |source| DemError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    crate::io::write_bytes_atomic(path, s.as_bytes()).map_err(io)?;
+    crate::io::write_bytes_atomic(path, s.as_bytes())?;
     if let Some(prj) = prj_for(&g.crs) {
-        crate::io::write_bytes_atomic(&path.with_extension("prj"), prj.as_bytes()).map_err(io)?;
+        crate::io::write_bytes_atomic(&path.with_extension("prj"), prj.as_bytes())?;
     }
     Ok(())
 }

@@ -42,20 +42,18 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Dem, DemError> {
     read_bytes(path, &bytes, opts)
 }
 
-/// Reads a whole file, refusing one larger than `budget` before reading it.
+/// Reads a whole regular file, refusing anything else (a FIFO, a link to `/dev/zero`)
+/// and a file larger than `budget`, before reading it.
 pub(crate) fn read_file(path: &Path, budget: u64) -> Result<Vec<u8>, DemError> {
-    let err = |source| DemError::Read {
+    Ok(crate::io::read_regular(path, budget)?)
+}
+
+/// Reads a text file beside a DEM (a PNG sidecar, a `.prj`) as [`read_file`] does.
+pub(crate) fn read_text(path: &Path, budget: u64) -> Result<String, DemError> {
+    String::from_utf8(read_file(path, budget)?).map_err(|_| DemError::Malformed {
         path: path.to_path_buf(),
-        source,
-    };
-    let len = std::fs::metadata(path).map_err(err)?.len();
-    crate::io::check_budget(format!("reading {}", path.display()), len, budget).map_err(|e| {
-        DemError::Io {
-            path: path.to_path_buf(),
-            source: e,
-        }
-    })?;
-    std::fs::read(path).map_err(err)
+        what: "UTF-8 text".into(),
+    })
 }
 
 /// Reads a GeoTIFF DEM held in memory; `path` names it in errors.

@@ -234,8 +234,5 @@ pub(crate) fn check_grid_size(
         need,
         budget,
     )
-    .map_err(|e| DemError::Io {
-        path: path.to_path_buf(),
-        source: e,
-    })
+    .map_err(DemError::Io)
 }
