@@ -76,6 +76,15 @@ pub fn ron_options() -> ron::Options {
         .with_default_extension(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_VARIANT_NEWTYPES)
 }
 
+/// A scene type as tree-file text (canonical layout, the extensions of [`ron_options`]).
+pub(crate) fn to_ron_text(value: &impl serde::Serialize) -> String {
+    let pretty = ron::ser::PrettyConfig::new()
+        .struct_names(false)
+        .indentor("    ".to_string())
+        .extensions(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_VARIANT_NEWTYPES);
+    ron::ser::to_string_pretty(value, pretty).expect("scene types always serialize")
+}
+
 /// A loaded tree file: the scene and where it came from.
 #[derive(Clone, Debug)]
 pub struct SceneFile {
@@ -183,11 +192,7 @@ impl Scene {
 
     /// The scene as tree-file text (canonical layout; comments are not kept).
     pub fn to_ron(&self) -> String {
-        let pretty = ron::ser::PrettyConfig::new()
-            .struct_names(false)
-            .indentor("    ".to_string())
-            .extensions(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_VARIANT_NEWTYPES);
-        ron::ser::to_string_pretty(self, pretty).expect("scene types always serialize")
+        to_ron_text(self)
     }
 }
 
