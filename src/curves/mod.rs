@@ -22,7 +22,7 @@ pub use spec::{FeatureSet, FeatureVolumeSpec, Orientation, Propagation};
 #[derive(Debug, thiserror::Error)]
 pub enum CurveError {
     /// A file could not be read.
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}")]
     Read {
         /// The file.
         path: PathBuf,

@@ -49,12 +49,13 @@ pub enum RenderError {
     #[error(transparent)]
     Io(#[from] crate::io::IoError),
     /// PNG encoding failed.
-    #[error("cannot encode PNG {path}: {message}")]
+    #[error("cannot encode PNG {path}")]
     Encode {
         /// The destination.
         path: std::path::PathBuf,
         /// What went wrong.
-        message: String,
+        #[source]
+        source: ::image::ImageError,
     },
     /// The GPU path failed.
     #[error(transparent)]
