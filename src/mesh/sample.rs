@@ -18,13 +18,8 @@ pub fn grid_spanning(b: &Aabb, dims: [usize; 3]) -> Result<Grid, MeshError> {
             dims[0], dims[1], dims[2]
         )));
     }
+    super::grid::check_box(b)?;
     let size = b.size();
-    if b.is_empty() || !size.is_finite() || size.min_element() <= 0.0 {
-        return Err(MeshError::GridShape(format!(
-            "box {} .. {}: expected a finite box with positive size on every axis",
-            b.min, b.max
-        )));
-    }
     let steps = Vec3::new(
         dims[0] as f32 - 1.0,
         dims[1] as f32 - 1.0,

@@ -119,8 +119,16 @@ impl Camera {
     /// in view (the view is shifted sideways and vertically so that the box is centred in
     /// the image, not the box's centre).
     pub fn frame(support: &Aabb, fov_y: f32, width: u32, height: u32) -> Result<Self, RenderError> {
-        if support.is_empty() || !(support.min.is_finite() && support.max.is_finite()) {
-            return Err(RenderError::EmptySupport(format!("{support:?}")));
+        if support.is_empty() {
+            return Err(RenderError::EmptySupport(
+                "the field is zero everywhere".into(),
+            ));
+        }
+        if !(support.min.is_finite() && support.max.is_finite()) {
+            return Err(RenderError::EmptySupport(format!(
+                "{} .. {}",
+                support.min, support.max
+            )));
         }
         let centre = support.center();
         let dir = Vec3::new(1.0, -1.0, 0.9).normalize();
