@@ -36,8 +36,17 @@ pub(crate) mod key {
 /// undeclared nodata value).
 pub(crate) const MAX_ABS_ELEVATION: f64 = 1e7;
 
-/// Reads a GeoTIFF DEM.
+/// Reads a GeoTIFF DEM. The size its header declares is checked against the budget
+/// before the file is read.
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<Dem, DemError> {
+    let (file, _) = crate::io::open_regular(path, opts.memory_budget)?;
+    let (w, h) = Decoder::new(std::io::BufReader::new(file))
+        .and_then(|mut d| d.dimensions())
+        .map_err(|source| DemError::Tiff {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    check_grid_size(path, w.into(), h.into(), 1, opts.memory_budget)?;
     let bytes = read_file(path, opts.memory_budget)?;
     read_bytes(path, &bytes, opts)
 }

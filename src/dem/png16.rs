@@ -56,8 +56,18 @@ impl ZMapping {
     }
 }
 
-/// Reads a PNG heightmap; the mapping comes from `opts.z_mapping` or the sidecar.
+/// Reads a PNG heightmap; the mapping comes from `opts.z_mapping` or the sidecar. The
+/// size its header declares is checked against the budget before the file is read.
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<Dem, DemError> {
+    // The size the header declares, against the budget, before the file is read.
+    let (file, _) = crate::io::open_regular(path, opts.memory_budget)?;
+    let (w, h) = ImageReader::with_format(std::io::BufReader::new(file), ImageFormat::Png)
+        .into_dimensions()
+        .map_err(|source| DemError::Png {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    check_grid_size(path, w.into(), h.into(), 1, opts.memory_budget)?;
     let bytes = read_file(path, opts.memory_budget)?;
     let sidecar = match &opts.sidecar {
         Some(p) => Some(p.clone()),

@@ -79,6 +79,26 @@ pub enum IoError {
 /// FIFO would block, `/dev/zero` never ends) and a file larger than `budget` bytes,
 /// before reading it.
 pub fn read_regular(path: &Path, budget: u64) -> Result<Vec<u8>, IoError> {
+    let (file, len) = open_regular(path, budget)?;
+    let mut bytes = Vec::with_capacity(len as usize);
+    // A file that grows while it is read stops one byte past the budget.
+    file.take(budget.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(|source| IoError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    check_budget(
+        format!("reading {}", path.display()),
+        bytes.len() as u64,
+        budget,
+    )?;
+    Ok(bytes)
+}
+
+/// Opens the regular file `path` as [`read_regular`] would read it (same refusals),
+/// for a reader that looks at its header first: the file and its length.
+pub fn open_regular(path: &Path, budget: u64) -> Result<(std::fs::File, u64), IoError> {
     let read_err = |source| IoError::Read {
         path: path.to_path_buf(),
         source,
@@ -90,15 +110,9 @@ pub fn read_regular(path: &Path, budget: u64) -> Result<Vec<u8>, IoError> {
             kind: file_kind(&meta.file_type()),
         });
     }
-    let what = || format!("reading {}", path.display());
-    check_budget(what(), meta.len(), budget)?;
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    // A file that grows while it is read stops one byte past the budget.
-    std::fs::File::open(path)
-        .and_then(|f| f.take(budget.saturating_add(1)).read_to_end(&mut bytes))
-        .map_err(read_err)?;
-    check_budget(what(), bytes.len() as u64, budget)?;
-    Ok(bytes)
+    check_budget(format!("reading {}", path.display()), meta.len(), budget)?;
+    let file = std::fs::File::open(path).map_err(read_err)?;
+    Ok((file, meta.len()))
 }
 
 /// What a file that is not a regular file is, for messages.
