@@ -148,6 +148,18 @@ fn outputs_never_overwrite_inputs() {
         );
         assert_eq!(std::fs::read(&tree).unwrap(), original, "{args:?}");
     }
+    // A DEM the tree reads is one of its inputs too.
+    let dem_tree = dir.path().join("dem.ron");
+    let png = dir.path().join("dem.png");
+    std::fs::write(&png, b"not overwritten").unwrap();
+    std::fs::write(
+        &dem_tree,
+        "(version: 1, root: Heightfield(source: \"dem.png\", falloff: 2))",
+    )
+    .unwrap();
+    let (ok, err) = karstic(&["render", s(&dem_tree), "-o", s(&png)]);
+    assert!(!ok && err.contains("refusing to overwrite"), "{err}");
+    assert_eq!(std::fs::read(&png).unwrap(), b"not overwritten");
     // The array and its sidecar would be the same file.
     let (ok, err) = karstic(&["sample", s(&tree), "--res", "4", "4", "4", "-o", s(&npy)]);
     assert!(!ok && err.contains("are the same file"), "{err}");

@@ -54,16 +54,15 @@ pub(super) struct BuildArgs {
 pub(super) fn run(args: BuildArgs) -> anyhow::Result<()> {
     let format = Format::from_path(&args.output)?;
     let outputs = export::written_files(&args.output)?;
-    let mut inputs = vec![args.tree.clone()];
-    if is_npy(&args.tree) {
-        inputs.push(Sidecar::path_for(&args.tree));
-    }
-    check_outputs(&inputs, &outputs)?;
     let started = Instant::now();
     let (mesh, stats) = if is_npy(&args.tree) {
+        check_outputs(
+            &[args.tree.clone(), Sidecar::path_for(&args.tree)],
+            &outputs,
+        )?;
         build_from_grid(&args)?
     } else {
-        let tree = super::load_tree(&args.tree, args.budget.max_memory)?;
+        let tree = super::load_tree(&args.tree, args.budget.max_memory, &outputs)?;
         build_from_field(&tree, &args)?
     };
     let write = Instant::now();

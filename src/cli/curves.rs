@@ -92,10 +92,10 @@ fn build(args: BuildArgs) -> anyhow::Result<()> {
             outputs.extend(export::written_files(out)?);
         }
     }
-    check_outputs(&[&args.file], &outputs)?;
     let budget = args.budget.max_memory;
     let clock = Instant::now();
     let file = VolumeFile::load(&args.file)?;
+    check_outputs(&file.inputs(), &outputs)?;
     let spec = file.pick(args.node.as_deref())?;
     let field = file.build(spec, args.seed, budget)?;
     let base = file.base_dir();

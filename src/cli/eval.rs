@@ -1,7 +1,7 @@
 //! `karstic eval TREE`: field values and gradients at points read from CSV or stdin.
 
 use std::io::{BufRead, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Args;
@@ -62,7 +62,7 @@ fn parse_point(line: &str) -> Option<Result<Vec3, String>> {
 
 /// Runs `karstic eval`.
 pub(super) fn run(args: EvalArgs) -> anyhow::Result<()> {
-    let tree = &super::load_tree(&args.tree, args.budget.max_memory)?;
+    let tree = &super::load_tree(&args.tree, args.budget.max_memory, &[] as &[&Path])?;
     let (source, reader): (String, Box<dyn BufRead>) = match &args.points {
         Some(p) => (
             p.display().to_string(),

@@ -73,9 +73,17 @@ fn chain(e: &dyn std::error::Error) -> String {
     text
 }
 
-/// Loads and compiles a tree file within `budget` bytes, printing the loader's notices.
-fn load_tree(path: &Path, budget: u64) -> anyhow::Result<karstic::field::Tree> {
-    let compiled = karstic::scene::load(path)?.compile_with(budget)?;
+/// Loads a tree file, refuses `outputs` that are among the files it reads (the tree, its
+/// DEMs and curve files), and compiles it within `budget` bytes, printing the loader's
+/// notices.
+fn load_tree(
+    path: &Path,
+    budget: u64,
+    outputs: &[impl AsRef<Path>],
+) -> anyhow::Result<karstic::field::Tree> {
+    let file = karstic::scene::load(path)?;
+    karstic::io::check_outputs(&file.inputs(), outputs)?;
+    let compiled = file.compile_with(budget)?;
     for n in &compiled.notices {
         eprintln!("notice: {n}");
     }

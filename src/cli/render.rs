@@ -7,7 +7,7 @@ use anyhow::Context;
 use glam::Vec3;
 
 use super::Budget;
-use karstic::io::{check_outputs, progress};
+use karstic::io::progress;
 use karstic::render::{Camera, Device, Frame, Method, RenderSettings, Renderable, cpu};
 
 /// Arguments of `karstic render`.
@@ -52,11 +52,10 @@ pub(super) struct RenderArgs {
 /// Runs `karstic render`.
 pub(super) fn run(args: RenderArgs) -> anyhow::Result<()> {
     let outputs: Vec<&PathBuf> = std::iter::once(&args.output).chain(&args.cost).collect();
-    check_outputs(&[&args.tree], &outputs)?;
     let (w, h) = (args.size[0], args.size[1]);
     karstic::render::camera::check_size(w, h)?;
     Frame::check_budget(w, h, args.budget.max_memory)?;
-    let tree = super::load_tree(&args.tree, args.budget.max_memory)?;
+    let tree = super::load_tree(&args.tree, args.budget.max_memory, &outputs)?;
     let subject = Renderable::from_tree(tree, args.gpu);
     let support = subject.field.support();
     let look = args

@@ -7,7 +7,7 @@ use clap::Args;
 
 use super::{Budget, load_tree};
 use karstic::field::{Field, slab_count};
-use karstic::io::{check_outputs, progress, write_atomic};
+use karstic::io::{progress, write_atomic};
 use karstic::mesh::npy;
 use karstic::mesh::sample::{Sidecar, grid_spanning, sample_grid};
 
@@ -36,8 +36,8 @@ pub(super) struct SampleArgs {
 /// Runs `karstic sample`.
 pub(super) fn run(args: SampleArgs) -> anyhow::Result<()> {
     let side = Sidecar::path_for(&args.output);
-    check_outputs(&[&args.tree], &[&args.output, &side])?;
-    let field = load_tree(&args.tree, args.budget.max_memory)?;
+    let outputs = [&args.output, &side];
+    let field = load_tree(&args.tree, args.budget.max_memory, &outputs)?;
     let bbox = args
         .bbox
         .as_deref()

@@ -7,6 +7,7 @@ use ron::extensions::Extensions;
 
 use super::spec::{FORMAT_VERSION, NodeSpec, Scene};
 use super::validate::{Locate, Problem, validate};
+use crate::curves::spec::CurveSource;
 use crate::io::read_regular;
 
 /// Errors from loading, validating, compiling or editing a tree file.
@@ -193,6 +194,30 @@ impl Scene {
     /// The scene as tree-file text (canonical layout; comments are not kept).
     pub fn to_ron(&self) -> String {
         to_ron_text(self)
+    }
+}
+
+impl SceneFile {
+    /// The files compiling the scene reads: the tree file, its DEMs (with a PNG DEM's
+    /// sidecar, an ASCII grid's `.prj`) and its curve files. A run's outputs must not be
+    /// among them ([`crate::io::check_outputs`]).
+    pub fn inputs(&self) -> Vec<PathBuf> {
+        let mut files = vec![self.path.clone()];
+        for n in self.scene.all_nodes() {
+            match n {
+                NodeSpec::Heightfield(h) => files.extend(crate::dem::files_read(
+                    &self.base_dir.join(&h.source),
+                    &crate::dem::ReadOptions::default(),
+                )),
+                NodeSpec::FeatureVolume(f) => {
+                    if let CurveSource::Path(p) = &f.curves {
+                        files.push(self.base_dir.join(p));
+                    }
+                }
+                _ => {}
+            }
+        }
+        files
     }
 }
 

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use super::load::{SceneError, SceneFile, parse_scene, read_text};
 use crate::curves::FeatureVolumeSpec;
-use crate::curves::spec::{BuildOptions, parse_ron};
+use crate::curves::spec::{BuildOptions, CurveSource, parse_ron};
 use crate::voxel::SField;
 
 /// A loaded Feature Volume file.
@@ -68,6 +68,25 @@ impl VolumeFile {
         match self {
             VolumeFile::Bare { path, .. } => path,
             VolumeFile::Tree(f) => &f.path,
+        }
+    }
+
+    /// The files building its volumes reads: the file itself, its curve files and, in a
+    /// tree, its DEMs ([`SceneFile::inputs`]).
+    pub fn inputs(&self) -> Vec<PathBuf> {
+        match self {
+            VolumeFile::Bare {
+                spec,
+                path,
+                base_dir,
+            } => {
+                let mut files = vec![path.clone()];
+                if let CurveSource::Path(p) = &spec.curves {
+                    files.push(base_dir.join(p));
+                }
+                files
+            }
+            VolumeFile::Tree(f) => f.inputs(),
         }
     }
 
