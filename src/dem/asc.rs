@@ -47,6 +47,8 @@ pub fn read_bytes(
             e.valid_up_to()
         ),
     })?;
+    // A byte-order mark some editors write before the header.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let syntax = |line: usize, column: usize, what: String| DemError::Syntax {
         path: path.to_path_buf(),
         line,
@@ -340,5 +342,15 @@ mod tests {
         let ft = "PROJCS[\"x\",GEOGCS[\"y\",UNIT[\"Degree\",0.017]],UNIT[\"Foot_US\",0.3048006096012192]]";
         assert!((parse_prj(ft).unwrap().1 - 0.3048006096).abs() < 1e-9);
         assert!(parse_prj("LOCAL_CS[\"x\"]").is_err());
+    }
+
+    #[test]
+    fn a_byte_order_mark_before_the_header_is_skipped() {
+        let grid = "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2\n3 4\n";
+        let path = Path::new("bom.asc");
+        let opts = ReadOptions::default();
+        let plain = read_bytes(path, grid.as_bytes(), None, &opts).unwrap();
+        let bom = read_bytes(path, format!("\u{feff}{grid}").as_bytes(), None, &opts).unwrap();
+        assert_eq!(plain.heightfield.samples(), bom.heightfield.samples());
     }
 }

@@ -57,11 +57,16 @@ pub(crate) fn read_file(path: &Path, budget: u64) -> Result<Vec<u8>, DemError> {
     Ok(crate::io::read_regular(path, budget)?)
 }
 
-/// Reads a text file beside a DEM (a PNG sidecar, a `.prj`) as [`read_file`] does.
+/// Reads a text file beside a DEM (a PNG sidecar, a `.prj`) as [`read_file`] does,
+/// without a UTF-8 byte-order mark.
 pub(crate) fn read_text(path: &Path, budget: u64) -> Result<String, DemError> {
-    String::from_utf8(read_file(path, budget)?).map_err(|_| DemError::Malformed {
+    let text = String::from_utf8(read_file(path, budget)?).map_err(|_| DemError::Malformed {
         path: path.to_path_buf(),
         what: "UTF-8 text".into(),
+    })?;
+    Ok(match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_string(),
+        None => text,
     })
 }
 

@@ -44,8 +44,7 @@ impl VolumeFile {
         let text = read_text(path)?;
         let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         if is_bare_volume(&text) {
-            let text = text.trim_start_matches('\u{feff}');
-            let spec = parse_ron(text, path).map_err(|e| SceneError::Asset {
+            let spec = parse_ron(&text, path).map_err(|e| SceneError::Asset {
                 path: path.to_path_buf(),
                 node: "FeatureVolume".into(),
                 source: Box::new(e),
