@@ -153,6 +153,8 @@ mod tests {
             ],
             &["karstic", "dem", "info", "d.tif", "--max-memory", "8G"],
             &["karstic", "curves", "build", "c.ron", "--max-memory", "8G"],
+            &["karstic", "run", "t.ron", "--max-memory", "8G"],
+            &["karstic", "eval", "t.ron", "--max-memory", "8G"],
         ] {
             Cli::try_parse_from(argv).unwrap_or_else(|e| panic!("{argv:?}: {e}"));
             let mut bad = argv.to_vec();
