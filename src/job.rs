@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use anyhow::Context;
 use indicatif::ProgressBar;
 
 use crate::field::{Aabb, Field, Tree};
@@ -24,6 +25,8 @@ pub struct JobOptions {
     pub no_render: bool,
     /// No progress bars.
     pub quiet: bool,
+    /// Memory budget of the DEMs, grids and image, in bytes.
+    pub budget: u64,
 }
 
 /// What a job made, and how long each stage took.
@@ -52,12 +55,13 @@ fn bar(quiet: bool) -> Option<ProgressBar> {
     (!quiet).then(|| progress(0, "", false))
 }
 
-/// Runs the job of the tree file `path`.
+/// Runs the job of the tree file `path`. The job section was validated when the file
+/// was loaded; the image is checked against the budget before meshing starts.
 pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
     let mut stages = Vec::new();
     let t = Instant::now();
     let file: SceneFile = scene::load(path)?;
-    let compiled = file.compile()?;
+    let compiled = file.compile_with(opts.budget)?;
     stages.push(("load + compile", t.elapsed()));
     let tree = compiled.tree;
     let job = file.scene.job.clone();
@@ -85,11 +89,25 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
     } else {
         fine
     };
+    let camera = if opts.no_render {
+        None
+    } else {
+        let (w, h) = job.as_ref().map_or((1280, 720), |j| j.image);
+        let fov = job.as_ref().map_or(40.0, |j| j.fov.0);
+        let look = job
+            .as_ref()
+            .and_then(|j| j.camera)
+            .filter(|_| !opts.full)
+            .map(|c| (c.eye.0, c.target.0));
+        Frame::check_budget(w, h, opts.budget)?;
+        Some(Camera::view(look, &region, fov, w, h)?)
+    };
 
     let t = Instant::now();
     let grid = GridSpec::with_cell(&region, cell)?;
     let mesh_opts = MeshOptions {
         progress: bar(opts.quiet),
+        budget: opts.budget,
         ..MeshOptions::default()
     };
     if let Some(b) = &mesh_opts.progress {
@@ -102,7 +120,8 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
     }
     stages.push(("polygonize", t.elapsed()));
 
-    std::fs::create_dir_all(&opts.out_dir)?;
+    std::fs::create_dir_all(&opts.out_dir)
+        .with_context(|| format!("cannot create the output folder {}", opts.out_dir.display()))?;
     let stem = file.scene.name.clone().unwrap_or_else(|| {
         path.file_stem()
             .map_or("scene".into(), |s| s.to_string_lossy().into_owned())
@@ -113,25 +132,20 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
     export::write(&mesh, &mesh_path, &ExportOptions { color: true })?;
     stages.push(("write mesh", t.elapsed()));
 
-    let image_path = if opts.no_render {
-        None
-    } else {
-        let t = Instant::now();
-        let (w, h) = job.as_ref().map_or((1280, 720), |j| j.image);
-        let fov = job.as_ref().map_or(40.0, |j| j.fov.0);
-        let camera = match job.as_ref().and_then(|j| j.camera) {
-            Some(c) if !opts.full => Camera::look_at(c.eye.0, c.target.0, fov, w, h)?,
-            _ => Camera::frame(&region, fov, w, h)?,
-        };
-        let settings = RenderSettings::for_scene(&region, &camera, Method::Segment);
-        let tiles = w.div_ceil(cpu::TILE) * h.div_ceil(cpu::TILE);
-        let bar = progress(tiles as u64, "rendering", opts.quiet);
-        let frame: Frame = cpu::render(&tree, &camera, &settings, &bar);
-        bar.finish_and_clear();
-        let image_path = opts.out_dir.join(format!("{stem}{suffix}.png"));
-        frame.write_png(&image_path)?;
-        stages.push(("render", t.elapsed()));
-        Some(image_path)
+    let image_path = match camera {
+        None => None,
+        Some(camera) => {
+            let t = Instant::now();
+            let settings = RenderSettings::for_scene(&region, &camera, Method::Segment);
+            let tiles = camera.width.div_ceil(cpu::TILE) * camera.height.div_ceil(cpu::TILE);
+            let bar = progress(tiles as u64, "rendering", opts.quiet);
+            let frame: Frame = cpu::render(&tree, &camera, &settings, &bar);
+            bar.finish_and_clear();
+            let image_path = opts.out_dir.join(format!("{stem}{suffix}.png"));
+            frame.write_png(&image_path)?;
+            stages.push(("render", t.elapsed()));
+            Some(image_path)
+        }
     };
     Ok(JobReport {
         tree,

@@ -24,7 +24,8 @@ fn every_corpus_file_gives_its_expected_error() {
         match dem::read(&dir.join(file), &ReadOptions::default()) {
             Ok(_) => failures.push(format!("{file}: read without error")),
             Err(e) => {
-                let msg = e.to_string();
+                // The error and its sources, as the command line prints them.
+                let msg = format!("{:#}", anyhow::Error::from(e));
                 // the message names the file at fault: the input or its sidecar
                 let stem = file.rsplit_once('.').map_or(file, |s| s.0);
                 if !msg.contains(want) || !msg.contains(stem) {

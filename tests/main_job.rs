@@ -84,6 +84,7 @@ fn job(dir: &std::path::Path, full: bool) -> JobReport {
         full,
         no_render: true,
         quiet: true,
+        budget: karstic::io::DEFAULT_MEMORY_BUDGET,
     };
     karstic::job::run(std::path::Path::new(SCENE), &opts).unwrap()
 }

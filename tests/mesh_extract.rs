@@ -238,6 +238,47 @@ fn oversized_extractions_are_refused_before_allocating() {
     assert!(e.to_string().contains("would need"), "{e}");
 }
 
+#[test]
+fn grids_far_over_the_budget_are_refused_before_their_bands() {
+    // 10¹⁰ columns: refused from the grid's size alone (the column index used to be
+    // allocated first, aborting the process).
+    let s = unit_sphere();
+    let huge = GridSpec::new(Vec3::splat(-1.0), Vec3::splat(1e-5), [100_000, 100_000, 10]).unwrap();
+    let started = std::time::Instant::now();
+    let e = polygonize(&s, &huge, &MeshOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("column index"), "{e}");
+    assert!(started.elapsed().as_secs_f64() < 1.0);
+
+    // A terrain crossing every column: the column index fits, its samples cannot (each
+    // column needs at least two). The estimate from a few tiles refuses it before the
+    // bands stage; the exact count would say "N samples", without "median".
+    let t = Heightfield {
+        h: Hills {
+            base: 0.0,
+            a: 2.0,
+            k: Vec2::splat(0.05),
+            slope: 0.0,
+        },
+        falloff: 2.0,
+        domain: Aabb::new(Vec3::new(-50.0, -50.0, -10.0), Vec3::new(50.0, 50.0, 10.0)),
+    };
+    let grid = GridSpec::with_resolution(&t.domain, 2048).unwrap();
+    let columns = ((grid.cells[0] + 1) * (grid.cells[1] + 1)) as u64;
+    let opts = MeshOptions {
+        budget: columns * (64 + 16),
+        ..MeshOptions::default()
+    };
+    let started = std::time::Instant::now();
+    let e = polygonize(&t, &grid, &opts).unwrap_err();
+    assert!(matches!(e, MeshError::Budget(_)), "{e}");
+    assert!(e.to_string().contains("median"), "{e}");
+    assert!(
+        started.elapsed().as_secs_f64() < 2.0,
+        "{:?}",
+        started.elapsed()
+    );
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(24))]
 

@@ -1,117 +1,154 @@
-//! `karstic render` argument parsing and outputs (through `render_tree`, the part after
-//! the tree file is loaded).
+//! `karstic render` from the command line, and the library's GPU-or-CPU rendering
+//! ([`Renderable::render_with_fallback`]) it stands on.
 
 use crate::common;
 
-use karstic::field::Field;
+use std::path::Path;
+use std::process::Command;
 
-use clap::Parser;
 use common::{Terrain, tapes};
-use karstic::cli::render::{LoadedTree, RenderArgs, load_tree, render_tree};
-use karstic::cli::{Cli, Command};
+use indicatif::ProgressBar;
+use karstic::field::Field;
+use karstic::render::{Camera, Device, Fallback, Method, RenderSettings, Renderable};
 
-fn args(extra: &[&str]) -> RenderArgs {
-    let mut argv = vec!["karstic", "render", "scene.ron", "-o", "out.png"];
-    argv.extend_from_slice(extra);
-    match Cli::try_parse_from(argv).unwrap().command {
-        Command::Render(a) => a,
-        other => panic!("parsed as {other:?}"),
-    }
+fn karstic(args: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_karstic"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
 
-#[test]
-fn flags_parse() {
-    let a = args(&[
-        "--size", "64", "48", "--method", "sphere", "--camera", "-10", "5", "3.5", "0", "0", "-1",
-        "--fov", "30", "--gpu", "--quiet", "--cost", "c.png",
-    ]);
-    assert_eq!(a.size, vec![64, 48]);
-    assert_eq!(a.method, karstic::render::Method::Sphere);
-    assert_eq!(a.camera, Some(vec![-10.0, 5.0, 3.5, 0.0, 0.0, -1.0]));
-    assert!(a.gpu && a.quiet && a.cost.is_some());
-    let d = args(&[]);
-    assert_eq!(d.size, vec![960, 540]);
-    assert_eq!(d.method, karstic::render::Method::Segment);
-    assert!(
-        Cli::try_parse_from(["karstic", "render", "x.ron", "-o", "o.png", "--size", "5"]).is_err()
-    );
-    assert!(
-        Cli::try_parse_from([
-            "karstic", "render", "x.ron", "-o", "o.png", "--method", "bogus"
-        ])
-        .is_err()
-    );
+fn trees() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("trees")
+}
+
+/// Renders `subject` at `w × h`, framed from its support.
+fn render(subject: &Renderable, w: u32, h: u32) -> (karstic::render::Frame, Device<'_>) {
+    let support = subject.field.support();
+    let camera = Camera::view(None, &support, 40.0, w, h).unwrap();
+    let settings = RenderSettings::for_scene(&support, &camera, Method::Segment);
+    subject.render_with_fallback(&camera, &settings, &ProgressBar::hidden())
 }
 
 #[test]
 fn renders_png_and_cost_image_and_checks_the_budget() {
     let dir = tempfile::tempdir().unwrap();
-    let terrain = Terrain::new(100.0, 12.0, 4.0);
-    let tree = LoadedTree {
-        field: Box::new(terrain),
-        tape: None,
-    };
-    let mut a = args(&["--size", "120", "80", "--quiet"]);
-    a.output = dir.path().join("t.png");
-    a.cost = Some(dir.path().join("cost.png"));
-    render_tree(&a, &tree).unwrap();
-    let img = image::open(&a.output).unwrap().to_rgba8();
+    let tree = trees().join("arch.ron");
+    let tree = tree.to_str().unwrap();
+    let out = dir.path().join("t.png");
+    let cost = dir.path().join("cost.png");
+    let (ok, err) = karstic(&[
+        "render",
+        tree,
+        "-o",
+        out.to_str().unwrap(),
+        "--cost",
+        cost.to_str().unwrap(),
+        "--size",
+        "120",
+        "80",
+        "--quiet",
+    ]);
+    assert!(ok, "{err}");
+    let img = image::open(&out).unwrap().to_rgba8();
     assert_eq!(img.dimensions(), (120, 80));
-    let cost = image::open(a.cost.as_ref().unwrap()).unwrap().to_rgba8();
-    assert_eq!(cost.dimensions(), (120, 80));
-    // Sky in a top corner, terrain in the middle: the image is not uniform.
+    assert_eq!(
+        image::open(&cost).unwrap().to_rgba8().dimensions(),
+        (120, 80)
+    );
+    // Sky in a top corner, the arch's ground in the middle: the image is not uniform.
     assert_ne!(img.get_pixel(0, 0), img.get_pixel(60, 45));
 
     // An explicit camera looking away from the scene sees only sky.
-    let mut away = a.clone();
-    away.output = dir.path().join("away.png");
-    away.cost = None;
-    away.camera = Some(vec![0.0, 0.0, 500.0, 0.0, 1.0, 1000.0]);
-    render_tree(&away, &tree).unwrap();
-    let sky = image::open(&away.output).unwrap().to_rgba8();
+    let away = dir.path().join("away.png");
+    let (ok, err) = karstic(&[
+        "render",
+        tree,
+        "-o",
+        away.to_str().unwrap(),
+        "--size",
+        "40",
+        "30",
+        "--quiet",
+        "--camera",
+        "0",
+        "0",
+        "500",
+        "0",
+        "1",
+        "1000",
+    ]);
+    assert!(ok, "{err}");
+    let sky = image::open(&away).unwrap().to_rgba8();
     assert!(sky.pixels().all(|p| p[2] >= p[0]), "bluish sky everywhere");
 
-    // Over budget: refused before rendering, nothing written.
-    let mut big = a.clone();
-    big.output = dir.path().join("big.png");
-    big.max_memory = 1000;
-    let e = render_tree(&big, &tree).unwrap_err().to_string();
-    assert!(e.contains("memory budget"), "{e}");
-    assert!(!big.output.exists());
-    let mut bad = a.clone();
-    bad.size = vec![0, 10];
-    assert!(render_tree(&bad, &tree).is_err());
+    // Over budget (in any unit): refused before rendering, nothing written.
+    let big = dir.path().join("big.png");
+    for budget in ["1000", "1K", "0.001MB"] {
+        let (ok, err) = karstic(&[
+            "render",
+            tree,
+            "-o",
+            big.to_str().unwrap(),
+            "--size",
+            "120",
+            "80",
+            "--max-memory",
+            budget,
+        ]);
+        assert!(!ok && err.contains("memory budget"), "{budget}: {err}");
+        assert!(!big.exists());
+    }
+    let (ok, err) = karstic(&[
+        "render",
+        tree,
+        "-o",
+        big.to_str().unwrap(),
+        "--size",
+        "0",
+        "10",
+    ]);
+    assert!(!ok && err.contains("image size 0 × 10"), "{err}");
 }
 
 #[test]
-fn gpu_flag_falls_back_or_renders() {
-    let dir = tempfile::tempdir().unwrap();
+fn the_gpu_renders_or_the_cpu_takes_over() {
     let terrain = Terrain::new(100.0, 12.0, 4.0);
     let tape = tapes::terrain(&terrain, 48);
-    let tree = LoadedTree {
+    let subject = Renderable {
         field: Box::new(tape.clone()),
         tape: Some(Ok(tape)),
     };
-    let mut a = args(&["--size", "48", "32", "--gpu", "--quiet"]);
-    a.output = dir.path().join("g.png");
-    render_tree(&a, &tree).unwrap();
-    assert_eq!(
-        image::open(&a.output).unwrap().to_rgba8().dimensions(),
-        (48, 32)
-    );
+    let (frame, device) = render(&subject, 48, 32);
+    assert_eq!((frame.width, frame.height), (48, 32));
+    assert!(frame.hits() > 0, "the terrain is in view");
+    match device {
+        Device::Gpu => {}
+        Device::CpuInstead(Fallback::Failed(e)) => eprintln!("no GPU here: {e}"),
+        other => panic!("a tape was given: {other:?}"),
+    }
+    let cpu = Renderable {
+        field: Box::new(terrain),
+        tape: None,
+    };
+    let (frame, device) = render(&cpu, 48, 32);
+    assert!(matches!(device, Device::Cpu), "{device:?}");
+    assert!(frame.hits() > 0);
 }
 
 #[test]
 fn tree_files_load_with_their_tape_or_the_reason_they_have_none() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
+    let load = |path: &Path, gpu: bool| {
+        let tree = karstic::scene::load(path).unwrap().compile().unwrap().tree;
+        Renderable::from_tree(tree, gpu)
+    };
     // Without the GPU asked for, no tape is built.
-    assert!(
-        load_tree(&dir.join("blobs.ron"), false)
-            .unwrap()
-            .tape
-            .is_none()
-    );
-    let blobs = load_tree(&dir.join("blobs.ron"), true).unwrap();
+    assert!(load(&trees().join("blobs.ron"), false).tape.is_none());
+    let blobs = load(&trees().join("blobs.ron"), true);
     let tape = blobs
         .tape
         .as_ref()
@@ -120,7 +157,7 @@ fn tree_files_load_with_their_tape_or_the_reason_they_have_none() {
         .expect("point blobs encode");
     assert!(blobs.field.support().contains_box(&tape.support()));
     // Every scene of trees/ encodes (tests/render_trees.rs); a disc skeleton does not.
-    let spire = load_tree(&dir.join("rock_spire.ron"), true).unwrap();
+    let spire = load(&trees().join("rock_spire.ron"), true);
     assert!(matches!(spire.tape, Some(Ok(_))), "the cone spire encodes");
     let out = tempfile::tempdir().unwrap();
     let disc_file = out.path().join("disc.ron");
@@ -129,7 +166,7 @@ fn tree_files_load_with_their_tape_or_the_reason_they_have_none() {
         "(version: 1, root: Primitive(name: \"disc\", shape: Disc(center: (0, 0, 0), normal: (0, 0.6, 0.8), radius: 4), falloff: 2))",
     )
     .unwrap();
-    let disc = load_tree(&disc_file, true).unwrap();
+    let disc = load(&disc_file, true);
     let e = disc
         .tape
         .as_ref()
@@ -141,12 +178,29 @@ fn tree_files_load_with_their_tape_or_the_reason_they_have_none() {
         e.contains("\"disc\"") && e.contains("no GPU encoding"),
         "{e}"
     );
-    // --gpu without an encoding still renders, on the CPU.
-    let mut a = args(&["--size", "40", "30", "--gpu", "--quiet"]);
-    a.output = out.path().join("disc.png");
-    render_tree(&a, &disc).unwrap();
-    assert_eq!(
-        image::open(&a.output).unwrap().to_rgba8().dimensions(),
-        (40, 30)
+    // Without an encoding the CPU renders, saying why.
+    let (frame, device) = render(&disc, 40, 30);
+    assert_eq!((frame.width, frame.height), (40, 30));
+    let Device::CpuInstead(Fallback::NoTape(why)) = device else {
+        panic!("{device:?}")
+    };
+    assert!(why.to_string().contains("no GPU encoding"), "{why}");
+    // And so does the command line, with the reason on stderr.
+    let png = out.path().join("disc.png");
+    let (ok, err) = karstic(&[
+        "render",
+        disc_file.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+        "--size",
+        "40",
+        "30",
+        "--gpu",
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("--gpu:") && err.contains("on the CPU"),
+        "{err}"
     );
+    assert_eq!(image::open(&png).unwrap().to_rgba8().dimensions(), (40, 30));
 }

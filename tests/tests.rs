@@ -7,6 +7,7 @@ mod gltf_validator;
 mod mesh_fields;
 
 // Suites.
+mod cli_inputs;
 mod curves_cli;
 mod curves_field;
 mod curves_mesh;

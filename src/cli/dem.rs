@@ -5,19 +5,21 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::{Args, Subcommand};
 
-use crate::dem::{self, Dem, Interpolation, ReadOptions};
+use super::Budget;
+use karstic::dem::{self, Dem, Interpolation, ReadOptions};
+use karstic::io::check_outputs;
 
 /// Inspect and convert DEMs (GeoTIFF, PNG + JSON sidecar, ESRI ASCII, SRTM .hgt).
 #[derive(Args, Debug)]
-pub struct DemArgs {
+pub(super) struct DemArgs {
     /// What to do.
     #[command(subcommand)]
-    pub command: DemCommand,
+    command: DemCommand,
 }
 
 /// `dem` subcommands.
 #[derive(Subcommand, Debug)]
-pub enum DemCommand {
+pub(super) enum DemCommand {
     /// Print size, cell size in metres, CRS kind, elevation range and nodata count.
     Info(InfoArgs),
     /// Convert between formats (by extension: .tif, .png, .asc), optionally resampling.
@@ -26,26 +28,26 @@ pub enum DemCommand {
 
 /// Options shared by every command that reads a DEM.
 #[derive(Args, Debug, Clone)]
-pub struct ReadArgs {
+pub(super) struct ReadArgs {
     /// PNG: the JSON sidecar (default: FILE.json, or P.json for FILE = P_suffix.png).
     #[arg(long, value_name = "JSON")]
-    pub sidecar: Option<PathBuf>,
+    sidecar: Option<PathBuf>,
     /// PNG: elevations of raw 0 and of the largest raw value, overriding the sidecar.
     #[arg(long, num_args = 2, value_names = ["LO", "HI"], allow_negative_numbers = true)]
-    pub z_range: Option<Vec<f64>>,
+    z_range: Option<Vec<f64>>,
     /// Cell size in metres for files without a georeference.
     #[arg(long, value_name = "METRES")]
-    pub cell_size: Option<f64>,
-    /// Refuse grids needing more memory than this (bytes; K, M, G suffixes allowed).
-    #[arg(long, value_name = "BYTES", value_parser = parse_bytes, default_value = "8G")]
-    pub max_memory: u64,
+    cell_size: Option<f64>,
+    /// Memory budget.
+    #[command(flatten)]
+    budget: Budget,
 }
 
 impl ReadArgs {
     /// The library's read options.
-    pub fn options(&self) -> ReadOptions {
+    fn options(&self) -> ReadOptions {
         ReadOptions {
-            memory_budget: self.max_memory,
+            memory_budget: self.budget.max_memory,
             z_range: self.z_range.as_ref().map(|v| [v[0], v[1]]),
             sidecar: self.sidecar.clone(),
             cell_size: self.cell_size,
@@ -55,35 +57,35 @@ impl ReadArgs {
 
 /// `dem info`.
 #[derive(Args, Debug)]
-pub struct InfoArgs {
+pub(super) struct InfoArgs {
     /// The DEM file.
-    pub file: PathBuf,
+    file: PathBuf,
     /// Read options.
     #[command(flatten)]
-    pub read: ReadArgs,
+    read: ReadArgs,
 }
 
 /// `dem convert`.
 #[derive(Args, Debug)]
-pub struct ConvertArgs {
+pub(super) struct ConvertArgs {
     /// Input DEM.
-    pub input: PathBuf,
+    input: PathBuf,
     /// Output DEM (.tif float32 GeoTIFF, .png 16-bit + .json sidecar, .asc ESRI grid).
-    pub output: PathBuf,
+    output: PathBuf,
     /// Resample to square cells of this size in metres.
     #[arg(long, value_name = "METRES")]
-    pub resample: Option<f64>,
+    resample: Option<f64>,
     /// Interpolation used when resampling.
     #[arg(long, value_enum, default_value = "bilinear")]
-    pub interpolation: InterpArg,
+    interpolation: InterpArg,
     /// Read options.
     #[command(flatten)]
-    pub read: ReadArgs,
+    read: ReadArgs,
 }
 
 /// Interpolation names on the command line.
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
-pub enum InterpArg {
+pub(super) enum InterpArg {
     /// Bilinear.
     Bilinear,
     /// Catmull-Rom bicubic.
@@ -99,32 +101,8 @@ impl From<InterpArg> for Interpolation {
     }
 }
 
-/// `"8G"` → 8 GiB; plain numbers are bytes.
-pub fn parse_bytes(s: &str) -> Result<u64, String> {
-    let t = s.trim();
-    let (num, mul) = match t.char_indices().last() {
-        Some((i, c @ ('k' | 'K' | 'm' | 'M' | 'g' | 'G' | 't' | 'T'))) => {
-            let shift = match c.to_ascii_uppercase() {
-                'K' => 10,
-                'M' => 20,
-                'G' => 30,
-                _ => 40,
-            };
-            (&t[..i], 1u64 << shift)
-        }
-        _ => (t, 1),
-    };
-    let v: f64 = num
-        .parse()
-        .map_err(|_| format!("expected a size like 512M or 8G, found {s:?}"))?;
-    if !(v >= 0.0 && v.is_finite()) {
-        return Err(format!("expected a non-negative size, found {s:?}"));
-    }
-    Ok((v * mul as f64) as u64)
-}
-
 /// Runs `karstic dem ...`.
-pub fn run(args: DemArgs) -> anyhow::Result<()> {
+pub(super) fn run(args: DemArgs) -> anyhow::Result<()> {
     match args.command {
         DemCommand::Info(a) => info(a),
         DemCommand::Convert(a) => convert(a),
@@ -145,7 +123,7 @@ fn info(a: InfoArgs) -> anyhow::Result<()> {
 }
 
 /// The `dem info` report.
-pub fn describe(name: &str, d: &Dem) -> String {
+fn describe(name: &str, d: &Dem) -> String {
     let h = &d.heightfield;
     let g = &d.georef;
     let c = h.cell();
@@ -179,10 +157,15 @@ pub fn describe(name: &str, d: &Dem) -> String {
 }
 
 fn convert(a: ConvertArgs) -> anyhow::Result<()> {
-    let mut d = dem::read(&a.input, &a.read.options())?;
+    let opts = a.read.options();
+    check_outputs(
+        &dem::files_read(&a.input, &opts),
+        &dem::files_written(&a.output)?,
+    )?;
+    let mut d = dem::read(&a.input, &opts)?;
     if let Some(cell) = a.resample {
         d = d
-            .resample(cell, a.interpolation.into(), a.read.max_memory)
+            .resample(cell, a.interpolation.into(), a.read.budget.max_memory)
             .with_context(|| format!("resampling {}", a.input.display()))?;
     }
     print_notices(&d);
@@ -194,18 +177,4 @@ fn convert(a: ConvertArgs) -> anyhow::Result<()> {
         d.heightfield.ny()
     );
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn byte_sizes() {
-        assert_eq!(parse_bytes("8G"), Ok(8 << 30));
-        assert_eq!(parse_bytes("512m"), Ok(512 << 20));
-        assert_eq!(parse_bytes("1000"), Ok(1000));
-        assert!(parse_bytes("lots").is_err());
-        assert!(parse_bytes("-1K").is_err());
-    }
 }

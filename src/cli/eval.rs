@@ -1,36 +1,49 @@
 //! `karstic eval TREE`: field values and gradients at points read from CSV or stdin.
 
 use std::io::{BufRead, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Args;
 use glam::Vec3;
 
-use crate::field::Field;
-use crate::scene;
+use super::Budget;
+use karstic::field::Field;
 
 /// Arguments of `karstic eval`.
 #[derive(Args, Debug)]
-pub struct EvalArgs {
+pub(super) struct EvalArgs {
     /// Tree file.
-    pub tree: PathBuf,
+    tree: PathBuf,
     /// CSV file of points `x,y,z` (one per line; `#` comments and a header line allowed).
     /// Reads standard input when absent.
     #[arg(long)]
-    pub points: Option<PathBuf>,
+    points: Option<PathBuf>,
+    /// Memory budget.
+    #[command(flatten)]
+    budget: Budget,
+}
+
+/// The fields of a line: separated by commas or white space.
+fn fields(line: &str) -> Vec<&str> {
+    line.split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|s| !s.is_empty())
+        .collect()
+}
+
+/// A header line such as `x,y,z`: some field is not a number at all (`nan` and `inf`
+/// are numbers, so `nan,0,0` is a bad point, not a header).
+fn is_header(line: &str) -> bool {
+    fields(line).iter().any(|f| f.parse::<f32>().is_err())
 }
 
 /// Parses one `x,y,z` line (commas or white space); `None` for blank or comment lines.
-pub fn parse_point(line: &str) -> Option<Result<Vec3, String>> {
+fn parse_point(line: &str) -> Option<Result<Vec3, String>> {
     let line = line.trim();
     if line.is_empty() || line.starts_with('#') {
         return None;
     }
-    let parts: Vec<&str> = line
-        .split(|c: char| c == ',' || c.is_whitespace())
-        .filter(|s| !s.is_empty())
-        .collect();
+    let parts = fields(line);
     if parts.len() != 3 {
         return Some(Err(format!(
             "expected 3 numbers x,y,z, found {} fields",
@@ -48,9 +61,8 @@ pub fn parse_point(line: &str) -> Option<Result<Vec3, String>> {
 }
 
 /// Runs `karstic eval`.
-pub fn run(args: EvalArgs) -> anyhow::Result<()> {
-    let compiled = scene::load(&args.tree)?.compile()?;
-    let tree = &compiled.tree;
+pub(super) fn run(args: EvalArgs) -> anyhow::Result<()> {
+    let tree = &super::load_tree(&args.tree, args.budget.max_memory, &[] as &[&Path])?;
     let (source, reader): (String, Box<dyn BufRead>) = match &args.points {
         Some(p) => (
             p.display().to_string(),
@@ -65,10 +77,15 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     writeln!(out, "x,y,z,value,gx,gy,gz")?;
     for (n, line) in reader.lines().enumerate() {
         let line = line.with_context(|| format!("{source}: reading line {}", n + 1))?;
-        let p = match parse_point(&line) {
+        // A UTF-8 byte-order mark may open the file.
+        let line = if n == 0 {
+            line.trim_start_matches('\u{feff}')
+        } else {
+            &line
+        };
+        let p = match parse_point(line) {
             None => continue,
-            // A header line such as "x,y,z" is skipped.
-            Some(Err(_)) if n == 0 && line.chars().any(|c| c.is_ascii_alphabetic()) => continue,
+            Some(Err(_)) if n == 0 && is_header(line) => continue,
             Some(Err(e)) => anyhow::bail!("{source}:{}: {e}", n + 1),
             Some(Ok(p)) => p,
         };
@@ -77,4 +94,24 @@ pub fn run(args: EvalArgs) -> anyhow::Result<()> {
     }
     out.flush()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn headers_are_words_not_bad_numbers() {
+        assert!(is_header("x,y,z"));
+        assert!(is_header("\"x\" \"y\" \"z\""));
+        assert!(!is_header("nan,0,0"));
+        assert!(!is_header("1,2,inf"));
+        assert!(parse_point("nan,0,0").unwrap().is_err());
+        assert_eq!(
+            parse_point(" 1, 2 3 ").unwrap(),
+            Ok(Vec3::new(1.0, 2.0, 3.0))
+        );
+        assert!(parse_point("# note").is_none());
+        assert!(parse_point("1,2").unwrap().is_err());
+    }
 }

@@ -1,16 +1,20 @@
-//! The command line: a thin layer over the library. Each subcommand lives in its own file.
+//! The command line: flags (clap) over the library. Each subcommand lives in its own file.
 
-pub mod build;
-pub mod curves;
-pub mod dem;
-pub mod eval;
-pub mod sample;
-pub mod tree;
+mod build;
+mod curves;
+mod dem;
+mod eval;
+mod render;
+mod run;
+mod sample;
+mod tree;
 
-use clap::{Parser, Subcommand};
+use std::path::Path;
 
-pub mod render;
-pub mod run;
+use clap::{Args, Parser, Subcommand};
+use glam::Vec3;
+use karstic::field::Aabb;
+use karstic::io::parse_byte_size;
 
 /// karstic: implicit terrain modelling — DEMs amplified with caves, arches and overhangs.
 #[derive(Parser, Debug)]
@@ -18,12 +22,12 @@ pub mod run;
 pub struct Cli {
     /// Subcommand.
     #[command(subcommand)]
-    pub command: Command,
+    command: Command,
 }
 
 /// All subcommands.
 #[derive(Subcommand, Debug)]
-pub enum Command {
+enum Command {
     /// The main job: mesh a tree's region and render a preview, timing every stage.
     Run(run::RunArgs),
     /// Build a mesh (.glb, .gltf, .obj, .ply) from a tree with bound-pruned Marching Cubes.
@@ -42,9 +46,44 @@ pub enum Command {
     Curves(curves::CurvesArgs),
 }
 
-/// Loads and compiles a tree file.
-pub fn load_tree(path: &std::path::Path) -> anyhow::Result<crate::field::Tree> {
-    let compiled = crate::scene::load(path)?.compile()?;
+/// The `--max-memory` flag of every command that reads or builds grids and images.
+#[derive(Args, Debug, Clone, Copy)]
+struct Budget {
+    /// Refuse grids, images and files needing more memory than this: bytes, or a number
+    /// with a unit — K, M, G, T (or KiB … TiB) are powers of 1024, KB, MB, GB, TB powers
+    /// of 1000 (`8G`, `512MiB`, `1.5GB`).
+    #[arg(long = "max-memory", value_name = "SIZE", value_parser = parse_byte_size,
+          default_value = "8GiB")]
+    max_memory: u64,
+}
+
+/// The box of a `--box XMIN YMIN ZMIN XMAX YMAX ZMAX` flag (clap checks there are six).
+fn corners(v: &[f32]) -> Aabb {
+    Aabb::new(Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]))
+}
+
+/// An error and its sources, `outer: inner: …`, as `main` prints them.
+fn chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut next = e.source();
+    while let Some(s) = next {
+        text.push_str(&format!(": {s}"));
+        next = s.source();
+    }
+    text
+}
+
+/// Loads a tree file, refuses `outputs` that are among the files it reads (the tree, its
+/// DEMs and curve files), and compiles it within `budget` bytes, printing the loader's
+/// notices.
+fn load_tree(
+    path: &Path,
+    budget: u64,
+    outputs: &[impl AsRef<Path>],
+) -> anyhow::Result<karstic::field::Tree> {
+    let file = karstic::scene::load(path)?;
+    karstic::io::check_outputs(&file.inputs(), outputs)?;
+    let compiled = file.compile_with(budget)?;
     for n in &compiled.notices {
         eprintln!("notice: {n}");
     }
@@ -60,7 +99,67 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Tree(a) => tree::run(a),
         Command::Eval(a) => eval::run(a),
         Command::Sample(a) => sample::run(a),
-        Command::Render(args) => render::run(args),
+        Command::Render(a) => render::run(a),
         Command::Curves(a) => curves::run(a),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_budget_is_the_library_default() {
+        let cli = Cli::try_parse_from(["karstic", "render", "t.ron", "-o", "t.png"]).unwrap();
+        let Command::Render(a) = cli.command else {
+            panic!("parsed as {:?}", cli.command)
+        };
+        assert_eq!(a.budget.max_memory, karstic::io::DEFAULT_MEMORY_BUDGET);
+    }
+
+    #[test]
+    fn every_max_memory_takes_units() {
+        for argv in [
+            &[
+                "karstic",
+                "build",
+                "t.ron",
+                "-o",
+                "t.glb",
+                "--max-memory",
+                "8G",
+            ][..],
+            &[
+                "karstic",
+                "render",
+                "t.ron",
+                "-o",
+                "t.png",
+                "--max-memory",
+                "8G",
+            ],
+            &[
+                "karstic",
+                "sample",
+                "t.ron",
+                "--res",
+                "2",
+                "2",
+                "2",
+                "-o",
+                "t.npy",
+                "--max-memory",
+                "8G",
+            ],
+            &["karstic", "dem", "info", "d.tif", "--max-memory", "8G"],
+            &["karstic", "curves", "build", "c.ron", "--max-memory", "8G"],
+            &["karstic", "run", "t.ron", "--max-memory", "8G"],
+            &["karstic", "eval", "t.ron", "--max-memory", "8G"],
+        ] {
+            Cli::try_parse_from(argv).unwrap_or_else(|e| panic!("{argv:?}: {e}"));
+            let mut bad = argv.to_vec();
+            *bad.last_mut().unwrap() = "8X";
+            assert!(Cli::try_parse_from(&bad).is_err(), "{bad:?}");
+        }
     }
 }

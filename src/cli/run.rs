@@ -4,37 +4,42 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::job::{self, JobOptions};
+use super::Budget;
+use karstic::job::{self, JobOptions};
 
 /// Arguments of `karstic run`.
 #[derive(Args, Debug)]
-pub struct RunArgs {
+pub(super) struct RunArgs {
     /// Tree file; its `job` section says what region, cell size and camera to use.
-    pub tree: PathBuf,
+    tree: PathBuf,
     /// Output folder.
     #[arg(short, long, default_value = "out")]
-    pub out: PathBuf,
+    out: PathBuf,
     /// Mesh the whole scene at the job's coarse cell size (`full_cell`).
     #[arg(long)]
-    pub full: bool,
+    full: bool,
     /// Skip the preview image.
     #[arg(long)]
-    pub no_render: bool,
+    no_render: bool,
     /// Also print the mesher's statistics.
     #[arg(long)]
-    pub stats: bool,
+    stats: bool,
     /// No progress bars.
     #[arg(long)]
-    pub quiet: bool,
+    quiet: bool,
+    /// Memory budget.
+    #[command(flatten)]
+    budget: Budget,
 }
 
 /// Runs `karstic run`.
-pub fn run(args: RunArgs) -> anyhow::Result<()> {
+pub(super) fn run(args: RunArgs) -> anyhow::Result<()> {
     let opts = JobOptions {
         out_dir: args.out.clone(),
         full: args.full,
         no_render: args.no_render,
         quiet: args.quiet,
+        budget: args.budget.max_memory,
     };
     let report = job::run(&args.tree, &opts)?;
     for n in &report.notices {

@@ -6,20 +6,20 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::{Args, Subcommand};
 
-use crate::field::{Aabb, Field};
-use crate::scene::{self, edit};
+use karstic::field::{Aabb, Field};
+use karstic::scene::{self, edit};
 
 /// Tree-file commands.
 #[derive(Args, Debug)]
-pub struct TreeArgs {
+pub(super) struct TreeArgs {
     /// What to do.
     #[command(subcommand)]
-    pub command: TreeCommand,
+    command: TreeCommand,
 }
 
 /// The `tree` subcommands.
 #[derive(Subcommand, Debug)]
-pub enum TreeCommand {
+pub(super) enum TreeCommand {
     /// Parse, check and compile tree files; reports the first error of each.
     Validate {
         /// Tree files.
@@ -69,7 +69,7 @@ fn fmt_box(b: &Aabb) -> String {
 }
 
 /// Runs a `tree` subcommand.
-pub fn run(args: TreeArgs) -> anyhow::Result<()> {
+pub(super) fn run(args: TreeArgs) -> anyhow::Result<()> {
     match args.command {
         TreeCommand::Validate { files } => {
             let mut failed = 0;
@@ -77,7 +77,7 @@ pub fn run(args: TreeArgs) -> anyhow::Result<()> {
                 match scene::load(f).and_then(|s| s.compile().map(|_| ())) {
                     Ok(()) => println!("{}: ok", f.display()),
                     Err(e) => {
-                        eprintln!("{e}");
+                        eprintln!("{}", super::chain(&e));
                         failed += 1;
                     }
                 }

@@ -28,7 +28,7 @@ pub use terrain::TerrainSurface;
 #[derive(Debug, thiserror::Error)]
 pub enum CurveError {
     /// A file could not be read.
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}")]
     Read {
         /// The file.
         path: PathBuf,

@@ -364,9 +364,10 @@ pub struct FeatureVolumeSpec {
 }
 
 /// Reads a RON file with the tree files' options (`Some` implicit, newtype variants
-/// unwrapped: `Inline(curves: [..])`), reporting parse errors with the path, line and
-/// column.
+/// unwrapped: `Inline(curves: [..])`, a UTF-8 byte-order mark skipped), reporting parse
+/// errors with the path, line and column.
 pub fn parse_ron<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<T, CurveError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     crate::scene::ron_options()
         .from_str(text)
         .map_err(|e| CurveError::Parse {

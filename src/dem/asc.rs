@@ -7,22 +7,16 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::georef::{Crs, Georef, RasterType};
-use super::geotiff::{finish_samples, read_file, reorder};
+use super::geotiff::{finish_samples, read_file, read_text, reorder};
 use super::{Dem, DemError, ReadOptions, check_grid_size};
 
 /// Reads an ESRI ASCII grid, and its `.prj` when there is one.
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<Dem, DemError> {
     let bytes = read_file(path, opts.memory_budget)?;
     let prj_path = path.with_extension("prj");
-    let prj = match std::fs::read_to_string(&prj_path) {
-        Ok(s) => Some(s),
+    let prj = match std::fs::symlink_metadata(&prj_path) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
-        Err(source) => {
-            return Err(DemError::Read {
-                path: prj_path,
-                source,
-            });
-        }
+        _ => Some(read_text(&prj_path, opts.memory_budget)?),
     };
     read_bytes(path, &bytes, prj.as_deref(), opts)
 }
@@ -53,6 +47,8 @@ pub fn read_bytes(
             e.valid_up_to()
         ),
     })?;
+    // A byte-order mark some editors write before the header.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let syntax = |line: usize, column: usize, what: String| DemError::Syntax {
         path: path.to_path_buf(),
         line,
@@ -325,13 +321,9 @@ pub fn write(dem: &Dem, path: &Path) -> Result<(), DemError> {
         }
         s.push('\n');
     }
-    let io = |source| DemError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    crate::io::write_bytes_atomic(path, s.as_bytes()).map_err(io)?;
+    crate::io::write_bytes_atomic(path, s.as_bytes())?;
     if let Some(prj) = prj_for(&g.crs) {
-        crate::io::write_bytes_atomic(&path.with_extension("prj"), prj.as_bytes()).map_err(io)?;
+        crate::io::write_bytes_atomic(&path.with_extension("prj"), prj.as_bytes())?;
     }
     Ok(())
 }
@@ -350,5 +342,15 @@ mod tests {
         let ft = "PROJCS[\"x\",GEOGCS[\"y\",UNIT[\"Degree\",0.017]],UNIT[\"Foot_US\",0.3048006096012192]]";
         assert!((parse_prj(ft).unwrap().1 - 0.3048006096).abs() < 1e-9);
         assert!(parse_prj("LOCAL_CS[\"x\"]").is_err());
+    }
+
+    #[test]
+    fn a_byte_order_mark_before_the_header_is_skipped() {
+        let grid = "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2\n3 4\n";
+        let path = Path::new("bom.asc");
+        let opts = ReadOptions::default();
+        let plain = read_bytes(path, grid.as_bytes(), None, &opts).unwrap();
+        let bom = read_bytes(path, format!("\u{feff}{grid}").as_bytes(), None, &opts).unwrap();
+        assert_eq!(plain.heightfield.samples(), bom.heightfield.samples());
     }
 }

@@ -6,21 +6,17 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum DemError {
     /// The file could not be opened or read.
-    #[error("cannot read {path}: {source}")]
+    #[error("cannot read {path}")]
     Read {
         /// The file.
         path: PathBuf,
         /// Why.
         source: std::io::Error,
     },
-    /// Writing failed or a size budget was exceeded.
-    #[error("{path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        source: crate::io::IoError,
-    },
+    /// Reading or writing failed, or a size budget was exceeded (the error names the
+    /// file).
+    #[error(transparent)]
+    Io(#[from] crate::io::IoError),
     /// The extension names no known DEM format.
     #[error("{path}: unknown DEM format (expected .tif, .tiff, .png, .asc or .hgt)")]
     UnknownFormat {
@@ -56,7 +52,7 @@ pub enum DemError {
         what: String,
     },
     /// The TIFF decoder refused the file.
-    #[error("{path}: TIFF: {source}")]
+    #[error("{path}: TIFF")]
     Tiff {
         /// The file.
         path: PathBuf,
@@ -64,7 +60,7 @@ pub enum DemError {
         source: tiff::TiffError,
     },
     /// The PNG decoder or encoder refused the file.
-    #[error("{path}: PNG: {source}")]
+    #[error("{path}: PNG")]
     Png {
         /// The file.
         path: PathBuf,

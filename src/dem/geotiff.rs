@@ -36,26 +36,38 @@ pub(crate) mod key {
 /// undeclared nodata value).
 pub(crate) const MAX_ABS_ELEVATION: f64 = 1e7;
 
-/// Reads a GeoTIFF DEM.
+/// Reads a GeoTIFF DEM. The size its header declares is checked against the budget
+/// before the file is read.
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<Dem, DemError> {
+    let (file, _) = crate::io::open_regular(path, opts.memory_budget)?;
+    let (w, h) = Decoder::new(std::io::BufReader::new(file))
+        .and_then(|mut d| d.dimensions())
+        .map_err(|source| DemError::Tiff {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    check_grid_size(path, w.into(), h.into(), 1, opts.memory_budget)?;
     let bytes = read_file(path, opts.memory_budget)?;
     read_bytes(path, &bytes, opts)
 }
 
-/// Reads a whole file, refusing one larger than `budget` before reading it.
+/// Reads a whole regular file, refusing anything else (a FIFO, a link to `/dev/zero`)
+/// and a file larger than `budget`, before reading it.
 pub(crate) fn read_file(path: &Path, budget: u64) -> Result<Vec<u8>, DemError> {
-    let err = |source| DemError::Read {
+    Ok(crate::io::read_regular(path, budget)?)
+}
+
+/// Reads a text file beside a DEM (a PNG sidecar, a `.prj`) as [`read_file`] does,
+/// without a UTF-8 byte-order mark.
+pub(crate) fn read_text(path: &Path, budget: u64) -> Result<String, DemError> {
+    let text = String::from_utf8(read_file(path, budget)?).map_err(|_| DemError::Malformed {
         path: path.to_path_buf(),
-        source,
-    };
-    let len = std::fs::metadata(path).map_err(err)?.len();
-    crate::io::check_budget(format!("reading {}", path.display()), len, budget).map_err(|e| {
-        DemError::Io {
-            path: path.to_path_buf(),
-            source: e,
-        }
+        what: "UTF-8 text".into(),
     })?;
-    std::fs::read(path).map_err(err)
+    Ok(match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_string(),
+        None => text,
+    })
 }
 
 /// Reads a GeoTIFF DEM held in memory; `path` names it in errors.

@@ -21,10 +21,7 @@ pub fn write(dem: &Dem, path: &Path) -> Result<(), DemError> {
         path: path.to_path_buf(),
         source,
     })?;
-    crate::io::write_bytes_atomic(path, &bytes).map_err(|source| DemError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    Ok(crate::io::write_bytes_atomic(path, &bytes)?)
 }
 
 /// The GeoTIFF file of `dem`, in memory.

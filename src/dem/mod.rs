@@ -150,6 +150,29 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Dem, DemError> {
     }
 }
 
+/// The files [`read`] reads for `path`: the DEM and, when present, its PNG sidecar or
+/// `.prj`.
+pub fn files_read(path: &Path, opts: &ReadOptions) -> Vec<std::path::PathBuf> {
+    let mut files = vec![path.to_path_buf()];
+    match Format::from_path(path) {
+        Ok(Format::Png) => files.extend(opts.sidecar.clone().or_else(|| png16::find_sidecar(path))),
+        Ok(Format::Asc) => files.push(path.with_extension("prj")),
+        _ => {}
+    }
+    files
+}
+
+/// The files [`write`] may write for `path`: the DEM and its PNG sidecar or `.prj`.
+pub fn files_written(path: &Path) -> Result<Vec<std::path::PathBuf>, DemError> {
+    let mut files = vec![path.to_path_buf()];
+    match Format::from_path(path)? {
+        Format::Png => files.push(path.with_extension("json")),
+        Format::Asc => files.push(path.with_extension("prj")),
+        Format::GeoTiff | Format::Hgt => {}
+    }
+    Ok(files)
+}
+
 /// Writes a DEM atomically, choosing the writer from the file extension.
 pub fn write(dem: &Dem, path: &Path) -> Result<(), DemError> {
     match Format::from_path(path)? {
@@ -211,8 +234,5 @@ pub(crate) fn check_grid_size(
         need,
         budget,
     )
-    .map_err(|e| DemError::Io {
-        path: path.to_path_buf(),
-        source: e,
-    })
+    .map_err(DemError::Io)
 }

@@ -14,7 +14,7 @@ use image::{ExtendedColorType, ImageDecoder, ImageEncoder, ImageFormat, ImageRea
 use serde_json::{Value, json};
 
 use super::georef::{Crs, Georef, RasterType};
-use super::geotiff::{finish_samples, read_file, reorder};
+use super::geotiff::{finish_samples, read_file, read_text, reorder};
 use super::{Dem, DemError, ReadOptions, check_grid_size};
 
 /// How raw PNG values map to elevations: `raw[0] ↦ z[0]`, `raw[1] ↦ z[1]`, linear between.
@@ -56,8 +56,18 @@ impl ZMapping {
     }
 }
 
-/// Reads a PNG heightmap; the mapping comes from `opts.z_mapping` or the sidecar.
+/// Reads a PNG heightmap; the mapping comes from `opts.z_mapping` or the sidecar. The
+/// size its header declares is checked against the budget before the file is read.
 pub fn read(path: &Path, opts: &ReadOptions) -> Result<Dem, DemError> {
+    // The size the header declares, against the budget, before the file is read.
+    let (file, _) = crate::io::open_regular(path, opts.memory_budget)?;
+    let (w, h) = ImageReader::with_format(std::io::BufReader::new(file), ImageFormat::Png)
+        .into_dimensions()
+        .map_err(|source| DemError::Png {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    check_grid_size(path, w.into(), h.into(), 1, opts.memory_budget)?;
     let bytes = read_file(path, opts.memory_budget)?;
     let sidecar = match &opts.sidecar {
         Some(p) => Some(p.clone()),
@@ -65,10 +75,7 @@ pub fn read(path: &Path, opts: &ReadOptions) -> Result<Dem, DemError> {
     };
     let side = match &sidecar {
         Some(p) => {
-            let text = std::fs::read_to_string(p).map_err(|source| DemError::Read {
-                path: p.clone(),
-                source,
-            })?;
+            let text = read_text(p, opts.memory_budget)?;
             Some((p.clone(), text))
         }
         None => None,
@@ -393,11 +400,7 @@ pub fn write(dem: &Dem, path: &Path) -> Result<(), DemError> {
         side["nodata_raw"] = json!(0);
     }
     let text = serde_json::to_string_pretty(&side).expect("a JSON value always serializes");
-    let io = |p: &Path| {
-        let p = p.to_path_buf();
-        move |source| DemError::Io { path: p, source }
-    };
-    crate::io::write_bytes_atomic(path, &png).map_err(io(path))?;
+    crate::io::write_bytes_atomic(path, &png)?;
     let side_path = path.with_extension("json");
-    crate::io::write_bytes_atomic(&side_path, text.as_bytes()).map_err(io(&side_path))
+    Ok(crate::io::write_bytes_atomic(&side_path, text.as_bytes())?)
 }

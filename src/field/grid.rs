@@ -28,9 +28,12 @@ impl Grid {
         self.len() == 0
     }
 
-    /// Bytes needed for its values as f32.
+    /// Bytes needed for its values as f32 (saturating: a grid too large to count is
+    /// too large for any budget).
     pub fn bytes(&self) -> u64 {
-        self.dims.iter().map(|&d| d as u64).product::<u64>() * 4
+        self.dims
+            .iter()
+            .fold(4u64, |b, &d| b.saturating_mul(d as u64))
     }
 
     /// Position of sample `(i, j, k)`.

@@ -36,49 +36,28 @@ pub const BRICK_COLUMNS: usize = 16;
 /// Slack, in cells, when turning a z-band into cell indices (guards rounding).
 const BAND_SLACK: f32 = 1e-3;
 
-/// The tiling of the `(cells + 1)²` grid columns.
-pub struct Tiles {
+/// How the `(cells + 1)²` grid columns are cut into tiles: sizes only, no allocation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TileGrid {
     /// Grid columns per axis (`cells + 1`).
     pub n: [usize; 2],
     /// Tiles per axis.
     pub count: [usize; 2],
-    /// Column id of each `(i, j)`: `id[i + n[0]·j]`.
-    id: Vec<u32>,
-    /// First column id of each tile, plus the total.
-    pub start: Vec<usize>,
 }
 
-impl Tiles {
-    /// Tiles over a grid's columns.
+impl TileGrid {
+    /// The tiling of a grid's columns.
     pub fn new(grid: &GridSpec) -> Self {
         let n = [grid.cells[0] + 1, grid.cells[1] + 1];
-        let count = [n[0].div_ceil(TILE), n[1].div_ceil(TILE)];
-        let mut id = vec![0u32; n[0] * n[1]];
-        let mut start = Vec::with_capacity(count[0] * count[1] + 1);
-        let mut next = 0u32;
-        for t in 0..count[0] * count[1] {
-            start.push(next as usize);
-            let (lo, hi) = Self::range_of(n, count, t);
-            for j in lo[1]..hi[1] {
-                for i in lo[0]..hi[0] {
-                    id[i + n[0] * j] = next;
-                    next += 1;
-                }
-            }
-        }
-        start.push(next as usize);
-        Tiles {
+        TileGrid {
             n,
-            count,
-            id,
-            start,
+            count: [n[0].div_ceil(TILE), n[1].div_ceil(TILE)],
         }
     }
 
-    fn range_of(n: [usize; 2], count: [usize; 2], t: usize) -> ([usize; 2], [usize; 2]) {
-        let (ti, tj) = (t % count[0], t / count[0]);
-        let lo = [ti * TILE, tj * TILE];
-        (lo, [(lo[0] + TILE).min(n[0]), (lo[1] + TILE).min(n[1])])
+    /// Number of grid columns.
+    pub fn columns_total(&self) -> u64 {
+        self.n[0] as u64 * self.n[1] as u64
     }
 
     /// Number of tiles.
@@ -93,19 +72,74 @@ impl Tiles {
 
     /// Grid-column range `[lo, hi)` of tile `t`.
     pub fn range(&self, t: usize) -> ([usize; 2], [usize; 2]) {
-        Self::range_of(self.n, self.count, t)
+        let (ti, tj) = (t % self.count[0], t / self.count[0]);
+        let lo = [ti * TILE, tj * TILE];
+        (
+            lo,
+            [(lo[0] + TILE).min(self.n[0]), (lo[1] + TILE).min(self.n[1])],
+        )
     }
 
     /// Columns of tile `t` in id order.
-    pub fn columns(&self, t: usize) -> impl Iterator<Item = (usize, usize)> {
+    pub fn columns(&self, t: usize) -> impl Iterator<Item = (usize, usize)> + use<> {
         let (lo, hi) = self.range(t);
         (lo[1]..hi[1]).flat_map(move |j| (lo[0]..hi[0]).map(move |i| (i, j)))
+    }
+}
+
+/// The tiling of the grid columns with their numbering: one `u32` per column, so the
+/// column count is checked against the budget before this is built.
+pub struct Tiles {
+    /// The tiling.
+    pub layout: TileGrid,
+    /// Column id of each `(i, j)`: `id[i + n[0]·j]`.
+    id: Vec<u32>,
+    /// First column id of each tile, plus the total.
+    pub start: Vec<usize>,
+}
+
+impl Tiles {
+    /// Numbers the columns of `layout`, tile by tile.
+    pub fn new(layout: TileGrid) -> Self {
+        let n = layout.n;
+        let mut id = vec![0u32; n[0] * n[1]];
+        let mut start = Vec::with_capacity(layout.len() + 1);
+        let mut next = 0u32;
+        for t in 0..layout.len() {
+            start.push(next as usize);
+            for (i, j) in layout.columns(t) {
+                id[i + n[0] * j] = next;
+                next += 1;
+            }
+        }
+        start.push(next as usize);
+        Tiles { layout, id, start }
+    }
+
+    /// Number of tiles.
+    pub fn len(&self) -> usize {
+        self.layout.len()
+    }
+
+    /// Always false: a grid has at least one column.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// Grid-column range `[lo, hi)` of tile `t`.
+    pub fn range(&self, t: usize) -> ([usize; 2], [usize; 2]) {
+        self.layout.range(t)
+    }
+
+    /// Columns of tile `t` in id order.
+    pub fn columns(&self, t: usize) -> impl Iterator<Item = (usize, usize)> + use<> {
+        self.layout.columns(t)
     }
 
     /// Id of grid column `(i, j)`.
     #[inline]
     pub fn id(&self, i: usize, j: usize) -> usize {
-        self.id[i + self.n[0] * j] as usize
+        self.id[i + self.layout.n[0] * j] as usize
     }
 }
 
@@ -303,7 +337,7 @@ pub fn footprint(grid: &GridSpec, lo: [isize; 2], hi: [isize; 2]) -> Rect {
 pub fn tile_bands<'f>(
     field: &'f dyn Field,
     grid: &GridSpec,
-    tiles: &Tiles,
+    tiles: &TileGrid,
     t: usize,
     use_elevation: bool,
 ) -> TileBands<'f> {
@@ -528,7 +562,7 @@ mod tests {
     #[test]
     fn tiles_number_columns_contiguously() {
         let g = GridSpec::new(Vec3::ZERO, Vec3::ONE, [40, 20, 3]).unwrap();
-        let tiles = Tiles::new(&g);
+        let tiles = Tiles::new(TileGrid::new(&g));
         let mut seen = vec![false; 41 * 21];
         for t in 0..tiles.len() {
             for (n, (i, j)) in tiles.columns(t).enumerate() {

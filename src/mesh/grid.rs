@@ -17,6 +17,26 @@ pub struct GridSpec {
     pub cells: [usize; 3],
 }
 
+/// Errors unless `b` is a finite box with positive size on every axis; an empty box (the
+/// support of a field that is zero everywhere) is told as such.
+pub(crate) fn check_box(b: &Aabb) -> Result<(), MeshError> {
+    if b.is_empty() {
+        return Err(MeshError::GridShape(
+            "the box is empty: the field is zero everywhere (its support box is empty), \
+             or the box's minimum exceeds its maximum"
+                .into(),
+        ));
+    }
+    let size = b.size();
+    if !size.is_finite() || size.min_element() <= 0.0 {
+        return Err(MeshError::GridShape(format!(
+            "box {} .. {}: expected a finite box with positive size on every axis",
+            b.min, b.max
+        )));
+    }
+    Ok(())
+}
+
 /// Largest sample count along one axis (indices are stored as `u32`).
 const MAX_AXIS: usize = 1 << 24;
 
@@ -69,13 +89,8 @@ impl GridSpec {
     }
 
     fn fit(b: &Aabb, cells_for: impl Fn(f32) -> f32) -> Result<Self, MeshError> {
+        check_box(b)?;
         let size = b.size();
-        if b.is_empty() || !size.is_finite() || size.min_element() <= 0.0 {
-            return Err(MeshError::GridShape(format!(
-                "box {} .. {}: expected a finite box with positive size on every axis",
-                b.min, b.max
-            )));
-        }
         let mut cells = [0usize; 3];
         for (k, c) in cells.iter_mut().enumerate() {
             let n = cells_for(size[k]).max(1.0);

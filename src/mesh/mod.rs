@@ -12,6 +12,7 @@
 pub mod cell;
 pub mod columns;
 pub mod dense;
+mod estimate;
 pub mod export;
 pub mod grid;
 pub mod indexed;

@@ -9,14 +9,9 @@ const MAGIC: &[u8] = b"\x93NUMPY";
 /// Errors reading an `.npy` file.
 #[derive(Debug, thiserror::Error)]
 pub enum NpyError {
-    /// The file could not be read.
-    #[error("cannot read {path}: {source}")]
-    Read {
-        /// The file.
-        path: String,
-        /// Why.
-        source: io::Error,
-    },
+    /// The file could not be read, is not a regular file or exceeds the budget.
+    #[error(transparent)]
+    Read(#[from] crate::io::IoError),
     /// The file is not a float32 C-order `.npy`.
     #[error("{path}: {what}")]
     Format {
@@ -54,14 +49,14 @@ pub fn write_f32(w: &mut dyn Write, shape: &[usize], values: &[f32]) -> io::Resu
     }
 }
 
-/// Reads a float32 C-order `.npy` file: its shape and values.
-pub fn read_f32(path: &Path) -> Result<(Vec<usize>, Vec<f32>), NpyError> {
-    let name = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| NpyError::Read {
-        path: name.clone(),
-        source,
-    })?;
-    parse_f32(&bytes).map_err(|what| NpyError::Format { path: name, what })
+/// Reads a float32 C-order `.npy` file: its shape and values. A file over `budget`
+/// bytes is refused before it is read.
+pub fn read_f32(path: &Path, budget: u64) -> Result<(Vec<usize>, Vec<f32>), NpyError> {
+    let bytes = crate::io::read_regular(path, budget)?;
+    parse_f32(&bytes).map_err(|what| NpyError::Format {
+        path: path.display().to_string(),
+        what,
+    })
 }
 
 fn parse_f32(bytes: &[u8]) -> Result<(Vec<usize>, Vec<f32>), String> {

@@ -4,7 +4,8 @@
 //! 1. **Bands** ([`columns::tile_bands`]): per cell column, the cell layers that can hold
 //!    the surface; per grid column, the elevation usable for direct extraction.
 //! 2. **Samples**: the union of the adjacent cells' layers per grid column, laid out tile
-//!    by tile; the memory budget is checked here, before anything large is allocated.
+//!    by tile; the memory budget is checked here exactly, after a first check before
+//!    anything is allocated ([`super::estimate`]).
 //! 3. **Values**: field samples via [`Field::eval_block`] on the tile's pruned field;
 //!    in elevation columns one `h(x, y)` per column gives pseudo-values
 //!    `T + (h − z) / dz`, whose sign is the field's and whose linear interpolation puts
@@ -28,7 +29,8 @@ use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 use super::cell::{ambiguity_mask, edge_t};
-use super::columns::{self, Cursor, Elevations, SampleSpan, Spans, TILE, Tiles};
+use super::columns::{self, Cursor, Elevations, SampleSpan, Spans, TILE, TileGrid, Tiles};
+use super::estimate::{COLUMN_BYTES, SAMPLE_BYTES, check_before_bands};
 use super::grid::GridSpec;
 use super::indexed::Mesh;
 use super::stats::MeshStats;
@@ -47,12 +49,6 @@ const REFINE_TOLERANCE: f32 = 1e-4;
 /// field for its block first, which only pays off over many samples (a heightfield's
 /// floor costs two samples per column).
 const SHORT_SPAN: usize = crate::field::BRICK;
-
-/// Bytes per stored sample: its value and three vertex slots.
-const SAMPLE_BYTES: u64 = 16;
-
-/// Bytes per grid column of bookkeeping (ids, spans, elevations).
-const COLUMN_BYTES: u64 = 64;
 
 /// How [`polygonize`] works.
 #[derive(Clone, Debug)]
@@ -99,13 +95,17 @@ pub fn polygonize(
     grid: &GridSpec,
     opts: &MeshOptions,
 ) -> Result<(Mesh, MeshStats), MeshError> {
-    let tiles = Tiles::new(grid);
-    let columns = (tiles.n[0] * tiles.n[1]) as u64;
-    check_budget(
-        format!("the column index of a {}×{} grid", tiles.n[0], tiles.n[1]),
-        columns * COLUMN_BYTES,
+    let layout = TileGrid::new(grid);
+    check_before_bands(
+        field,
+        grid,
+        &layout,
+        opts.prune,
+        opts.elevation,
         opts.budget,
     )?;
+    let columns = layout.columns_total();
+    let tiles = Tiles::new(layout);
     let tick = || {
         if let Some(p) = &opts.progress {
             p.inc(1);
@@ -119,7 +119,7 @@ pub fn polygonize(
         .into_par_iter()
         .map(|t| {
             let b = if opts.prune {
-                columns::tile_bands(field, grid, &tiles, t, opts.elevation)
+                columns::tile_bands(field, grid, &layout, t, opts.elevation)
             } else {
                 full_bands(grid, &tiles, t)
             };
@@ -423,7 +423,7 @@ impl<'f> Ctx<'_, 'f> {
             gradients: 0,
             heights: 0,
         };
-        let n = self.tiles.n;
+        let n = self.tiles.layout.n;
         for (i, j) in self.tiles.columns(t) {
             let id = self.tiles.id(i, j);
             let spans = self.samples.of(id);
@@ -547,7 +547,7 @@ impl<'f> Ctx<'_, 'f> {
     ) -> Vec<[u32; 3]> {
         let tables = &*TABLES;
         let [ncx, ncy, _] = self.grid.cells;
-        let tile_of = |i: usize, j: usize| (i / TILE) + self.tiles.count[0] * (j / TILE);
+        let tile_of = |i: usize, j: usize| (i / TILE) + self.tiles.layout.count[0] * (j / TILE);
         let mut out = Vec::new();
         for (i, j) in self.tiles.columns(t) {
             if i >= ncx || j >= ncy {

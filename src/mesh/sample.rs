@@ -7,7 +7,8 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::MeshError;
-use crate::field::{Aabb, Grid, T};
+use crate::field::{Aabb, Field, Grid, T, eval_grid};
+use crate::io::check_budget;
 
 /// `dims` samples spanning `b` corner to corner (each axis needs at least 2).
 pub fn grid_spanning(b: &Aabb, dims: [usize; 3]) -> Result<Grid, MeshError> {
@@ -17,13 +18,8 @@ pub fn grid_spanning(b: &Aabb, dims: [usize; 3]) -> Result<Grid, MeshError> {
             dims[0], dims[1], dims[2]
         )));
     }
+    super::grid::check_box(b)?;
     let size = b.size();
-    if b.is_empty() || !size.is_finite() || size.min_element() <= 0.0 {
-        return Err(MeshError::GridShape(format!(
-            "box {} .. {}: expected a finite box with positive size on every axis",
-            b.min, b.max
-        )));
-    }
     let steps = Vec3::new(
         dims[0] as f32 - 1.0,
         dims[1] as f32 - 1.0,
@@ -34,6 +30,20 @@ pub fn grid_spanning(b: &Aabb, dims: [usize; 3]) -> Result<Grid, MeshError> {
         step: size / steps,
         dims,
     })
+}
+
+/// The values of `field` on `grid` ([`eval_grid`]: x fastest, then y, then z), refused
+/// before anything is allocated when they would take more than `budget` bytes.
+/// `progress` advances once per slab ([`crate::field::slab_count`]).
+pub fn sample_grid(
+    field: &dyn Field,
+    grid: &Grid,
+    budget: u64,
+    progress: Option<&indicatif::ProgressBar>,
+) -> Result<Vec<f32>, MeshError> {
+    let [nx, ny, nz] = grid.dims;
+    check_budget(format!("a {nx}×{ny}×{nz} grid"), grid.bytes(), budget)?;
+    Ok(eval_grid(field, grid, progress))
 }
 
 /// The JSON sidecar of a sampled `.npy` grid.

@@ -73,11 +73,7 @@ impl Camera {
                 "eye and target must be finite".into(),
             ));
         }
-        if !(fov_y > 0.0 && fov_y <= 179.0) {
-            return Err(RenderError::BadCamera(format!(
-                "field of view {fov_y}° is outside (0°, 179°]"
-            )));
-        }
+        check_fov(fov_y)?;
         let forward = (target - eye).normalize_or_zero();
         if forward == Vec3::ZERO {
             return Err(RenderError::BadCamera("eye and target coincide".into()));
@@ -102,13 +98,37 @@ impl Camera {
         })
     }
 
+    /// The camera a tree file's `job` or a command line asks for: looking from `eye` at
+    /// `target` when `look` gives them, otherwise framing `frame` ([`Camera::frame`]).
+    /// `karstic render --camera` and `karstic run` both build theirs here.
+    pub fn view(
+        look: Option<(Vec3, Vec3)>,
+        frame: &Aabb,
+        fov_y: f32,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, RenderError> {
+        match look {
+            Some((eye, target)) => Camera::look_at(eye, target, fov_y, width, height),
+            None => Camera::frame(frame, fov_y, width, height),
+        }
+    }
+
     /// The default framing of a field's support box: a three-quarter view from the
     /// south-east (+X, −Y) and above, from the closest point that keeps all eight corners
     /// in view (the view is shifted sideways and vertically so that the box is centred in
     /// the image, not the box's centre).
     pub fn frame(support: &Aabb, fov_y: f32, width: u32, height: u32) -> Result<Self, RenderError> {
-        if support.is_empty() || !(support.min.is_finite() && support.max.is_finite()) {
-            return Err(RenderError::EmptySupport(format!("{support:?}")));
+        if support.is_empty() {
+            return Err(RenderError::EmptySupport(
+                "the field is zero everywhere".into(),
+            ));
+        }
+        if !(support.min.is_finite() && support.max.is_finite()) {
+            return Err(RenderError::EmptySupport(format!(
+                "{} .. {}",
+                support.min, support.max
+            )));
         }
         let centre = support.center();
         let dir = Vec3::new(1.0, -1.0, 0.9).normalize();
@@ -176,6 +196,16 @@ impl Camera {
     pub fn basis(&self) -> (Vec3, Vec3, Vec3, f32) {
         (self.right, self.up, self.forward, self.half_h)
     }
+}
+
+/// Errors on a vertical field of view outside `(0°, 179°]`.
+pub fn check_fov(fov_y: f32) -> Result<(), RenderError> {
+    if !(fov_y > 0.0 && fov_y <= 179.0) {
+        return Err(RenderError::BadCamera(format!(
+            "field of view {fov_y}° is outside (0°, 179°]"
+        )));
+    }
+    Ok(())
 }
 
 /// Errors on an image side of 0 or above [`MAX_SIDE`].
@@ -255,5 +285,16 @@ mod tests {
         assert!(Camera::look_at(Vec3::X, Vec3::ZERO, 0.0, 10, 10).is_err());
         assert!(Camera::look_at(Vec3::X, Vec3::ZERO, 45.0, 0, 10).is_err());
         assert!(Camera::frame(&Aabb::EMPTY, 45.0, 10, 10).is_err());
+    }
+
+    #[test]
+    fn view_looks_where_asked_or_frames_the_box() {
+        let b = Aabb::new(Vec3::new(-50.0, -20.0, 0.0), Vec3::new(150.0, 80.0, 30.0));
+        let look = (Vec3::new(0.0, -300.0, 100.0), Vec3::new(10.0, 0.0, 0.0));
+        let asked = Camera::view(Some(look), &b, 30.0, 64, 48).unwrap();
+        assert_eq!((asked.eye, asked.target), look);
+        let framed = Camera::view(None, &b, 30.0, 64, 48).unwrap();
+        assert_eq!(framed, Camera::frame(&b, 30.0, 64, 48).unwrap());
+        assert!(Camera::view(Some((Vec3::ONE, Vec3::ONE)), &b, 30.0, 64, 48).is_err());
     }
 }

@@ -98,9 +98,9 @@ fn write_rgba_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<(
     let mut bytes = Vec::new();
     PngEncoder::new(&mut bytes)
         .write_image(rgba, width, height, image::ExtendedColorType::Rgba8)
-        .map_err(|e| RenderError::Encode {
+        .map_err(|source| RenderError::Encode {
             path: path.to_path_buf(),
-            message: e.to_string(),
+            source,
         })?;
     write_bytes_atomic(path, &bytes)?;
     Ok(())

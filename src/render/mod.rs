@@ -8,9 +8,11 @@
 //! * [`image`]: the rendered [`Frame`] and its PNG outputs (colour and step cost).
 //! * [`raycast`]: triangle-mesh ray casting (obvhs), the ground truth for the tracer.
 //! * [`gpu`]: the same tracer as a wgpu compute shader over a flattened node tape.
+//! * [`fallback`]: the GPU when it can, the CPU otherwise ([`Renderable`]).
 
 pub mod camera;
 pub mod cpu;
+pub mod fallback;
 pub mod gpu;
 pub mod image;
 pub mod raycast;
@@ -19,6 +21,7 @@ pub mod trace;
 
 pub use camera::{Camera, Ray};
 pub use cpu::{RenderSettings, render};
+pub use fallback::{Device, Fallback, Renderable};
 pub use image::Frame;
 pub use shade::Shading;
 pub use trace::{Method, Trace, TraceParams, Tracer};
@@ -46,12 +49,13 @@ pub enum RenderError {
     #[error(transparent)]
     Io(#[from] crate::io::IoError),
     /// PNG encoding failed.
-    #[error("cannot encode PNG {path}: {message}")]
+    #[error("cannot encode PNG {path}")]
     Encode {
         /// The destination.
         path: std::path::PathBuf,
         /// What went wrong.
-        message: String,
+        #[source]
+        source: ::image::ImageError,
     },
     /// The GPU path failed.
     #[error(transparent)]

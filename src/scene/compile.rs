@@ -1,6 +1,6 @@
 //! Compiling a scene into the flat [`Tree`] the evaluators run.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
 use glam::{Affine3A, Quat};
@@ -38,6 +38,10 @@ struct Compiler<'s> {
     dems: DemCache,
     /// The terrain anchors resolve against, loaded on first use.
     terrain: Option<Arc<HeightfieldField>>,
+    /// The named nodes, for instances.
+    index: HashMap<&'s str, &'s NodeSpec>,
+    /// Memory budget of DEMs and voxel grids, bytes.
+    budget: u64,
 }
 
 impl Compiler<'_> {
@@ -74,7 +78,7 @@ impl Compiler<'_> {
         };
         let hf = spec
             .load_with(self.base_dir, &mut self.dems)
-            .map_err(|e| self.error(asking, e.to_string()))?;
+            .map_err(|e| self.asset_error(asking, e))?;
         let hf = Arc::new(hf);
         self.terrain = Some(hf.clone());
         Ok(hf)
@@ -112,16 +116,27 @@ impl Compiler<'_> {
             max_memory,
         };
         f.build_with(self.base_dir, &opts)
-            .map_err(|e| self.error(n, e.to_string()))
+            .map_err(|e| self.asset_error(n, e))
     }
 
     fn error(&self, node: &NodeSpec, message: impl Into<String>) -> SceneError {
         SceneError::Node {
             path: self.path.to_path_buf(),
-            node: node
-                .name()
-                .map_or_else(|| node.kind().to_string(), |n| format!("{n:?}")),
+            node: label(node),
             message: message.into(),
+        }
+    }
+
+    /// A node whose asset failed, with the asset's error as the source.
+    fn asset_error(
+        &self,
+        node: &NodeSpec,
+        e: impl std::error::Error + Send + Sync + 'static,
+    ) -> SceneError {
+        SceneError::Asset {
+            path: self.path.to_path_buf(),
+            node: label(node),
+            source: Box::new(e),
         }
     }
 
@@ -161,11 +176,11 @@ impl Compiler<'_> {
             NodeSpec::Heightfield(h) => {
                 let leaf = h
                     .load_with(self.base_dir, &mut self.dems)
-                    .map_err(|e| self.error(n, e.to_string()))?;
+                    .map_err(|e| self.asset_error(n, e))?;
                 self.builder.leaf(Arc::new(leaf), name)
             }
             NodeSpec::FeatureVolume(f) => {
-                let leaf = self.feature_volume(n, f, self.scene.seed, DEFAULT_MEMORY_BUDGET)?;
+                let leaf = self.feature_volume(n, f, self.scene.seed, self.budget)?;
                 self.builder.leaf(Arc::new(leaf), name)
             }
             NodeSpec::Anchor(a) => {
@@ -251,9 +266,9 @@ impl Compiler<'_> {
                 if let Some(&id) = self.named.get(&i.of) {
                     return Ok(id);
                 }
-                let target = self
-                    .scene
-                    .find(&i.of)
+                let target = *self
+                    .index
+                    .get(i.of.as_str())
                     .ok_or_else(|| self.error(n, format!("unknown node referenced: {:?}", i.of)))?;
                 // Compile the referenced subtree once, outside the outline.
                 let record = std::mem::replace(&mut self.record, false);
@@ -266,9 +281,15 @@ impl Compiler<'_> {
 }
 
 impl SceneFile {
-    /// Compiles the scene into a tree.
+    /// Compiles the scene into a tree, within the default memory budget.
     pub fn compile(&self) -> Result<Compiled, SceneError> {
-        compile_scene(&self.scene, &self.path, &self.base_dir)
+        self.compile_with(DEFAULT_MEMORY_BUDGET)
+    }
+
+    /// Compiles the scene into a tree; DEMs and voxel grids are refused beyond `budget`
+    /// bytes each, before they are read or allocated.
+    pub fn compile_with(&self, budget: u64) -> Result<Compiled, SceneError> {
+        Compiler::new(&self.scene, &self.path, &self.base_dir, budget).run()
     }
 
     /// The scene's `FeatureVolume` nodes (in `defs` and the tree, pre-order).
@@ -293,13 +314,13 @@ impl SceneFile {
         max_memory: u64,
     ) -> Result<SField, SceneError> {
         let node = NodeSpec::FeatureVolume(f.clone());
-        Compiler::new(&self.scene, &self.path, &self.base_dir)
+        Compiler::new(&self.scene, &self.path, &self.base_dir, max_memory)
             .feature_volume(&node, f, seed, max_memory)
     }
 }
 
 impl<'s> Compiler<'s> {
-    fn new(scene: &'s Scene, path: &'s Path, base_dir: &'s Path) -> Self {
+    fn new(scene: &'s Scene, path: &'s Path, base_dir: &'s Path, budget: u64) -> Self {
         Compiler {
             scene,
             path,
@@ -308,20 +329,32 @@ impl<'s> Compiler<'s> {
             named: BTreeMap::new(),
             outline: Vec::new(),
             record: true,
-            dems: DemCache::new(DEFAULT_MEMORY_BUDGET),
+            dems: DemCache::new(budget),
             terrain: None,
+            index: scene.named(),
+            budget,
         }
+    }
+
+    fn run(mut self) -> Result<Compiled, SceneError> {
+        let root = self.node(&self.scene.root, 0)?;
+        let tree = self.builder.build(root);
+        Ok(Compiled {
+            tree,
+            outline: self.outline,
+            notices: self.dems.notices().to_vec(),
+        })
     }
 }
 
-/// Compiles `scene`; asset paths are relative to `base_dir`, `path` names the file in errors.
+/// A node in messages: its name, or its kind.
+fn label(node: &NodeSpec) -> String {
+    node.name()
+        .map_or_else(|| node.kind().to_string(), |n| format!("{n:?}"))
+}
+
+/// Compiles `scene` within the default memory budget; asset paths are relative to
+/// `base_dir`, `path` names the file in errors.
 pub fn compile_scene(scene: &Scene, path: &Path, base_dir: &Path) -> Result<Compiled, SceneError> {
-    let mut c = Compiler::new(scene, path, base_dir);
-    let root = c.node(&scene.root, 0)?;
-    let tree = c.builder.build(root);
-    Ok(Compiled {
-        tree,
-        outline: c.outline,
-        notices: c.dems.notices().to_vec(),
-    })
+    Compiler::new(scene, path, base_dir, DEFAULT_MEMORY_BUDGET).run()
 }

@@ -6,12 +6,12 @@
 
 use std::path::{Path, PathBuf};
 
-use serde_json::Value as Json;
-
 use super::compile::compile_scene;
-use super::load::{SceneError, load, parse_scene, ron_options};
+use super::load::{SceneError, load, ron_options, to_ron_text};
 use super::spec::{NodeSpec, Scene};
-use crate::io::write_bytes_atomic;
+use super::splice::{SpliceError, set_field};
+use super::validate::validate;
+use crate::io::{read_regular, write_bytes_atomic};
 
 fn edit_error(path: &Path, message: impl Into<String>) -> SceneError {
     SceneError::Edit {
@@ -21,6 +21,8 @@ fn edit_error(path: &Path, message: impl Into<String>) -> SceneError {
 }
 
 /// Applies `change` to the scene in `path`, validates, keeps a `.bak`, writes atomically.
+/// What the edit would break is reported by node name (the rewritten text is not the
+/// file's, so its positions would mislead).
 fn edit_file(
     path: &Path,
     change: impl FnOnce(&mut Scene) -> Result<(), SceneError>,
@@ -28,16 +30,14 @@ fn edit_file(
     let file = load(path)?;
     let mut scene = file.scene.clone();
     change(&mut scene)?;
+    validate(&scene).map_err(|p| edit_error(path, format!("after the edit: {}", p.message)))?;
+    compile_scene(&scene, path, &file.base_dir)?;
     let text = scene.to_ron();
-    // Validate exactly what will be written.
-    let reparsed = parse_scene(&text, path)?;
-    compile_scene(&reparsed, path, &file.base_dir)?;
-    let io = |e: crate::io::IoError| edit_error(path, e.to_string());
-    let original = std::fs::read(path).map_err(|e| edit_error(path, e.to_string()))?;
+    let original = read_regular(path, super::load::MAX_TREE_FILE).map_err(SceneError::Read)?;
     let mut bak = path.as_os_str().to_owned();
     bak.push(".bak");
-    write_bytes_atomic(&PathBuf::from(bak), &original).map_err(io)?;
-    write_bytes_atomic(path, text.as_bytes()).map_err(io)
+    write_bytes_atomic(&PathBuf::from(bak), &original).map_err(SceneError::Write)?;
+    write_bytes_atomic(path, text.as_bytes()).map_err(SceneError::Write)
 }
 
 fn find_mut<'a>(node: &'a mut NodeSpec, name: &str) -> Option<&'a mut NodeSpec> {
@@ -57,52 +57,43 @@ fn scene_find_mut<'a>(scene: &'a mut Scene, name: &str) -> Option<&'a mut NodeSp
         .find_map(|n| find_mut(n, name))
 }
 
-fn parse_value(path: &Path, text: &str) -> Result<Json, SceneError> {
-    let v: ron::Value = ron_options()
-        .from_str(text)
-        .map_err(|e| edit_error(path, format!("value {text:?} is not valid RON: {}", e.code)))?;
-    serde_json::to_value(v).map_err(|e| edit_error(path, format!("value {text:?}: {e}")))
-}
-
 /// `karstic tree set FILE NAME.PARAM VALUE`: sets a parameter (a dotted path inside the
-/// node, e.g. `shape.radius`) of the node named `NAME` to the RON value `VALUE`.
+/// node, e.g. `shape.radius`) of the node named `NAME` to `VALUE`, written as in a tree
+/// file (`3.5`, `(0, 0, 10)`, `Sphere(center: (0, 0, 0), radius: 4)`). An optional
+/// parameter the node leaves out (`noise`, `base_depth`) is added.
 pub fn set_param(path: &Path, target: &str, value: &str) -> Result<(), SceneError> {
     let (name, param) = target
         .split_once('.')
         .ok_or_else(|| edit_error(path, format!("expected NAME.PARAM, found {target:?}")))?;
-    let new_value = parse_value(path, value)?;
+    let keys: Vec<&str> = param.split('.').collect();
     edit_file(path, |scene| {
         let node = scene_find_mut(scene, name)
             .ok_or_else(|| edit_error(path, format!("no node named {name:?}")))?;
-        let mut json = serde_json::to_value(&*node).map_err(|e| edit_error(path, e.to_string()))?;
         let kind = node.kind();
-        let mut slot = json
-            .get_mut(kind)
-            .ok_or_else(|| edit_error(path, format!("node {name:?} has no parameters")))?;
-        for key in param.split('.') {
-            let fields = match &*slot {
-                Json::Object(m) => m.keys().cloned().collect::<Vec<_>>().join(", "),
-                _ => String::new(),
-            };
-            // Walk into enum-tagged values ({"Sphere": {...}}) transparently.
-            if let Json::Object(m) = &*slot
-                && m.len() == 1
-                && !m.contains_key(key)
-                && let Some(inner) = m.values().next()
-                && inner.get(key).is_some()
-            {
-                slot = slot.as_object_mut().unwrap().values_mut().next().unwrap();
+        let no_param = |fields: &[String]| {
+            edit_error(
+                path,
+                format!(
+                    "node {name:?} ({kind}) has no parameter {param:?} (it has: {})",
+                    fields.join(", ")
+                ),
+            )
+        };
+        let text = set_field(&to_ron_text(&*node), &keys, value).map_err(|e| match e {
+            SpliceError::NoField { fields, .. } => no_param(&fields),
+            SpliceError::NotOneValue => edit_error(
+                path,
+                format!("value {value:?} for {target}: expected one value, as in a tree file"),
+            ),
+        })?;
+        *node = ron_options().from_str(&text).map_err(|e| match e.code {
+            ron::Error::NoSuchStructField {
+                expected, found, ..
+            } if keys.last() == Some(&found.as_str()) => {
+                no_param(&expected.iter().map(|s| s.to_string()).collect::<Vec<_>>())
             }
-            slot = slot.get_mut(key).ok_or_else(|| {
-                edit_error(
-                    path,
-                    format!("node {name:?} ({kind}) has no parameter {param:?} (it has: {fields})"),
-                )
-            })?;
-        }
-        *slot = new_value;
-        *node = serde_json::from_value(json)
-            .map_err(|e| edit_error(path, format!("invalid value for {name}.{param}: {e}")))?;
+            code => edit_error(path, format!("invalid value for {target}: {code}")),
+        })?;
         Ok(())
     })
 }

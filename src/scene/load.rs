@@ -1,23 +1,24 @@
 //! Reading and writing tree files, with errors that say where and what.
 
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use ron::extensions::Extensions;
 
 use super::spec::{FORMAT_VERSION, NodeSpec, Scene};
+use super::validate::{Locate, Problem, validate};
+use crate::curves::spec::CurveSource;
+use crate::io::read_regular;
 
 /// Errors from loading, validating, compiling or editing a tree file.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    /// The file could not be read or written.
-    #[error("{path}: {message}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// What went wrong.
-        message: String,
-    },
+    /// The file could not be read (or is not a regular file).
+    #[error(transparent)]
+    Read(crate::io::IoError),
+    /// The file could not be written.
+    #[error(transparent)]
+    Write(crate::io::IoError),
     /// The text is not a valid tree file at a position.
     #[error("{path}:{line}:{col}: {message}")]
     Syntax {
@@ -30,7 +31,7 @@ pub enum SceneError {
         /// What was expected.
         message: String,
     },
-    /// A node is well-formed but cannot be compiled (missing asset, bad geometry…).
+    /// A node is well-formed but cannot be compiled (bad geometry, no terrain…).
     #[error("{path}: node {node}: {message}")]
     Node {
         /// The file.
@@ -38,6 +39,25 @@ pub enum SceneError {
         /// The node's name or kind.
         node: String,
         /// What went wrong.
+        message: String,
+    },
+    /// A node's asset could not be made: its DEM, its curve file, its voxel pipeline.
+    #[error("{path}: node {node}")]
+    Asset {
+        /// The file.
+        path: PathBuf,
+        /// The node's name or kind.
+        node: String,
+        /// What went wrong.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+    /// The Feature Volume asked for is not in the file (`karstic curves build --node`).
+    #[error("{path}: {message}")]
+    Volume {
+        /// The file.
+        path: PathBuf,
+        /// Which volumes there are.
         message: String,
     },
     /// An edit command could not be applied.
@@ -55,6 +75,15 @@ pub enum SceneError {
 pub fn ron_options() -> ron::Options {
     ron::Options::default()
         .with_default_extension(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_VARIANT_NEWTYPES)
+}
+
+/// A scene type as tree-file text (canonical layout, the extensions of [`ron_options`]).
+pub(crate) fn to_ron_text(value: &impl serde::Serialize) -> String {
+    let pretty = ron::ser::PrettyConfig::new()
+        .struct_names(false)
+        .indentor("    ".to_string())
+        .extensions(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_VARIANT_NEWTYPES);
+    ron::ser::to_string_pretty(value, pretty).expect("scene types always serialize")
 }
 
 /// A loaded tree file: the scene and where it came from.
@@ -77,7 +106,7 @@ fn line_col(text: &str, offset: usize) -> (usize, usize) {
 }
 
 /// Position of the `nth` (0-based) occurrence of `key: "value"` in `text`, if found.
-fn find_field(text: &str, key: &str, value: &str, nth: usize) -> Option<(usize, usize)> {
+fn find_quoted(text: &str, key: &str, value: &str, nth: usize) -> Option<(usize, usize)> {
     let quoted = format!("\"{value}\"");
     let mut count = 0;
     let mut from = 0;
@@ -96,6 +125,13 @@ fn find_field(text: &str, key: &str, value: &str, nth: usize) -> Option<(usize, 
     None
 }
 
+/// Position of the first field `key:` (not a mention of the word in a comment).
+fn find_key(text: &str, key: &str) -> Option<(usize, usize)> {
+    text.match_indices(key)
+        .find(|(at, w)| text[at + w.len()..].trim_start().starts_with(':'))
+        .map(|(at, _)| line_col(text, at))
+}
+
 impl SceneError {
     fn at(path: &Path, pos: Option<(usize, usize)>, message: String) -> Self {
         let (line, col) = pos.unwrap_or((1, 1));
@@ -108,16 +144,19 @@ impl SceneError {
     }
 }
 
-/// A node name must be a simple identifier so `NAME.PARAM` paths stay unambiguous.
-fn valid_name(name: &str) -> bool {
-    !name.is_empty()
-        && name
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+/// The error of a rule the text at `path` breaks, at its position in `text`.
+fn located(problem: Problem, text: &str, path: &Path) -> SceneError {
+    let pos = problem.at.and_then(|at| match at {
+        Locate::Quoted { key, value, nth } => find_quoted(text, key, &value, nth),
+        Locate::Key(key) => find_key(text, key),
+    });
+    SceneError::at(path, pos, problem.message)
 }
 
-/// Parses and validates tree-file text (`path` only names it in errors).
+/// Parses and validates tree-file text (`path` only names it in errors). A UTF-8
+/// byte-order mark before the text is skipped.
 pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let scene: Scene = ron_options()
         .from_str(text)
         .map_err(|e| SceneError::Syntax {
@@ -129,130 +168,85 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
     if scene.version != FORMAT_VERSION {
         return Err(SceneError::at(
             path,
-            find_version(text),
+            find_key(text, "version"),
             format!(
                 "unsupported format version {} (this karstic reads version {FORMAT_VERSION})",
                 scene.version
             ),
         ));
     }
-    validate_names(&scene, text, path)?;
+    validate(&scene).map_err(|p| located(p, text, path))?;
     Ok(scene)
 }
 
-/// Position of the `version:` field (not a mention of the word in a comment).
-fn find_version(text: &str) -> Option<(usize, usize)> {
-    text.match_indices("version")
-        .find(|(at, w)| text[at + w.len()..].trim_start().starts_with(':'))
-        .map(|(at, _)| line_col(text, at))
-}
-
-/// Names are valid and unique; every instance refers to an existing node and no instance
-/// refers to a subtree that contains it.
-fn validate_names(scene: &Scene, text: &str, path: &Path) -> Result<(), SceneError> {
-    let mut seen: BTreeMap<&str, usize> = BTreeMap::new();
-    for n in scene.all_nodes() {
-        let Some(name) = n.name() else { continue };
-        let nth = seen.entry(name).or_insert(0);
-        let pos = find_field(text, "name", name, *nth);
-        if !valid_name(name) {
-            return Err(SceneError::at(
-                path,
-                pos,
-                format!("invalid node name {name:?}: expected letters, digits, '_' or '-'"),
-            ));
-        }
-        if *nth > 0 {
-            return Err(SceneError::at(
-                path,
-                pos,
-                format!("duplicate node name {name:?}"),
-            ));
-        }
-        *nth += 1;
-    }
-    let mut instance_count: BTreeMap<&str, usize> = BTreeMap::new();
-    for n in scene.all_nodes() {
-        let NodeSpec::Instance(i) = n else { continue };
-        let nth = instance_count.entry(&i.of).or_insert(0);
-        let pos = find_field(text, "of", &i.of, *nth);
-        *nth += 1;
-        let Some(target) = scene.find(&i.of) else {
-            let names: Vec<&str> = seen.keys().copied().collect();
-            return Err(SceneError::at(
-                path,
-                pos,
-                format!(
-                    "unknown node referenced: {:?} (named nodes: {})",
-                    i.of,
-                    names.join(", ")
-                ),
-            ));
-        };
-        if reaches(scene, target, &i.of, &mut BTreeSet::new()) {
-            return Err(SceneError::at(
-                path,
-                pos,
-                format!(
-                    "instance of {:?} is inside the node it instances (a cycle)",
-                    i.of
-                ),
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// True when `node`'s subtree, following instances, contains an instance of `name`.
-fn reaches<'a>(
-    scene: &'a Scene,
-    node: &'a NodeSpec,
-    name: &str,
-    visiting: &mut BTreeSet<&'a str>,
-) -> bool {
-    let mut found = false;
-    node.walk(&mut |n, _| {
-        if found {
-            return;
-        }
-        if let NodeSpec::Instance(i) = n {
-            if i.of == name {
-                found = true;
-            } else if visiting.insert(i.of.as_str())
-                && let Some(t) = scene.find(&i.of)
-            {
-                found = reaches(scene, t, name, visiting);
+impl Scene {
+    /// The named nodes (in `defs` and the tree) by name; the first of a duplicated name.
+    pub fn named(&self) -> HashMap<&str, &NodeSpec> {
+        let mut named = HashMap::new();
+        for n in self.all_nodes() {
+            if let Some(name) = n.name() {
+                named.entry(name).or_insert(n);
             }
         }
-    });
-    found
-}
-
-impl Scene {
-    /// The node named `name` (in `defs` or the tree).
-    pub fn find(&self, name: &str) -> Option<&NodeSpec> {
-        self.all_nodes()
-            .into_iter()
-            .find(|n| n.name() == Some(name))
+        named
     }
 
     /// The scene as tree-file text (canonical layout; comments are not kept).
     pub fn to_ron(&self) -> String {
-        let pretty = ron::ser::PrettyConfig::new()
-            .struct_names(false)
-            .indentor("    ".to_string())
-            .extensions(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_VARIANT_NEWTYPES);
-        ron::ser::to_string_pretty(self, pretty).expect("scene types always serialize")
+        to_ron_text(self)
     }
+}
+
+impl SceneFile {
+    /// The files compiling the scene reads: the tree file, its DEMs (with a PNG DEM's
+    /// sidecar, an ASCII grid's `.prj`) and its curve files. A run's outputs must not be
+    /// among them ([`crate::io::check_outputs`]).
+    pub fn inputs(&self) -> Vec<PathBuf> {
+        let mut files = vec![self.path.clone()];
+        for n in self.scene.all_nodes() {
+            match n {
+                NodeSpec::Heightfield(h) => files.extend(crate::dem::files_read(
+                    &self.base_dir.join(&h.source),
+                    &crate::dem::ReadOptions::default(),
+                )),
+                NodeSpec::FeatureVolume(f) => {
+                    if let CurveSource::Path(p) = &f.curves {
+                        files.push(self.base_dir.join(p));
+                    }
+                }
+                _ => {}
+            }
+        }
+        files
+    }
+}
+
+/// Largest tree file read, in bytes: a tree is text written by people and tools.
+pub const MAX_TREE_FILE: u64 = 1 << 30;
+
+/// Reads a tree file's text: a regular UTF-8 file of at most [`MAX_TREE_FILE`] bytes.
+pub(crate) fn read_text(path: &Path) -> Result<String, SceneError> {
+    let bytes = read_regular(path, MAX_TREE_FILE).map_err(SceneError::Read)?;
+    String::from_utf8(bytes).map_err(|e| {
+        let (line, col) = line_col_bytes(e.as_bytes(), e.utf8_error().valid_up_to());
+        SceneError::Syntax {
+            path: path.to_path_buf(),
+            line,
+            col,
+            message: "the file is not UTF-8 text".into(),
+        }
+    })
+}
+
+/// 1-based line and column of byte `offset` in the UTF-8 prefix `bytes[..offset]`.
+fn line_col_bytes(bytes: &[u8], offset: usize) -> (usize, usize) {
+    line_col(std::str::from_utf8(&bytes[..offset]).unwrap_or(""), offset)
 }
 
 /// Loads and validates a tree file.
 pub fn load(path: impl AsRef<Path>) -> Result<SceneFile, SceneError> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
-        path: path.to_path_buf(),
-        message: format!("cannot read tree file: {e}"),
-    })?;
+    let text = read_text(path)?;
     let scene = parse_scene(&text, path)?;
     let base_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     Ok(SceneFile {
@@ -270,8 +264,9 @@ mod tests {
     fn positions_are_one_based() {
         assert_eq!(line_col("ab\ncd", 4), (2, 2));
         assert_eq!(
-            find_field("x\n  name: \"a\", of: \"a\"", "of", "a", 0),
+            find_quoted("x\n  name: \"a\", of: \"a\"", "of", "a", 0),
             Some((2, 18))
         );
+        assert_eq!(find_key("// version\n version: 2", "version"), Some((2, 2)));
     }
 }

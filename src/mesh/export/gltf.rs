@@ -229,7 +229,7 @@ fn write_glb_to(doc: &Document, w: &mut dyn Write) -> io::Result<()> {
 
 /// Writes a JSON glTF (`.gltf`) and its buffer beside it (same stem, `.bin`).
 pub fn write_gltf(mesh: &Mesh, path: &Path, opts: &ExportOptions) -> Result<(), ExportError> {
-    let bin_path = path.with_extension("bin");
+    let bin_path = bin_path(path);
     let bin_name = bin_path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -240,6 +240,11 @@ pub fn write_gltf(mesh: &Mesh, path: &Path, opts: &ExportOptions) -> Result<(), 
     }
     write_atomic(path, |w| doc.root.to_writer_pretty(w).map_err(json_error))?;
     Ok(())
+}
+
+/// The buffer file of the JSON glTF `path`: the same name with the extension `.bin`.
+pub(crate) fn bin_path(path: &Path) -> std::path::PathBuf {
+    path.with_extension("bin")
 }
 
 /// Escapes what a URI reference may not hold raw (glTF URIs are RFC 3986).

@@ -6,7 +6,7 @@ pub mod gltf;
 pub mod obj;
 pub mod ply;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
@@ -71,6 +71,15 @@ pub fn write(mesh: &Mesh, path: &Path, opts: &ExportOptions) -> Result<(), Expor
         Format::Obj => obj::write_obj(mesh, path),
         Format::Ply => ply::write_ply(mesh, path, opts),
     }
+}
+
+/// Every file [`write`] writes for `path`: the file itself and, for `.gltf`, its `.bin`.
+pub fn written_files(path: &Path) -> Result<Vec<PathBuf>, ExportError> {
+    let mut files = vec![path.to_path_buf()];
+    if Format::from_path(path)? == Format::Gltf {
+        files.push(gltf::bin_path(path));
+    }
+    Ok(files)
 }
 
 /// karstic's Z-up `(x, y, z)` as Y-up `(x, z, −y)`.

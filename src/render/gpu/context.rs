@@ -94,11 +94,11 @@ impl GpuContext {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
         let adapter =
             pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
-                .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+                .map_err(GpuError::NoAdapter)?;
         let info = adapter.get_info();
         let limits = adapter.limits();
         if limits.max_storage_buffers_per_shader_stage < 10 {
-            return Err(GpuError::Device(format!(
+            return Err(GpuError::Unsuitable(format!(
                 "{} binds {} storage buffers per stage; the tracer needs 10",
                 info.name, limits.max_storage_buffers_per_shader_stage
             )));
@@ -108,7 +108,7 @@ impl GpuContext {
             required_limits: limits,
             ..Default::default()
         }))
-        .map_err(|e| GpuError::Device(e.to_string()))?;
+        .map_err(GpuError::Device)?;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("trace.wgsl"),
@@ -116,9 +116,7 @@ impl GpuContext {
         });
         let fbm_probe = pipeline(&device, &module, "fbm_probe", &[]);
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Device(format!(
-                "the tracing shader does not compile: {e}"
-            )));
+            return Err(GpuError::Shader(e));
         }
         Ok(GpuContext {
             device,
@@ -145,9 +143,7 @@ impl GpuContext {
             probe: pipeline(&self.device, &self.module, "probe", &constants),
         });
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Device(format!(
-                "the tracing shader does not compile: {e}"
-            )));
+            return Err(GpuError::Shader(e));
         }
         map.insert(key, p.clone());
         Ok(p)
@@ -254,7 +250,7 @@ impl GpuContext {
         }
         self.queue.submit([enc.finish()]);
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Run(e.to_string()));
+            return Err(GpuError::Run(e.into()));
         }
         let out = self.read_back(&[counters])?;
         let words = bytemuck::cast_slice::<u8, u32>(&out[0]);
@@ -288,18 +284,18 @@ impl GpuContext {
         }
         self.device
             .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| GpuError::Run(e.to_string()))?;
+            .map_err(|e| GpuError::Run(e.into()))?;
         for _ in &reads {
             rx.recv()
-                .map_err(|e| GpuError::Run(e.to_string()))?
-                .map_err(|e| GpuError::Run(e.to_string()))?;
+                .map_err(|e| GpuError::Run(e.into()))?
+                .map_err(|e| GpuError::Run(e.into()))?;
         }
         reads
             .iter()
             .map(|r| {
                 let bytes = r
                     .get_mapped_range(..)
-                    .map_err(|e| GpuError::Run(e.to_string()))?
+                    .map_err(|e| GpuError::Run(e.into()))?
                     .to_vec();
                 r.unmap();
                 Ok(bytes)
@@ -326,7 +322,7 @@ impl GpuContext {
         }
         self.queue.submit([enc.finish()]);
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Run(e.to_string()));
+            return Err(GpuError::Run(e.into()));
         }
         self.read_back(outputs)
     }
@@ -393,9 +389,9 @@ impl GpuContext {
             let rows = tile_rows.min(h - row0);
             for pass in 0.. {
                 if pass == MAX_PASSES {
-                    return Err(GpuError::Run(format!(
-                        "rows {row0}.. still unfinished after {MAX_PASSES} passes"
-                    )));
+                    return Err(GpuError::Run(
+                        format!("rows {row0}.. still unfinished after {MAX_PASSES} passes").into(),
+                    ));
                 }
                 let info = [0, 0, 2, row0, pass, evals_per_pass, 0, 0u32];
                 self.queue

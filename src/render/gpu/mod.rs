@@ -19,11 +19,17 @@ use crate::tape::TapeError;
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
     /// No usable adapter (no GPU and no software Vulkan such as lavapipe).
-    #[error("no GPU adapter available ({0})")]
-    NoAdapter(String),
+    #[error("no GPU adapter available")]
+    NoAdapter(#[source] wgpu::RequestAdapterError),
     /// The device could not be created.
-    #[error("cannot open the GPU device: {0}")]
-    Device(String),
+    #[error("cannot open the GPU device")]
+    Device(#[source] wgpu::RequestDeviceError),
+    /// The adapter lacks what the tracer needs.
+    #[error("the GPU cannot run the tracer: {0}")]
+    Unsuitable(String),
+    /// The tracing shader does not compile on this device.
+    #[error("the tracing shader does not compile")]
+    Shader(#[source] wgpu::Error),
     /// The tree cannot be encoded for the GPU.
     #[error(transparent)]
     Tape(#[from] TapeError),
@@ -31,8 +37,8 @@ pub enum GpuError {
     #[error("{0}")]
     Limits(String),
     /// Running or reading back failed.
-    #[error("GPU execution failed: {0}")]
-    Run(String),
+    #[error("GPU execution failed")]
+    Run(#[source] Box<dyn std::error::Error + Send + Sync>),
 }
 
 /// The WGSL modules, each the concatenation of these files of `shaders/` (WGSL has no

@@ -1,0 +1,295 @@
+//! Replacing one field's value inside RON text, so `karstic tree set` can take the value
+//! as the user writes it (`Sphere(center: (0, 0, 0), radius: 4)`, `NaN`, an absent
+//! optional field) and let the tree-file parser judge it in place.
+//!
+//! The scanner knows only what delimits values: strings, raw strings, characters,
+//! comments, brackets and commas.
+
+/// Why a field cannot be spliced.
+#[derive(Debug, PartialEq, Eq)]
+pub enum SpliceError {
+    /// A key on the way is not a field of the value it names (the fields found are
+    /// listed); the last key of a path may be absent: it is added.
+    NoField {
+        /// The key.
+        key: String,
+        /// The fields there are.
+        fields: Vec<String>,
+    },
+    /// The new value is not exactly one RON value.
+    NotOneValue,
+}
+
+/// `text` (a RON value with named fields, e.g. `Primitive(name: "a", shape: …)`) with
+/// the field at `path` (`["shape", "radius"]`) set to `value`. Struct and enum values
+/// along the path are entered whatever their variant name (`shape` → `Sphere(…)`).
+pub fn set_field(text: &str, path: &[&str], value: &str) -> Result<String, SpliceError> {
+    let value = value.trim();
+    if value.is_empty() || value_end(value, 0) != value.len() {
+        return Err(SpliceError::NotOneValue);
+    }
+    let mut at = skip_attributes(text);
+    for (depth, key) in path.iter().enumerate() {
+        let last = depth + 1 == path.len();
+        let Some(body) = fields(text, at) else {
+            return Err(SpliceError::NoField {
+                key: key.to_string(),
+                fields: Vec::new(),
+            });
+        };
+        match body.fields.iter().find(|f| f.key == *key) {
+            Some(f) if last => {
+                return Ok(format!(
+                    "{}{value}{}",
+                    &text[..f.value.0],
+                    &text[f.value.1..]
+                ));
+            }
+            Some(f) => at = f.value.0,
+            None if last => {
+                let open = body.open + 1;
+                return Ok(format!(
+                    "{}{key}: {value}, {}",
+                    &text[..open],
+                    &text[open..]
+                ));
+            }
+            None => {
+                return Err(SpliceError::NoField {
+                    key: key.to_string(),
+                    fields: body.fields.iter().map(|f| f.key.to_string()).collect(),
+                });
+            }
+        }
+    }
+    Err(SpliceError::NoField {
+        key: String::new(),
+        fields: Vec::new(),
+    })
+}
+
+/// One `key: value` entry; `value` is its byte range.
+struct Field<'t> {
+    key: &'t str,
+    value: (usize, usize),
+}
+
+/// The named fields of the value at `at`: an optional name, then `(key: value, …)`.
+struct Body<'t> {
+    open: usize,
+    fields: Vec<Field<'t>>,
+}
+
+/// The fields of the value starting at (or after white space from) `at`, or `None` when
+/// it is not a parenthesised list of named fields.
+fn fields(text: &str, at: usize) -> Option<Body<'_>> {
+    let b = text.as_bytes();
+    let mut i = skip_blank(text, at);
+    i = ident_end(text, i);
+    i = skip_blank(text, i);
+    if b.get(i) != Some(&b'(') {
+        return None;
+    }
+    let open = i;
+    let mut fields = Vec::new();
+    i += 1;
+    loop {
+        i = skip_blank(text, i);
+        if b.get(i) == Some(&b')') || i >= b.len() {
+            return Some(Body { open, fields });
+        }
+        let key_end = ident_end(text, i);
+        let colon = skip_blank(text, key_end);
+        if key_end == i || b.get(colon) != Some(&b':') {
+            return None;
+        }
+        let start = skip_blank(text, colon + 1);
+        let end = value_end(text, start);
+        fields.push(Field {
+            key: &text[i..key_end],
+            value: (start, trim_end(text, start, end)),
+        });
+        i = skip_blank(text, end);
+        if b.get(i) == Some(&b',') {
+            i += 1;
+        }
+    }
+}
+
+/// The start of the value after the `#![enable(…)]` attributes that open a RON text.
+fn skip_attributes(text: &str) -> usize {
+    let mut i = skip_blank(text, 0);
+    while text[i..].starts_with("#![") {
+        i = text[i..]
+            .find(']')
+            .map_or(text.len(), |n| skip_blank(text, i + n + 1));
+    }
+    i
+}
+
+/// End of the identifier at `i` (`i` itself when there is none).
+fn ident_end(text: &str, i: usize) -> usize {
+    let b = text.as_bytes();
+    let mut j = i;
+    while j < b.len() && (b[j].is_ascii_alphanumeric() || b[j] == b'_') {
+        j += 1;
+    }
+    j
+}
+
+/// `end` moved back over trailing white space, not before `start`.
+fn trim_end(text: &str, start: usize, end: usize) -> usize {
+    start + text[start..end].trim_end().len()
+}
+
+/// `i` moved past white space and comments.
+fn skip_blank(text: &str, mut i: usize) -> usize {
+    let b = text.as_bytes();
+    loop {
+        while i < b.len() && b[i].is_ascii_whitespace() {
+            i += 1;
+        }
+        if text[i..].starts_with("//") {
+            i = text[i..].find('\n').map_or(b.len(), |n| i + n);
+        } else if text[i..].starts_with("/*") {
+            i = text[i + 2..].find("*/").map_or(b.len(), |n| i + 2 + n + 2);
+        } else {
+            return i;
+        }
+    }
+}
+
+/// End of the value starting at `i`: the first `,` or unmatched closing bracket outside
+/// strings, characters, comments and nested brackets (or the end of the text).
+fn value_end(text: &str, mut i: usize) -> usize {
+    let b = text.as_bytes();
+    let mut depth = 0usize;
+    while i < b.len() {
+        match b[i] {
+            b'(' | b'[' | b'{' => depth += 1,
+            b')' | b']' | b'}' => {
+                if depth == 0 {
+                    return i;
+                }
+                depth -= 1;
+            }
+            b',' if depth == 0 => return i,
+            b'"' => i = string_end(b, i + 1, false, 0),
+            b'\'' => i = string_end_char(b, i + 1),
+            b'r' if matches!(b.get(i + 1), Some(b'#' | b'"')) => {
+                let hashes = b[i + 1..].iter().take_while(|&&c| c == b'#').count();
+                i = string_end(b, i + 2 + hashes, true, hashes);
+            }
+            b'/' if matches!(b.get(i + 1), Some(b'/' | b'*')) => {
+                i = skip_blank(text, i);
+                continue;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    b.len()
+}
+
+/// Index of the last byte closing a string whose contents start at `i`: its quote, then
+/// `hashes` hashes for a raw string (which has no escapes).
+fn string_end(b: &[u8], mut i: usize, raw: bool, hashes: usize) -> usize {
+    while i < b.len() {
+        match b[i] {
+            b'\\' if !raw => i += 1,
+            b'"' if b[i + 1..]
+                .iter()
+                .take(hashes)
+                .filter(|&&c| c == b'#')
+                .count()
+                == hashes =>
+            {
+                return i + hashes;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    b.len()
+}
+
+/// Index of the closing quote of a character literal whose contents start at `i`.
+fn string_end_char(b: &[u8], mut i: usize) -> usize {
+    while i < b.len() {
+        match b[i] {
+            b'\\' => i += 1,
+            b'\'' => return i,
+            _ => {}
+        }
+        i += 1;
+    }
+    b.len()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const NODE: &str =
+        r#"Primitive(name: "a, (b)", shape: Sphere(center: (0, 0, 0), radius: 2.0), falloff: 1.5)"#;
+
+    #[test]
+    fn sets_nested_absent_and_whole_fields() {
+        assert_eq!(
+            set_field(NODE, &["shape", "radius"], "4").unwrap(),
+            r#"Primitive(name: "a, (b)", shape: Sphere(center: (0, 0, 0), radius: 4), falloff: 1.5)"#
+        );
+        assert_eq!(
+            set_field(NODE, &["shape"], "Point(center: (1, 2, 3))").unwrap(),
+            r#"Primitive(name: "a, (b)", shape: Point(center: (1, 2, 3)), falloff: 1.5)"#
+        );
+        assert_eq!(
+            set_field(NODE, &["noise"], "(amplitude: 1)").unwrap(),
+            r#"Primitive(noise: (amplitude: 1), name: "a, (b)", shape: Sphere(center: (0, 0, 0), radius: 2.0), falloff: 1.5)"#
+        );
+        assert_eq!(
+            set_field(NODE, &["falloff"], " NaN ").unwrap(),
+            r#"Primitive(name: "a, (b)", shape: Sphere(center: (0, 0, 0), radius: 2.0), falloff: NaN)"#
+        );
+    }
+
+    #[test]
+    fn skips_the_attributes_of_serialized_text() {
+        let text =
+            "#![enable(implicit_some)]\n#![enable(unwrap_variant_newtypes)]\nA(\n    x: 1,\n)";
+        assert_eq!(
+            set_field(text, &["x"], "2").unwrap(),
+            "#![enable(implicit_some)]\n#![enable(unwrap_variant_newtypes)]\nA(\n    x: 2,\n)"
+        );
+    }
+
+    #[test]
+    fn refuses_missing_paths_and_several_values() {
+        assert_eq!(
+            set_field(NODE, &["colour", "red"], "1"),
+            Err(SpliceError::NoField {
+                key: "colour".into(),
+                fields: vec!["name".into(), "shape".into(), "falloff".into()],
+            })
+        );
+        assert_eq!(
+            set_field(NODE, &["falloff"], "1, energy: 3"),
+            Err(SpliceError::NotOneValue)
+        );
+        assert_eq!(
+            set_field(NODE, &["falloff"], ""),
+            Err(SpliceError::NotOneValue)
+        );
+        assert!(set_field(NODE, &["falloff", "x"], "1").is_err());
+    }
+
+    #[test]
+    fn strings_comments_and_raw_strings_do_not_end_values() {
+        let text = "(a: r#\"x\"), (\"#, b: /* , */ 'c', d: \"\\\", \")";
+        let body = fields(text, 0).unwrap();
+        let keys: Vec<&str> = body.fields.iter().map(|f| f.key).collect();
+        assert_eq!(keys, ["a", "b", "d"]);
+        let d = &body.fields[2];
+        assert_eq!(&text[d.value.0..d.value.1], "\"\\\", \"");
+    }
+}

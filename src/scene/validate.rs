@@ -1,0 +1,285 @@
+//! What a tree file must satisfy beyond its types: node names valid and unique, every
+//! instance naming an existing node and none inside what it instances, operators with
+//! children, a job section that `karstic run` can carry out. One pass over the scene and
+//! one over the instance graph: linear in the number of nodes.
+
+use std::collections::HashMap;
+
+use super::spec::{JobSpec, NodeSpec, Scene};
+use crate::field::Aabb;
+use crate::mesh::GridSpec;
+use crate::render::camera::{Camera, check_fov, check_size};
+
+/// Where in the text a problem lies.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Locate {
+    /// The `nth` (0-based) occurrence of `key: "value"`.
+    Quoted {
+        /// The field, e.g. `name`.
+        key: &'static str,
+        /// Its value.
+        value: String,
+        /// Which occurrence.
+        nth: usize,
+    },
+    /// The first field `key:` (not a mention in a comment).
+    Key(&'static str),
+}
+
+/// A violated rule: what is wrong, and where to point when the text is at hand.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Problem {
+    /// What is wrong.
+    pub message: String,
+    /// Where, if it can be found in the text.
+    pub at: Option<Locate>,
+}
+
+impl Problem {
+    fn quoted(key: &'static str, value: &str, nth: usize, message: String) -> Self {
+        Problem {
+            message,
+            at: Some(Locate::Quoted {
+                key,
+                value: value.to_string(),
+                nth,
+            }),
+        }
+    }
+}
+
+/// Checks `scene` (see the module documentation); the first problem found.
+pub fn validate(scene: &Scene) -> Result<(), Problem> {
+    let graph = Graph::of(scene)?;
+    graph.check_acyclic()?;
+    if let Some(p) = graph.empty_operator {
+        return Err(p);
+    }
+    if let Some(job) = &scene.job {
+        check_job(job).map_err(|(key, message)| Problem {
+            message: format!("job.{key}: {message}"),
+            at: Some(Locate::Key(key)),
+        })?;
+    }
+    Ok(())
+}
+
+/// A node name must be a simple identifier so `NAME.PARAM` paths stay unambiguous.
+fn valid_name(name: &str) -> bool {
+    !name.is_empty()
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+}
+
+/// Named nodes and the edges between them: `a → b` when `b` is the nearest named node
+/// below `a`, or when an instance of `b` lies in `a`'s subtree with no named node between.
+/// A subtree, following instances, contains an instance of its own node exactly when
+/// this graph has a cycle (containment alone cannot make one).
+struct Graph<'s> {
+    names: Vec<&'s str>,
+    /// Edges of each node: `(target, is an instance)`.
+    edges: Vec<Vec<(usize, bool)>>,
+    /// The first operator without children (reported after the names and instances).
+    empty_operator: Option<Problem>,
+}
+
+impl<'s> Graph<'s> {
+    fn of(scene: &'s Scene) -> Result<Self, Problem> {
+        let mut index: HashMap<&str, usize> = HashMap::new();
+        let mut names = Vec::new();
+        let mut first_error = None;
+        let mut empty = None;
+        let mut instances = Vec::new();
+        // (depth, named node) of the nearest named ancestors, innermost last.
+        let mut owners: Vec<(usize, usize)> = Vec::new();
+        let mut containment = Vec::new();
+        for root in scene.defs.iter().chain(std::iter::once(&scene.root)) {
+            owners.clear();
+            root.walk(&mut |n, depth| {
+                if first_error.is_some() {
+                    return;
+                }
+                while owners.last().is_some_and(|&(d, _)| d >= depth) {
+                    owners.pop();
+                }
+                let owner = owners.last().map(|&(_, o)| o);
+                if empty.is_none() {
+                    empty = empty_operator(n);
+                }
+                let mut me = owner;
+                if let Some(name) = n.name() {
+                    if !valid_name(name) {
+                        first_error = Some(Problem::quoted(
+                            "name",
+                            name,
+                            0,
+                            format!(
+                                "invalid node name {name:?}: expected letters, digits, '_' or '-'"
+                            ),
+                        ));
+                        return;
+                    }
+                    if index.insert(name, names.len()).is_some() {
+                        first_error = Some(Problem::quoted(
+                            "name",
+                            name,
+                            1,
+                            format!("duplicate node name {name:?}"),
+                        ));
+                        return;
+                    }
+                    if let Some(o) = owner {
+                        containment.push((o, names.len()));
+                    }
+                    owners.push((depth, names.len()));
+                    me = Some(names.len());
+                    names.push(name);
+                }
+                if let NodeSpec::Instance(i) = n {
+                    instances.push((me, i.of.as_str()));
+                }
+            });
+        }
+        if let Some(p) = first_error {
+            return Err(p);
+        }
+        let mut edges = vec![Vec::new(); names.len()];
+        for (a, b) in containment {
+            edges[a].push((b, false));
+        }
+        for (owner, of) in instances {
+            let Some(&target) = index.get(of) else {
+                return Err(Problem::quoted("of", of, 0, unknown_reference(of, &names)));
+            };
+            if let Some(o) = owner {
+                edges[o].push((target, true));
+            }
+        }
+        Ok(Graph {
+            names,
+            edges,
+            empty_operator: empty,
+        })
+    }
+
+    /// Depth-first search without recursion (instance chains can be long): a back edge
+    /// closes a cycle, which holds an instance edge; that instance is reported.
+    fn check_acyclic(&self) -> Result<(), Problem> {
+        #[derive(Clone, Copy, PartialEq)]
+        enum Mark {
+            New,
+            Open,
+            Done,
+        }
+        let mut mark = vec![Mark::New; self.names.len()];
+        // (node, next edge, whether the edge into it is an instance edge)
+        let mut stack: Vec<(usize, usize, bool)> = Vec::new();
+        for start in 0..self.names.len() {
+            if mark[start] != Mark::New {
+                continue;
+            }
+            mark[start] = Mark::Open;
+            stack.push((start, 0, false));
+            while let Some(top) = stack.last_mut() {
+                let (node, next) = (top.0, top.1);
+                let Some(&(to, instance)) = self.edges[node].get(next) else {
+                    mark[node] = Mark::Done;
+                    stack.pop();
+                    continue;
+                };
+                top.1 += 1;
+                match mark[to] {
+                    Mark::New => {
+                        mark[to] = Mark::Open;
+                        stack.push((to, 0, instance));
+                    }
+                    Mark::Open => return Err(self.cycle(&stack, to, instance)),
+                    Mark::Done => {}
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The problem of the cycle closed by an edge into `to` (open on `stack`).
+    fn cycle(&self, stack: &[(usize, usize, bool)], to: usize, closing_instance: bool) -> Problem {
+        let from = stack.iter().rposition(|s| s.0 == to).unwrap_or(0);
+        // The closing edge, or an instance edge into a node of the cycle.
+        let target = if closing_instance {
+            to
+        } else {
+            stack[from + 1..].iter().find(|s| s.2).map_or(to, |s| s.0)
+        };
+        let name = self.names[target];
+        Problem::quoted(
+            "of",
+            name,
+            0,
+            format!("instance of {name:?} is inside the node it instances (a cycle)"),
+        )
+    }
+}
+
+/// An n-ary operator with no child.
+fn empty_operator(n: &NodeSpec) -> Option<Problem> {
+    let (NodeSpec::Blend(x) | NodeSpec::Union(x) | NodeSpec::Intersection(x)) = n else {
+        return None;
+    };
+    if !x.children.is_empty() {
+        return None;
+    }
+    let message = |what: String| {
+        format!(
+            "{what} has no children: a {} needs at least one (remove it, or add a child)",
+            n.kind()
+        )
+    };
+    Some(match n.name() {
+        Some(name) => Problem::quoted("name", name, 0, message(format!("{} {name:?}", n.kind()))),
+        None => Problem {
+            message: message(format!("an unnamed {}", n.kind())),
+            at: None,
+        },
+    })
+}
+
+/// The message of an instance of an unknown node, listing some of the known ones.
+fn unknown_reference(of: &str, names: &[&str]) -> String {
+    const SHOWN: usize = 12;
+    let mut known: Vec<&str> = names.iter().take(SHOWN).copied().collect();
+    known.sort_unstable();
+    let more = if names.len() > SHOWN {
+        format!(", and {} more", names.len() - SHOWN)
+    } else {
+        String::new()
+    };
+    format!(
+        "unknown node referenced: {of:?} (named nodes: {}{more})",
+        known.join(", ")
+    )
+}
+
+/// The job section: the region, the image and the camera as `karstic run` will use them.
+/// The error names the field at fault.
+fn check_job(job: &JobSpec) -> Result<(), (&'static str, String)> {
+    let (w, h) = job.image;
+    check_size(w, h).map_err(|e| ("image", e.to_string()))?;
+    check_fov(job.fov.0).map_err(|e| ("fov", e.to_string()))?;
+    if let Some(c) = job.camera {
+        Camera::look_at(c.eye.0, c.target.0, job.fov.0, w, h)
+            .map_err(|e| ("camera", e.to_string()))?;
+    }
+    if let Some(r) = job.region {
+        let (min, max) = (r.min.0, r.max.0);
+        if !min.cmplt(max).all() {
+            return Err((
+                "region",
+                format!("min {min} must be below max {max} on every axis"),
+            ));
+        }
+        GridSpec::with_cell(&Aabb::new(min, max), job.cell.0)
+            .map_err(|e| ("cell", e.to_string()))?;
+    }
+    Ok(())
+}

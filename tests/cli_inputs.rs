@@ -1,0 +1,263 @@
+//! Bad input and limits through the command line: sizes refused before memory is taken,
+//! inputs that never end or block, outputs that would destroy inputs, jobs checked at
+//! load, empty trees, header lines.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Runs `karstic args` (stdin from `input`), killing it after `limit`: `(success,
+/// stderr, how long it ran)`. A run that had to be killed fails the test.
+fn karstic_with(args: &[&str], input: &str, limit: Duration) -> (bool, String, Duration) {
+    let started = Instant::now();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_karstic"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(input.as_bytes())
+        .unwrap();
+    while child.try_wait().unwrap().is_none() {
+        if started.elapsed() > limit {
+            child.kill().unwrap();
+            panic!("karstic {args:?} still running after {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let out = child.wait_with_output().unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+        started.elapsed(),
+    )
+}
+
+fn karstic(args: &[&str]) -> (bool, String) {
+    let (ok, err, _) = karstic_with(args, "", Duration::from_secs(120));
+    (ok, err)
+}
+
+fn trees() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("trees")
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// A scratch folder holding a copy of `trees/arch.ron`.
+fn with_arch() -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let tree = dir.path().join("arch.ron");
+    std::fs::copy(trees().join("arch.ron"), &tree).unwrap();
+    (dir, tree)
+}
+
+#[test]
+fn huge_grids_are_refused_in_milliseconds_with_the_amount() {
+    let (dir, tree) = with_arch();
+    let out = dir.path().join("a.glb");
+    // 10¹⁰ columns used to abort the process (the column index was allocated first);
+    // 10⁴ cells per side ran for minutes at 5 GB before the samples were refused.
+    for (res, want) in [("100000", "column index"), ("10000", "samples")] {
+        let (ok, err, took) = karstic_with(
+            &["build", s(&tree), "-o", s(&out), "--res", res],
+            "",
+            Duration::from_secs(60),
+        );
+        assert!(
+            !ok && err.contains(want) && err.contains("GiB"),
+            "{res}: {err}"
+        );
+        assert!(took < Duration::from_secs(10), "--res {res}: {took:?}");
+        assert!(!out.exists());
+    }
+    // The Feature Curve mesher's cell: 95,000 cells a side.
+    let overhang = trees().join("curves/overhang.ron");
+    let (ok, err, took) = karstic_with(
+        &[
+            "curves",
+            "build",
+            s(&overhang),
+            "-o",
+            s(&out),
+            "--cell",
+            "0.001",
+        ],
+        "",
+        Duration::from_secs(120),
+    );
+    assert!(!ok && err.contains("would need"), "{err}");
+    assert!(took < Duration::from_secs(60), "{took:?}");
+    // Budgets in any unit, the same parser for every command.
+    let (ok, err) = karstic(&["build", s(&tree), "-o", s(&out), "--max-memory", "1MB"]);
+    assert!(!ok && err.contains("memory budget is 976.6 KiB"), "{err}");
+}
+
+#[cfg(unix)]
+#[test]
+fn dem_sources_that_never_end_or_block_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    std::os::unix::fs::symlink("/dev/zero", dir.path().join("zero.asc")).unwrap();
+    let made = Command::new("mkfifo")
+        .arg(dir.path().join("fifo.tif"))
+        .status()
+        .unwrap();
+    assert!(made.success());
+    for (source, want) in [("zero.asc", "character device"), ("fifo.tif", "FIFO")] {
+        let tree = dir.path().join(format!("{source}.ron"));
+        std::fs::write(
+            &tree,
+            format!("(version: 1, root: Heightfield(source: \"{source}\", falloff: 2))"),
+        )
+        .unwrap();
+        // Before: /dev/zero was read until 4 GB were taken, the FIFO blocked forever.
+        let (ok, err, _) =
+            karstic_with(&["tree", "validate", s(&tree)], "", Duration::from_secs(30));
+        assert!(!ok && err.contains(want) && err.contains(source), "{err}");
+        let dem = dir.path().join(source);
+        let (ok, err, _) = karstic_with(&["dem", "info", s(&dem)], "", Duration::from_secs(30));
+        assert!(!ok && err.contains(want), "{err}");
+    }
+}
+
+#[test]
+fn outputs_never_overwrite_inputs() {
+    let (dir, tree) = with_arch();
+    let original = std::fs::read(&tree).unwrap();
+    let dotted = dir.path().join(".").join("arch.ron");
+    let npy = dir.path().join("s.json");
+    for args in [
+        vec!["render", s(&tree), "-o", s(&tree)],
+        vec!["render", s(&tree), "-o", s(&dotted), "--size", "8", "8"],
+        vec!["render", s(&tree), "-o", "x.png", "--cost", s(&tree)],
+        vec!["sample", s(&tree), "--res", "4", "4", "4", "-o", s(&tree)],
+        vec!["curves", "build", s(&tree), "--ribbons", s(&tree)],
+    ] {
+        let (ok, err) = karstic(&args);
+        assert!(
+            !ok && err.contains("refusing to overwrite"),
+            "{args:?}: {err}"
+        );
+        assert_eq!(std::fs::read(&tree).unwrap(), original, "{args:?}");
+    }
+    // A DEM the tree reads is one of its inputs too.
+    let dem_tree = dir.path().join("dem.ron");
+    let png = dir.path().join("dem.png");
+    std::fs::write(&png, b"not overwritten").unwrap();
+    std::fs::write(
+        &dem_tree,
+        "(version: 1, root: Heightfield(source: \"dem.png\", falloff: 2))",
+    )
+    .unwrap();
+    let (ok, err) = karstic(&["render", s(&dem_tree), "-o", s(&png)]);
+    assert!(!ok && err.contains("refusing to overwrite"), "{err}");
+    assert_eq!(std::fs::read(&png).unwrap(), b"not overwritten");
+    // The array and its sidecar would be the same file.
+    let (ok, err) = karstic(&["sample", s(&tree), "--res", "4", "4", "4", "-o", s(&npy)]);
+    assert!(!ok && err.contains("are the same file"), "{err}");
+    assert!(!npy.exists());
+    // A DEM and its .prj are the inputs of `dem convert`.
+    let asc = dir.path().join("d.asc");
+    std::fs::copy(trees().join("data/jacksboro_crop.asc"), &asc).unwrap();
+    std::fs::copy(
+        trees().join("data/jacksboro_crop.prj"),
+        asc.with_extension("prj"),
+    )
+    .unwrap();
+    let before = std::fs::read(&asc).unwrap();
+    for out in ["d.asc", "./d.asc"] {
+        let out = dir.path().join(out);
+        let (ok, err) = karstic(&["dem", "convert", s(&asc), s(&out)]);
+        assert!(!ok && err.contains("refusing to overwrite"), "{err}");
+        assert_eq!(std::fs::read(&asc).unwrap(), before);
+    }
+}
+
+#[test]
+fn run_checks_its_job_before_meshing() {
+    let dir = tempfile::tempdir().unwrap();
+    let tree = dir.path().join("t.ron");
+    std::fs::write(
+        &tree,
+        "(version: 1, job: (cell: 0.5, camera: (eye: (0, 0, 9), target: (0, 0, 0))),\n \
+         root: Primitive(shape: Sphere(center: (0, 0, 0), radius: 2), falloff: 1))",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let (ok, err) = karstic(&["run", s(&tree), "-o", s(&out)]);
+    assert!(
+        !ok && err.contains("job.camera") && err.contains("vertical"),
+        "{err}"
+    );
+    assert!(!out.exists(), "nothing meshed or written");
+    let (ok, err) = karstic(&["tree", "validate", s(&tree)]);
+    assert!(!ok && err.contains("t.ron:1:"), "{err}");
+    // An output "folder" that is a file is named in the error.
+    let file = dir.path().join("file");
+    std::fs::write(&file, "x").unwrap();
+    let arch = trees().join("arch.ron");
+    let (ok, err) = karstic(&["run", s(&arch), "-o", s(&file), "--no-render", "--quiet"]);
+    assert!(!ok && err.contains(s(&file)), "{err}");
+}
+
+#[test]
+fn empty_trees_say_what_is_empty() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g.glb");
+    // Guidance curves alone make a field that is zero everywhere.
+    let guidance = trees().join("curves/guidance.ron");
+    let (ok, err) = karstic(&["build", s(&guidance), "-o", s(&out)]);
+    assert!(!ok && err.contains("zero everywhere"), "{err}");
+    assert!(!err.contains("inf"), "{err}");
+    let (ok, err) = karstic(&["render", s(&guidance), "-o", "g.png"]);
+    assert!(!ok && err.contains("zero everywhere"), "{err}");
+    let empty = dir.path().join("e.ron");
+    std::fs::write(
+        &empty,
+        "(version: 1, root: Blend(name: \"all\", children: []))",
+    )
+    .unwrap();
+    let (ok, err) = karstic(&["build", s(&empty), "-o", s(&out)]);
+    assert!(
+        !ok && err.contains("Blend \"all\" has no children"),
+        "{err}"
+    );
+}
+
+#[test]
+fn eval_tells_headers_from_bad_numbers() {
+    let arch = trees().join("arch.ron");
+    let limit = Duration::from_secs(60);
+    let (ok, err, _) = karstic_with(&["eval", s(&arch)], "\u{feff}x,y,z\n0,0,1\n", limit);
+    assert!(ok, "{err}");
+    let (ok, err, _) = karstic_with(&["eval", s(&arch)], "nan,0,0\n0,0,1\n", limit);
+    assert!(
+        !ok && err.contains("<stdin>:1: expected a finite number"),
+        "{err}"
+    );
+}
+
+#[test]
+fn tree_set_takes_tree_file_values() {
+    let (_dir, tree) = with_arch();
+    let (ok, err) = karstic(&[
+        "tree",
+        "set",
+        s(&tree),
+        "left_leg.shape",
+        "Sphere(center: (-25, 0, 0), radius: 3)",
+    ]);
+    assert!(ok, "{err}");
+    let text = std::fs::read_to_string(&tree).unwrap();
+    assert!(text.contains("Sphere("), "{text}");
+    let (ok, err) = karstic(&["tree", "set", s(&tree), "ground.falloff", "NaN"]);
+    assert!(!ok && err.contains("found NaN"), "{err}");
+}
