@@ -127,6 +127,13 @@ fn main_job_mesh_is_watertight_valid_caved_and_on_the_dem() {
         .check_topology(Some((&region, 1e-3 * cell)))
         .unwrap_or_else(|e| panic!("the job's mesh is not watertight: {e}"));
     assert!(topo.faces > 100_000, "{topo:?}");
+    // No debris: every piece of the mesh is a real surface (issue 13 found an 8-face
+    // fragment floating near the tunnel's mouth).
+    let pieces = r.mesh.component_sizes();
+    assert!(
+        pieces.iter().all(|&n| n >= 200),
+        "pieces of the job's mesh, by faces: {pieces:?}"
+    );
     gltf_validator::assert_valid(&r.mesh_path);
 
     let positions: Vec<Vec3> = r.mesh.positions.iter().map(|&p| p.into()).collect();

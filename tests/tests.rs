@@ -20,6 +20,7 @@ mod dem_implicit;
 mod dem_mesh;
 mod dem_readers;
 mod main_job;
+mod meld;
 mod mesh_cli;
 mod mesh_export;
 mod mesh_extract;

@@ -12,7 +12,7 @@ use glam::{Affine3A, Quat, Vec3};
 use karstic::field::falloff::{WYVILL_MAX_SLOPE, wyvill, wyvill_d, wyvill_interval, wyvill_slope};
 use karstic::field::skeleton::Point;
 use karstic::field::{
-    Aabb, Fbm, Field, Grid, Interval, Line, NodeId, Primitive, Rect, Skeleton, T, Tree,
+    Aabb, Fbm, Field, Grid, Interval, Line, NodeId, Primitive, Rect, Skeleton, T, Transition, Tree,
     TreeBuilder, Warp, ZBands, eval_grid, eval_grid_naive,
 };
 use proptest::prelude::*;
@@ -70,6 +70,8 @@ enum Shape {
     Union(Vec<Shape>),
     Inter(Vec<Shape>),
     Diff(Box<Shape>, Vec<Shape>),
+    /// The second subtree in place of the first inside a box (corner, size, transition).
+    Replace(Box<Shape>, Box<Shape>, Vec3, Vec3, f32),
     Move(Box<Shape>, Vec3, f32, f32),
     Warp(Box<Shape>, f32, u32),
     /// One subtree used twice (a union of it and a moved copy): the tree is a DAG.
@@ -98,6 +100,9 @@ fn shape() -> impl Strategy<Value = Shape> {
             prop::collection::vec(inner.clone(), 1..3).prop_map(Shape::Inter),
             (inner.clone(), prop::collection::vec(inner.clone(), 1..3))
                 .prop_map(|(a, b)| Shape::Diff(Box::new(a), b)),
+            (inner.clone(), inner.clone(), v(), v(), 0.2f32..4.0).prop_map(|(a, b, c, s, w)| {
+                Shape::Replace(Box::new(a), Box::new(b), c, s.abs() + 1.0, w)
+            }),
             (inner.clone(), v(), 0.5f32..2.0, -3.0f32..3.0).prop_map(|(a, t, s, r)| Shape::Move(
                 Box::new(a),
                 t,
@@ -150,6 +155,11 @@ fn build(s: &Shape, b: &mut TreeBuilder) -> NodeId {
             let a = build(a, b);
             let cs = all(v, b);
             b.difference(a, cs, None)
+        }
+        Shape::Replace(a, by, corner, size, w) => {
+            let (a, by) = (build(a, b), build(by, b));
+            let mix = Transition::new(Aabb::new(*corner, *corner + *size), *w);
+            b.replace(a, by, mix, None)
         }
         Shape::Move(a, t, s, r) => {
             let a = build(a, b);

@@ -19,9 +19,9 @@ pub use bspline::BSpline;
 pub use compound::{Arch, Profile, Tube, Tunnel, tube_proxy, tunnel_proxies};
 pub use constraint::{ConstraintPoint, CurveSample, FeatureCurve, slope_bitangent};
 pub use ribbon::{ProxyMesh, ProxyTriangle, ProxyVertex, Side, curve_ribbon};
+pub use room::Room;
 pub use shapes::{Disc, Quad};
 pub use spec::{FeatureSet, FeatureVolumeSpec, Orientation, Propagation};
-pub use room::Room;
 pub use terrain::TerrainSurface;
 
 /// Errors of curve files, feature-volume specs and the voxel pipeline.

@@ -24,9 +24,9 @@ use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
 use super::compound::{Arch, Profile, Tube};
-use super::terrain::TerrainSurface;
 use super::constraint::{ConstraintPoint, FeatureCurve, reproject, slope_bitangent};
 use super::shapes::{Disc, Quad};
+use super::terrain::TerrainSurface;
 use super::{BSpline, CurveError, Features};
 use crate::field::Aabb;
 use crate::field::Fbm;

@@ -72,7 +72,9 @@ impl Tree {
                     self.z_bands_at(c, fp, z, out);
                 }
             }
-            Node::Replace { base, by, mix } => self.replace_bands(id, [*base, *by], mix, fp, z, out),
+            Node::Replace { base, by, mix } => {
+                self.replace_bands(id, [*base, *by], mix, fp, z, out)
+            }
             Node::Warp { child, warp } => {
                 // The child is evaluated at most `r` away: its bands, widened by `r`.
                 let r = warp.reach();
