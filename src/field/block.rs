@@ -317,8 +317,12 @@ impl Tree {
                 }
             }
             Node::Replace { base, by, mix } => {
+                let w = mix.interval(bounds);
+                if w.lo >= 1.0 {
+                    return self.block(*by, pts, bounds, out, s);
+                }
                 self.block(*base, pts, bounds, out, s);
-                if mix.interval(bounds).hi <= 0.0 {
+                if w.hi <= 0.0 {
                     return;
                 }
                 let mut v = s.values(out.len());

@@ -65,11 +65,13 @@ impl Tree {
                 })
             }
             Node::Replace { base, by, mix } => {
-                let ib = self.interval_at(*base, b);
-                if mix.interval(b).hi <= 0.0 {
-                    ib
+                let w = mix.interval(b);
+                if w.hi <= 0.0 {
+                    self.interval_at(*base, b)
+                } else if w.lo >= 1.0 {
+                    self.interval_at(*by, b)
                 } else {
-                    mix.mix_interval(b, ib, self.interval_at(*by, b))
+                    mix.mix_interval(b, self.interval_at(*base, b), self.interval_at(*by, b))
                 }
             }
             Node::Affine {
@@ -110,6 +112,9 @@ impl Tree {
             }
             Node::Replace { base, by, mix } => {
                 let w = mix.interval(b);
+                if w.lo >= 1.0 {
+                    return self.lipschitz_box_at(*by, b);
+                }
                 let lb = self.lipschitz_box_at(*base, b);
                 if w.hi <= 0.0 {
                     return lb;
@@ -169,6 +174,9 @@ impl Tree {
             }
             Node::Replace { base, by, mix } => {
                 let w = mix.interval(&bx);
+                if w.lo >= 1.0 {
+                    return self.lipschitz_segment_with(*by, a, b, at);
+                }
                 let lb = self.lipschitz_segment_with(*base, a, b, at);
                 if w.hi <= 0.0 {
                     return lb;

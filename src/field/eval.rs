@@ -49,15 +49,15 @@ impl Tree {
                 .fold(self.value_at_with(*base, p, at), |v, &c| {
                     v.min(2.0 * T - self.value_at_with(c, p, at))
                 }),
-            Node::Replace { base, by, mix } => {
-                let fb = self.value_at_with(*base, p, at);
-                let w = mix.weight(p);
-                if w > 0.0 {
+            // Only the child that matters where the weight is 0 or 1.
+            Node::Replace { base, by, mix } => match mix.weight(p) {
+                w if w <= 0.0 => self.value_at_with(*base, p, at),
+                w if w >= 1.0 => self.value_at_with(*by, p, at),
+                w => {
+                    let fb = self.value_at_with(*base, p, at);
                     fb + w * (self.value_at_with(*by, p, at) - fb)
-                } else {
-                    fb
                 }
-            }
+            },
             // An affine map keeps the line's parameter: the child's lists still apply.
             Node::Affine {
                 child, to_child, ..
@@ -118,16 +118,15 @@ impl Tree {
                 }
                 best
             }
-            Node::Replace { base, by, mix } => {
-                let (fb, gb) = self.value_grad_at_with(*base, p, at);
-                let (w, gw) = mix.weight_grad(p);
-                if w > 0.0 {
+            Node::Replace { base, by, mix } => match mix.weight_grad(p) {
+                (w, _) if w <= 0.0 => self.value_grad_at_with(*base, p, at),
+                (w, _) if w >= 1.0 => self.value_grad_at_with(*by, p, at),
+                (w, gw) => {
+                    let (fb, gb) = self.value_grad_at_with(*base, p, at);
                     let (fv, gv) = self.value_grad_at_with(*by, p, at);
                     (fb + w * (fv - fb), gb + w * (gv - gb) + gw * (fv - fb))
-                } else {
-                    (fb, gb)
                 }
-            }
+            },
             // An affine map keeps the line's parameter: the child's lists still apply.
             Node::Affine {
                 child, to_child, ..
