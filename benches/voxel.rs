@@ -13,8 +13,9 @@ use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use karstic::curves::FeatureVolumeSpec;
+use karstic::curves::spec::BuildOptions;
 use karstic::field::Field;
-use karstic::scene::Positive;
+use karstic::scene::{P3, Positive};
 use karstic::voxel::{Interpolation, run};
 
 fn ridge(c: &mut Criterion) {
@@ -42,6 +43,47 @@ fn ridge(c: &mut Criterion) {
             b.iter(|| run(&noisy, &p).unwrap())
         });
     }
+    g.finish();
+}
+
+/// The pipeline with terrain boundary conditions (issue 13): the default scene's arch on
+/// the Jacksboro DEM, its domain resized to 128 × 128 × 64 nodes (4 m voxels): sampling
+/// the terrain, making room for the arch, and the run.
+fn on_terrain(c: &mut Criterion) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/jacksboro_caves.ron");
+    let file = karstic::scene::load(&path).unwrap();
+    let arch = file
+        .feature_volumes()
+        .into_iter()
+        .find(|f| f.name.as_deref() == Some("arch"))
+        .unwrap()
+        .clone();
+    let spec = FeatureVolumeSpec {
+        domain: (
+            P3(glam::Vec3::new(4380.0, 4700.0, 520.0)),
+            P3(glam::Vec3::new(4888.0, 5208.0, 772.0)),
+        ),
+        voxel: Positive(4.0),
+        ..arch
+    };
+    let tree = file.compile().unwrap().tree;
+    let dem = tree.nodes()[tree.find("dem").unwrap() as usize]
+        .leaf()
+        .and_then(|f| f.as_any())
+        .and_then(|a| a.downcast_ref::<karstic::dem::HeightfieldField>())
+        .unwrap();
+    let ground = |xy: glam::Vec2| Some(dem.height(xy)).filter(|h| h.is_finite());
+    let opts = BuildOptions {
+        ground: Some(&ground),
+        ..Default::default()
+    };
+    let base = path.parent().unwrap();
+    let (p, _) = spec.params(0, 8 << 30);
+    let mut g = c.benchmark_group("feature_curves_on_terrain");
+    g.sample_size(10);
+    g.bench_function("arch_128x128x64", |b| {
+        b.iter(|| run(&spec.resolve(base, &opts).unwrap(), &p).unwrap())
+    });
     g.finish();
 }
 
@@ -74,5 +116,5 @@ fn interpolation(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, ridge, interpolation);
+criterion_group!(benches, ridge, on_terrain, interpolation);
 criterion_main!(benches);

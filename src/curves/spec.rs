@@ -696,6 +696,14 @@ impl FeatureVolumeSpec {
         base_dir: &Path,
         opts: &BuildOptions<'_>,
     ) -> Result<SField, CurveError> {
+        let features = self.resolve(base_dir, opts)?;
+        self.build_features(&features, opts.seed, opts.max_memory)
+    }
+
+    /// The volume's primitives in world coordinates, `Ground(..)` points resolved on
+    /// `opts.ground`, and with `on_terrain` the terrain sampled over the domain: what
+    /// [`FeatureVolumeSpec::build_with`] runs the pipeline on.
+    pub fn resolve(&self, base_dir: &Path, opts: &BuildOptions<'_>) -> Result<Features, CurveError> {
         let no_ground = |_: Vec2| None;
         let set = self.feature_set(base_dir)?;
         let mut features = set
@@ -722,7 +730,7 @@ impl FeatureVolumeSpec {
             })?;
             features.terrain = Some(self.terrain_surface(&features, ground));
         }
-        self.build_features(&features, opts.seed, opts.max_memory)
+        Ok(features)
     }
 
     /// The terrain under the volume, sampled over its domain, with room made for the

@@ -246,21 +246,27 @@ impl SField {
 
     /// `S'(p)`: the displaced surface field at `p` clamped to the domain (`+∞` when empty).
     pub fn s_value(&self, p: Vec3) -> f32 {
-        self.s_eval::<false>(p).0
+        self.s_eval::<false>(p, f32::INFINITY).0
     }
 
     /// `(S'(p), ∇S'(p))` at `p` clamped to the domain.
     pub fn s_grad(&self, p: Vec3) -> (f32, Vec3) {
-        self.s_eval::<true>(p)
+        let (s, g, _) = self.s_eval::<true>(p, f32::INFINITY);
+        (s, g)
     }
 
-    /// `S'(p)`, and `∇S'(p)` when `GRAD` (else zero): the same arithmetic for the value
-    /// either way, without the gradient's cost when only the value is asked (the march).
+    /// `(S'(p), ∇S'(p), 0)`, the gradient only when `GRAD` (else zero): the same
+    /// arithmetic for the value either way, without the gradient's cost when only the
+    /// value is asked (the march). Where `|S(p)| ≥ far + α(p)` the fBm is skipped and
+    /// `(S(p), ∇S(p), α(p))` returned instead: `S'` lies within the margin `α` of it.
+    /// With `far` the sigmoid's width the field is then the same with `S` itself (the
+    /// noise cannot bring `S'` into its range): most of a terrain-aware volume lies far
+    /// from the surface.
     #[inline(always)]
-    fn s_eval<const GRAD: bool>(&self, p: Vec3) -> (f32, Vec3) {
+    fn s_eval<const GRAD: bool>(&self, p: Vec3, far: f32) -> (f32, Vec3, f32) {
         let q = self.params.domain.clamp(p);
         let Some((l, idx, f)) = locate(&self.vol.levels, q) else {
-            return (f32::INFINITY, Vec3::ZERO);
+            return (f32::INFINITY, Vec3::ZERO, 0.0);
         };
         let h = self.vol.levels[l].geom.h;
         let mut lin = trilinear_grad(&self.vol.s[l], &idx, f, h);
@@ -271,17 +277,21 @@ impl SField {
         }
         let (s, gs) = lin;
         if self.noise_amp == 0.0 {
-            return (s, gs);
+            return (s, gs, 0.0);
         }
         let (a, ga) = trilinear_grad(&self.vol.alpha[l], &idx, f, h);
+        let margin = a * FBM_AMPLITUDE;
+        if s.abs() >= far + margin {
+            return (s, gs, margin);
+        }
         let (b, gb) = trilinear_grad(&self.vol.beta[l], &idx, f, h);
         let o = q - self.params.domain.min;
         if !GRAD {
-            return (s - a * self.params.fbm.value(o * b), Vec3::ZERO);
+            return (s - a * self.params.fbm.value(o * b), Vec3::ZERO, 0.0);
         }
         let (n, gn) = self.params.fbm.value_grad(o * b);
         let gd = ga * n + (gn * b + gb * gn.dot(o)) * a;
-        (s - a * n, gs - gd)
+        (s - a * n, gs - gd, 0.0)
     }
 
     /// `±S'` by orientation.
@@ -411,7 +421,9 @@ impl SField {
         };
         let lip = bb.grad_s.length() + lip_noise;
         let bricks = Interval::new(bb.s[0], bb.s[1]).dilate(amp);
-        let around = Interval::point(self.s_value(bc.center())).dilate(lip * bc.radius());
+        let reach = lip * bc.radius();
+        let (sc, _, margin) = self.s_eval::<false>(bc.center(), self.params.transition + reach);
+        let around = Interval::point(sc).dilate(reach + margin);
         let mut s = bricks.intersect(around);
         if s.is_empty() {
             s = bricks;
@@ -430,7 +442,8 @@ impl Field for SField {
         if self.is_empty() || !self.params.domain.contains(p) {
             return 0.0;
         }
-        let v = sigma(self.signed(self.s_value(p)), self.params.transition);
+        let s = self.s_eval::<false>(p, self.params.transition).0;
+        let v = sigma(self.signed(s), self.params.transition);
         v.min(self.face_falloff(self.d_in(p).0))
     }
 
