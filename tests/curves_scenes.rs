@@ -1,4 +1,4 @@
-//! The thesis's examples (seed 000 §7.2) as scenes in `trees/curves/`: each is built by
+//! The thesis's examples (Becher 2016 §7.2) as scenes in `trees/curves/`: each is built by
 //! the voxel pipeline and its S field is checked against what the curves ask for.
 
 use crate::curves_util;

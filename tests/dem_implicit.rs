@@ -1,5 +1,6 @@
-//! The implicit heightfield leaf (seed 002 §5.1): every bound is checked by sampling, on the
-//! real UTM DEM (with its nodata edges) and on synthetic grids with polygons and bicubic.
+//! The implicit heightfield leaf (Paris et al. 2019 §5.1): every bound is checked by
+//! sampling, on the real UTM DEM (with its nodata edges) and on synthetic grids with
+//! polygons and bicubic.
 
 use crate::common::Rng;
 

@@ -409,7 +409,10 @@ mod tests {
         // The top of the crown is `height` above the feet, its underside `thickness` lower.
         let top = beam.curves()[CURVES_AROUND / 2].sample(0.5);
         let under = beam.curves()[0].sample(0.5);
-        assert!((top.pos - Vec3::new(20.0, 0.0, 20.0)).length() < 0.1, "{top:?}");
+        assert!(
+            (top.pos - Vec3::new(20.0, 0.0, 20.0)).length() < 0.1,
+            "{top:?}"
+        );
         assert!((under.pos.z - 16.0).abs() < 0.1, "{under:?}");
         assert!(top.left_normal().z > 0.99 && under.left_normal().z < -0.99);
         // Wider than thick; thicker and wider at the feet.

@@ -1,4 +1,4 @@
-//! Feature Curves and the other modelling primitives of seed 000 (ch. 3): cubic
+//! Feature Curves and the other modelling primitives of Becher 2016 (ch. 3): cubic
 //! B-splines with Constraint Points, simple shapes, compound tunnels and arches, and the
 //! proxy ribbon meshes they all turn into for the voxel pipeline ([`crate::voxel`]).
 
@@ -19,9 +19,9 @@ pub use bspline::BSpline;
 pub use compound::{Arch, Profile, Tube, Tunnel, tube_proxy, tunnel_proxies};
 pub use constraint::{ConstraintPoint, CurveSample, FeatureCurve, slope_bitangent};
 pub use ribbon::{ProxyMesh, ProxyTriangle, ProxyVertex, Side, curve_ribbon};
+pub use room::Room;
 pub use shapes::{Disc, Quad};
 pub use spec::{FeatureSet, FeatureVolumeSpec, Orientation, Propagation};
-pub use room::Room;
 pub use terrain::TerrainSurface;
 
 /// Errors of curve files, feature-volume specs and the voxel pipeline.

@@ -34,9 +34,15 @@ impl Room {
         let n = ((fp.max - fp.min) / cell).ceil().as_uvec2() + 1;
         let dims = [n.x as usize, n.y as usize];
         let span = |c: Vec3, r: f32| {
-            let lo = ((c.truncate() - r - origin) / cell).floor().max(Vec2::ZERO).as_uvec2();
+            let lo = ((c.truncate() - r - origin) / cell)
+                .floor()
+                .max(Vec2::ZERO)
+                .as_uvec2();
             let hi = ((c.truncate() + r - origin) / cell).floor().as_uvec2();
-            (lo, hi.min(UVec2::new(dims[0] as u32 - 1, dims[1] as u32 - 1)))
+            (
+                lo,
+                hi.min(UVec2::new(dims[0] as u32 - 1, dims[1] as u32 - 1)),
+            )
         };
         let each = |f: &mut dyn FnMut(usize, u32)| {
             for (k, &(c, r)) in balls.iter().enumerate() {

@@ -134,7 +134,12 @@ impl TerrainSurface {
         let [nx, ny] = self.dims;
         let h = |a: usize, b: usize| self.heights[a + nx * b];
         let z = h(i, j);
-        let (i0, i1, j0, j1) = (i.saturating_sub(1), (i + 1).min(nx - 1), j.saturating_sub(1), (j + 1).min(ny - 1));
+        let (i0, i1, j0, j1) = (
+            i.saturating_sub(1),
+            (i + 1).min(nx - 1),
+            j.saturating_sub(1),
+            (j + 1).min(ny - 1),
+        );
         let dx = (h(i1, j) - h(i0, j)) / ((i1 - i0) as f32 * self.spacing);
         let dy = (h(i, j1) - h(i, j0)) / ((j1 - j0) as f32 * self.spacing);
         if !(z.is_finite() && dx.is_finite() && dy.is_finite()) {
@@ -166,11 +171,16 @@ impl TerrainSurface {
         }
         for j in 0..ny - 1 {
             for i in 0..nx - 1 {
-                let c = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)].map(|(a, b)| index[a + nx * b]);
+                let c = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)]
+                    .map(|(a, b)| index[a + nx * b]);
                 if c.contains(&u32::MAX) {
                     continue;
                 }
-                let centre = c.iter().map(|&k| mesh.vertices[k as usize].pos).sum::<Vec3>() / 4.0;
+                let centre = c
+                    .iter()
+                    .map(|&k| mesh.vertices[k as usize].pos)
+                    .sum::<Vec3>()
+                    / 4.0;
                 if room.contains(centre) {
                     continue;
                 }
@@ -204,8 +214,12 @@ mod tests {
         assert_eq!(s.dims, [21, 11]);
         assert!((s.height(Vec2::new(13.0, 7.0)).unwrap() - 13.25).abs() < 1e-5);
         assert!(s.height(Vec2::new(41.0, 7.0)).is_none());
-        assert!(s.below(Vec3::new(13.0, 7.0, 13.0), 0.0) && s.above(Vec3::new(13.0, 7.0, 13.5), 0.0));
-        assert!(!s.below(Vec3::new(13.0, 7.0, 13.0), 0.5) && s.above(Vec3::new(13.0, 7.0, 13.5), 0.1));
+        assert!(
+            s.below(Vec3::new(13.0, 7.0, 13.0), 0.0) && s.above(Vec3::new(13.0, 7.0, 13.5), 0.0)
+        );
+        assert!(
+            !s.below(Vec3::new(13.0, 7.0, 13.0), 0.5) && s.above(Vec3::new(13.0, 7.0, 13.5), 0.1)
+        );
         let m = s.mesh();
         assert!(!m.triangles.is_empty());
         let expect = Vec3::new(-0.25, 0.0, 1.0).normalize();

@@ -1,4 +1,4 @@
-//! The implicit heightfield primitive of seed 002 §5.1.
+//! The implicit heightfield primitive of Paris et al. 2019 §5.1.
 //!
 //! Given an elevation `h` over a horizontal domain Ω (see [`super::domain`]):
 //!
@@ -231,8 +231,8 @@ impl HeightfieldField {
     /// defined on all of `fp`): `h` is `s`-Lipschitz on the cells under `fp` (`s` from the
     /// slope pyramid) and `fp` is convex, so `|h(x) − h(c)| ≤ s·|x − c|` around its centre
     /// `c`. For a footprint smaller than a cell this is far tighter than the cells' ranges —
-    /// it is what lets a ray step close to the terrain (seed 001 §7.2: the Lipschitz bound
-    /// of `h` along the ray).
+    /// it is what lets a ray step close to the terrain (Génevaux et al. 2015 §7.2: the
+    /// Lipschitz bound of `h` along the ray).
     #[inline]
     fn h_range_near(&self, fp: &Rect, cells: Interval, slope: f32, e_lo: f32) -> Interval {
         if e_lo <= 0.0 || cells.is_empty() {

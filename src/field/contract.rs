@@ -1,4 +1,4 @@
-//! The one contract every node of the field answers (DESIGN.md "What every node can answer").
+//! The one contract every node of the field answers (ARCHITECTURE.md, "Invariants").
 
 use glam::{Vec2, Vec3};
 
@@ -62,7 +62,7 @@ pub trait Field: Send + Sync {
 
     /// When, over the footprint `fp`, the field is a heightfield's, returns it: for
     /// `p` in `fp × e.z`, `f(p) > T ⇔ p.z < e.height(p.xy)` and the surface is `z = h`.
-    /// The mesher then places vertices straight on the elevation (seed 002 §7).
+    /// The mesher then places vertices straight on the elevation (Paris et al. 2019 §7).
     fn elevation(&self, _fp: &Rect) -> Option<Elevation<'_>> {
         None
     }

@@ -1,4 +1,4 @@
-//! The two scalar profiles that turn distances into fields (DESIGN.md, seed 002 §3.3, §5.1).
+//! The two scalar profiles that turn distances into fields (Paris et al. 2019 §3.3, §5.1).
 //!
 //! * Wyvill's falloff `g(x) = (1 − x²)³` on `[0, 1]`, 0 beyond: skeletal primitives are
 //!   `energy · g(d / R)`.
@@ -6,7 +6,7 @@
 //!   vertical distance, the voxel S field, prism distance): `σ(0) = T`, `σ(x) = 2T` for
 //!   `x ≥ R`, `σ(x) = 0` for `x ≤ −R`, odd about `(0, T)` and C¹.
 //!
-//! Seed 002 §5.1 also asks `σ'(0) = 1`. With distances in metres and `R` in metres that
+//! Paris et al. 2019 §5.1 also asks `σ'(0) = 1`. With distances in metres and `R` in metres that
 //! cubic overshoots `2T` (it is monotone only for `R ≤ 3T`), so we keep the other three
 //! constraints and take the monotone odd cubic `σ(x) = T(1 + 3u/2 − u³/2)`, `u = x / R`,
 //! whose slope at 0 is `3T / (2R)`. The surface `σ = T` is still exactly `x = 0`.

@@ -1,8 +1,8 @@
-//! The skeletal primitive (seed 002 §5.2): `f(p) = E · g(d̃(p))` with Wyvill's falloff
+//! The skeletal primitive (Paris et al. 2019 §5.2): `f(p) = E · g(d̃(p))` with Wyvill's falloff
 //! `g`, a [`Skeleton`], a radius of influence `R` and an energy `E` (negative carves).
 //!
 //! Without noise `d̃ = d / R`, `d` the Euclidean distance to the skeleton. With noise of
-//! amplitude `A < R` it is the anisotropic distance of seed 002 §5.2,
+//! amplitude `A < R` it is the anisotropic distance of Paris et al. 2019 §5.2,
 //! `d̃(p) = ‖p − s(p)‖ / (R + A·t(v(p)))` with `s` the projection on the skeleton,
 //! `u = (p − s)/‖p − s‖` and `v = s + R·u`: the turbulence `t` is read on the shell at
 //! distance `R`, so it is constant along each ray from the skeleton and every ray crosses

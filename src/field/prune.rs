@@ -133,7 +133,8 @@ impl Pruner<'_> {
                     return self.node(*by, b);
                 }
                 let (base, by) = (self.node(*base, b), self.node(*by, b));
-                let mut or_zero = |n: Option<NodeId>| n.unwrap_or_else(|| self.out.constant(0.0, None));
+                let mut or_zero =
+                    |n: Option<NodeId>| n.unwrap_or_else(|| self.out.constant(0.0, None));
                 let (base, by) = match (base, by) {
                     (None, None) => return None,
                     (base, by) => (or_zero(base), or_zero(by)),

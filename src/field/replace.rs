@@ -149,8 +149,7 @@ pub fn gap(base: Interval, by: Interval) -> f32 {
     (by.hi - base.lo).max(base.hi - by.lo).max(0.0)
 }
 
-impl Transition {
-}
+impl Transition {}
 
 #[cfg(test)]
 mod tests {
@@ -198,7 +197,10 @@ mod tests {
         let boxes = [
             Aabb::new(Vec3::new(-5.0, 10.0, 5.0), Vec3::new(4.0, 20.0, 9.0)),
             Aabb::new(Vec3::new(20.0, 20.0, 15.0), Vec3::new(80.0, 40.0, 25.0)),
-            Aabb::new(Vec3::new(-50.0, -50.0, -50.0), Vec3::new(150.0, 150.0, 150.0)),
+            Aabb::new(
+                Vec3::new(-50.0, -50.0, -50.0),
+                Vec3::new(150.0, 150.0, 150.0),
+            ),
             Aabb::new(Vec3::new(95.0, 55.0, 35.0), Vec3::new(99.0, 59.0, 39.0)),
         ];
         for b in boxes {

@@ -274,16 +274,10 @@ impl TreeBuilder {
             }
             Node::Replace { base, by, mix } => {
                 let (b, v) = (info(base), info(by));
-                let support = b
-                    .support
-                    .union(v.support.intersection(*mix.region()));
+                let support = b.support.union(v.support.intersection(*mix.region()));
                 let everywhere = Interval::new(0.0, 1.0);
-                let lipschitz = mix.mix_lipschitz(
-                    everywhere,
-                    b.lipschitz,
-                    v.lipschitz,
-                    gap(b.range, v.range),
-                );
+                let lipschitz =
+                    mix.mix_lipschitz(everywhere, b.lipschitz, v.lipschitz, gap(b.range, v.range));
                 (support, b.range.hull(v.range), lipschitz)
             }
             Node::Affine {

@@ -1,4 +1,4 @@
-//! Where the surface can lie over a footprint (seed 002 §7): z-bands for the mesher's
+//! Where the surface can lie over a footprint (Paris et al. 2019 §7): z-bands for the mesher's
 //! pruning, and the heightfield shortcut for direct elevation extraction.
 
 use super::bounds::{Interval, Rect, ZBands};
@@ -72,7 +72,9 @@ impl Tree {
                     self.z_bands_at(c, fp, z, out);
                 }
             }
-            Node::Replace { base, by, mix } => self.replace_bands(id, [*base, *by], mix, fp, z, out),
+            Node::Replace { base, by, mix } => {
+                self.replace_bands(id, [*base, *by], mix, fp, z, out)
+            }
             Node::Warp { child, warp } => {
                 // The child is evaluated at most `r` away: its bands, widened by `r`.
                 let r = warp.reach();

@@ -1,4 +1,4 @@
-//! Bound pruning (seed 002 §7, Fig. 22): which cells of each grid column can hold the
+//! Bound pruning (Paris et al. 2019 §7, Fig. 22): which cells of each grid column can hold the
 //! surface, and which samples must therefore be evaluated.
 //!
 //! Paris et al. bound the surface's elevation at each grid *vertex* and dilate the bounds

@@ -1,4 +1,4 @@
-//! Bound-pruned Marching Cubes over a [`Field`] (seed 002 §7): bands, samples, vertices,
+//! Bound-pruned Marching Cubes over a [`Field`] (Paris et al. 2019 §7): bands, samples, vertices,
 //! triangles, each stage parallel over tiles of grid columns.
 //!
 //! 1. **Bands** ([`columns::tile_bands`]): per cell column, the cell layers that can hold
@@ -88,7 +88,7 @@ pub fn progress_steps(grid: &GridSpec) -> u64 {
 
 /// Extracts the surface `f = T` of `field` on `grid` (solid where `f > T`): a welded,
 /// crack-free, 2-manifold mesh wound counter-clockwise from outside, with outward
-/// normals, plus the statistics of seed 002's Table 1. Deterministic for any number of
+/// normals, plus the statistics of Table 1 of Paris et al. 2019. Deterministic for any number of
 /// threads. Errors when the sample storage would exceed `opts.budget`.
 pub fn polygonize(
     field: &dyn Field,

@@ -244,10 +244,9 @@ impl Compiler<'_> {
                         ),
                     ));
                 }
-                let blend = r.blend.map_or_else(
-                    || 0.125 * region.size().x.min(region.size().y),
-                    |b| b.0,
-                );
+                let blend = r
+                    .blend
+                    .map_or_else(|| 0.125 * region.size().x.min(region.size().y), |b| b.0);
                 self.builder
                     .replace(base, by, Transition::new(region, blend), name)
             }

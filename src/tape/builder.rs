@@ -142,7 +142,7 @@ impl TapeBuilder {
         });
     }
 
-    /// Pushes the noisy primitive `energy · g(d̃)` of seed 002 §5.2 around a convex shape
+    /// Pushes the noisy primitive `energy · g(d̃)` of Paris et al. 2019 §5.2 around a convex shape
     /// (not a prism), with [`crate::field::Primitive`]'s anisotropic distance `d̃`.
     pub fn noisy_primitive(
         &mut self,
@@ -166,7 +166,7 @@ impl TapeBuilder {
     }
 
     /// Pushes `σ(h(x, y) − z, falloff)` for a heightfield (clamped at its edges).
-    /// Solid below the surface and unbounded: intersect it with a prism (seed 002 §5.1).
+    /// Solid below the surface and unbounded: intersect it with a prism (Paris et al. 2019 §5.1).
     pub fn heightfield(&mut self, grid: &HeightGrid<'_>, falloff: f32) -> Result<(), TapeError> {
         let (flags, q) = height::encode(grid, falloff, &mut self.heights)?;
         self.emit(op::HEIGHT, flags, &q);
@@ -349,7 +349,7 @@ impl TapeBuilder {
         self.max_warps = self.max_warps.max(self.warps.len());
     }
 
-    /// Enters the turbulence warp `w` (seed 002 §5.3) of the subtree emitted until
+    /// Enters the turbulence warp `w` (Paris et al. 2019 §5.3) of the subtree emitted until
     /// [`TapeBuilder::warp_end`]: the subtree is evaluated at `ω⁻¹(p)`.
     pub fn turbulence_begin(&mut self, w: &Warp) -> Result<(), TapeError> {
         if !(w.reach().is_finite() && w.lipschitz().is_finite()) {

@@ -1,4 +1,4 @@
-//! The voxel pipeline (seed 000 ch. 4) on a stack of sparse levels, coarse to fine.
+//! The voxel pipeline (Becher 2016, ch. 4) on a stack of sparse levels, coarse to fine.
 //!
 //! Levels halve the voxel size from a coarsest level of at most 8 nodes per axis down to
 //! the requested voxel. Every level is voxelized (§4.2). The normal, bitangent and noise
@@ -277,7 +277,11 @@ pub fn run(features: &Features, p: &Params) -> Result<Volume, CurveError> {
         * features.outside_of_thin(TUNNEL_VOXELS * geoms[top].h);
     let finest = features.proxy(p.ribbon, p.ribbon, 0.5 * p.voxel, 0.0);
     let uniform_noise = finest.vertices.windows(2).all(|w| w[0].noise == w[1].noise);
-    let max_alpha = finest.vertices.iter().map(|v| v.noise.x).fold(0.0, f32::max);
+    let max_alpha = finest
+        .vertices
+        .iter()
+        .map(|v| v.noise.x)
+        .fold(0.0, f32::max);
     drop(finest);
     let mut seen_seeds = false;
     let mut levels: Vec<Bricks> = Vec::new();
