@@ -114,10 +114,11 @@ fn citations(text: &str) -> BTreeSet<String> {
     let mut out = BTreeSet::new();
     for i in 1..words.len() {
         let et_al = words[i].starts_with("al.") && words[i - 1] == "et";
-        if et_al && i >= 2 {
-            if let Some(name) = author(words[i - 2]) {
-                out.insert(format!("{name} et al."));
-            }
+        if et_al
+            && i >= 2
+            && let Some(name) = author(words[i - 2])
+        {
+            out.insert(format!("{name} et al."));
         }
         let Some(y) = year(words[i]) else { continue };
         if i >= 3 && words[i - 1] == "al." && words[i - 2] == "et" {
