@@ -29,7 +29,7 @@ use super::pyramid::MinMaxPyramid;
 use super::{DemError, Georef};
 use crate::field::contract::{Elevation, ElevationSource};
 use crate::field::falloff::{
-    T, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope, wyvill,
+    ISO, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope, wyvill,
     wyvill_d, wyvill_interval, wyvill_slope,
 };
 use crate::field::{Aabb, Field, Interval, Rect, ZBands};
@@ -212,9 +212,9 @@ impl HeightfieldField {
         let dz = self.dist_z(z);
         let d2 = dxy * dxy + dz * dz;
         if d2 == 0.0 {
-            2.0 * T
+            2.0 * ISO
         } else {
-            2.0 * T * wyvill(d2.sqrt() / self.r)
+            2.0 * ISO * wyvill(d2.sqrt() / self.r)
         }
     }
 
@@ -302,11 +302,11 @@ impl Field for HeightfieldField {
         };
         let d = dxy.hypot(dz);
         let (fp, gfp) = if d == 0.0 {
-            (2.0 * T, Vec3::ZERO)
+            (2.0 * ISO, Vec3::ZERO)
         } else {
             let (g, dg) = wyvill_d(d / self.r);
             let gd = (dxy * (-ge)).extend(dz * gdz) / d;
-            (2.0 * T * g, gd * (2.0 * T * dg / self.r))
+            (2.0 * ISO * g, gd * (2.0 * ISO * dg / self.r))
         };
         if ft <= fp {
             (ft, gh.extend(-1.0) * dft)
@@ -333,7 +333,7 @@ impl Field for HeightfieldField {
         let z = b.z();
         let ft = sigma_interval(Interval::new(h.lo - z.hi, h.hi - z.lo), self.r);
         let d = self.dist_range(e, z);
-        let fp = wyvill_interval(d.scale(1.0 / self.r)).scale(2.0 * T);
+        let fp = wyvill_interval(d.scale(1.0 / self.r)).scale(2.0 * ISO);
         let f = ft.min(fp);
         if e.lo <= 0.0 {
             f.hull(Interval::ZERO)
@@ -344,7 +344,7 @@ impl Field for HeightfieldField {
 
     fn lipschitz(&self) -> f32 {
         let lt = sigma_max_slope(self.r) * (1.0 + self.lip_h * self.lip_h).sqrt();
-        let lp = 2.0 * T * WYVILL_MAX_SLOPE / self.r * self.domain.lipschitz();
+        let lp = 2.0 * ISO * WYVILL_MAX_SLOPE / self.r * self.domain.lipschitz();
         lt.max(lp)
     }
 
@@ -366,7 +366,7 @@ impl Field for HeightfieldField {
             sigma_slope(Interval::new(h.lo - z.hi, h.hi - z.lo), self.r) * (1.0 + s * s).sqrt()
         };
         let d = self.dist_range(e, z);
-        let lp = 2.0 * T * wyvill_slope(d.scale(1.0 / self.r)) / self.r * self.domain.lipschitz();
+        let lp = 2.0 * ISO * wyvill_slope(d.scale(1.0 / self.r)) / self.r * self.domain.lipschitz();
         lt.max(lp)
     }
 

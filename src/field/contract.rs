@@ -3,7 +3,7 @@
 use glam::{Vec2, Vec3};
 
 use super::bounds::{Aabb, Interval, Rect, ZBands};
-use super::falloff::T;
+use super::falloff::ISO;
 
 /// A scalar field `f: R³ → R` in the BlobTree convention: solid where `f > T`.
 ///
@@ -96,7 +96,7 @@ const Z_BAND_DEPTH: u32 = 6;
 /// Sound z-bands by interval subdivision: keeps every slab whose interval contains `T`.
 pub fn z_bands_by_interval<F: Field + ?Sized>(f: &F, fp: &Rect, z: Interval, out: &mut ZBands) {
     fn rec<F: Field + ?Sized>(f: &F, fp: &Rect, z: Interval, depth: u32, out: &mut ZBands) {
-        if !f.interval(&fp.extrude(z)).contains(T) {
+        if !f.interval(&fp.extrude(z)).contains(ISO) {
             return;
         }
         if depth == 0 {

@@ -13,8 +13,9 @@
 
 use super::bounds::Interval;
 
-/// The iso-value: solid where `f > T`.
-pub const T: f32 = 0.5;
+/// The iso-value `T` of the field convention (Paris et al. 2019 §5.1): solid where
+/// `f > T`, the surface at `f = T`. The papers' and the docs' formulas write it `T`.
+pub const ISO: f32 = 0.5;
 
 /// `max |g'(x)|` over `[0, 1]`, reached at `x = 1/√5`.
 pub const WYVILL_MAX_SLOPE: f32 = 1.717_300_8;
@@ -71,20 +72,20 @@ pub fn wyvill_slope(xs: Interval) -> f32 {
 #[inline]
 pub fn sigma(x: f32, r: f32) -> f32 {
     let u = (x / r).clamp(-1.0, 1.0);
-    (T * (1.0 + 1.5 * u - 0.5 * u * u * u)).clamp(0.0, 2.0 * T)
+    (ISO * (1.0 + 1.5 * u - 0.5 * u * u * u)).clamp(0.0, 2.0 * ISO)
 }
 
 /// `(σ_R(x), σ_R'(x))`.
 #[inline]
 pub fn sigma_d(x: f32, r: f32) -> (f32, f32) {
     let u = (x / r).clamp(-1.0, 1.0);
-    (sigma(x, r), 1.5 * T / r * (1.0 - u * u))
+    (sigma(x, r), 1.5 * ISO / r * (1.0 - u * u))
 }
 
 /// `max σ_R'` over all `x`: `3T / (2R)`.
 #[inline]
 pub fn sigma_max_slope(r: f32) -> f32 {
-    1.5 * T / r
+    1.5 * ISO / r
 }
 
 /// Range of `σ_R` over `xs` (σ is monotone).
@@ -124,8 +125,8 @@ mod tests {
     #[test]
     fn sigma_is_monotone_and_hits_its_constraints() {
         let r = 7.0;
-        assert_eq!(sigma(0.0, r), T);
-        assert_eq!(sigma(r, r), 2.0 * T);
+        assert_eq!(sigma(0.0, r), ISO);
+        assert_eq!(sigma(r, r), 2.0 * ISO);
         assert_eq!(sigma(-r, r), 0.0);
         assert_eq!(sigma_d(r, r).1, 0.0);
         let mut last = -1.0;
@@ -134,7 +135,7 @@ mod tests {
             let v = sigma(x, r);
             assert!(v >= last);
             assert!(
-                (sigma(-x, r) - (2.0 * T - v)).abs() < 1e-6,
+                (sigma(-x, r) - (2.0 * ISO - v)).abs() < 1e-6,
                 "odd about (0, T)"
             );
             last = v;

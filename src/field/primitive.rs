@@ -30,7 +30,7 @@ use thiserror::Error;
 
 use super::bounds::{Aabb, Interval, Rect, ZBands};
 use super::contract::{Field, z_bands_by_interval};
-use super::falloff::{T, WYVILL_MAX_SLOPE, wyvill, wyvill_d, wyvill_interval, wyvill_slope};
+use super::falloff::{ISO, WYVILL_MAX_SLOPE, wyvill, wyvill_d, wyvill_interval, wyvill_slope};
 use super::noise::{Fbm, NoiseSpec};
 use super::profile::LineProfile;
 use super::skeleton::{Project, Skeleton, SkeletonSpec};
@@ -313,11 +313,11 @@ impl Primitive {
     /// Distance from the skeleton within which the surface `f = T` can lie, or `None`
     /// when `f` never reaches `T`.
     fn surface_reach(&self) -> Option<f32> {
-        if self.energy < T {
+        if self.energy < ISO {
             return None;
         }
         // g(x) = T/E at x = √(1 − (T/E)^⅓).
-        let x = (1.0 - (T / self.energy).cbrt()).max(0.0).sqrt();
+        let x = (1.0 - (ISO / self.energy).cbrt()).max(0.0).sqrt();
         Some((self.radius + self.amplitude()) * x.min(1.0))
     }
 }

@@ -3,7 +3,7 @@
 
 use super::bounds::{Interval, Rect, ZBands};
 use super::contract::{Elevation, Field, z_bands_by_interval};
-use super::falloff::T;
+use super::falloff::ISO;
 use super::node::{Node, NodeId};
 use super::replace::Transition;
 use super::tree::Tree;
@@ -50,7 +50,7 @@ impl Tree {
         }
         match &self.nodes[id as usize] {
             Node::Constant(v) => {
-                if *v == T {
+                if *v == ISO {
                     out.push(z);
                 }
             }

@@ -22,7 +22,7 @@ use rayon::prelude::*;
 
 use super::grid::GridSpec;
 use super::{par_concat, split_parts};
-use crate::field::{Elevation, Field, Interval, Rect, T, ZBands};
+use crate::field::{Elevation, Field, ISO, Interval, Rect, ZBands};
 
 /// Grid columns per tile side.
 pub const TILE: usize = 32;
@@ -457,7 +457,7 @@ fn brick_runs(f: &dyn Field, fp: &Rect, grid: &GridSpec) -> Vec<[usize; 2]> {
         let b = (a + BRICK_LAYERS).min(ncz);
         if !f
             .interval(&fp.extrude(Interval::new(z_of(a), z_of(b))))
-            .contains(T)
+            .contains(ISO)
         {
             continue;
         }

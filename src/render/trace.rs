@@ -23,7 +23,7 @@
 use glam::Vec3;
 
 use super::camera::Ray;
-use crate::field::{Field, Line, T, Tree};
+use crate::field::{Field, ISO, Line, Tree};
 
 /// Which step rule to use.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -234,7 +234,7 @@ fn march(
     let mut side = 0.0f32;
     let (mut prev_t, mut prev_e) = (t0, 0.0);
     while steps < params.max_steps {
-        let e = along.value(t) - T;
+        let e = along.value(t) - ISO;
         steps += 1;
         let s_now = if e > 0.0 { 1.0 } else { -1.0 };
         if side == 0.0 {
@@ -308,7 +308,7 @@ fn refine(
             0.5 * (a + b)
         };
         m = m.clamp(a, b);
-        let e = along.value(m) - T;
+        let e = along.value(m) - ISO;
         n += 1;
         if (m - last).abs() < width {
             break;

@@ -15,7 +15,7 @@ use super::noise::{nprim_head, twarp_params};
 use super::shape::{Profile, Shape};
 use super::{Tape, TapeError, sfield};
 use crate::field::replace::gap;
-use crate::field::{Aabb, Fbm, Field, Interval, Noise, T, Transition, Warp};
+use crate::field::{Aabb, Fbm, Field, ISO, Interval, Noise, Transition, Warp};
 use crate::voxel::SField;
 
 /// Ball radius standing for "everywhere" when computing the global bound.
@@ -129,7 +129,7 @@ impl TapeBuilder {
     pub fn primitive(&mut self, shape: Shape, profile: Profile) {
         let (r, e, sigma, range) = match profile {
             Profile::Wyvill { radius, energy } => (radius, energy, 0, Interval::new(0.0, energy)),
-            Profile::Sigma { radius } => (radius, 1.0, flag::SIGMA, Interval::new(0.0, 2.0 * T)),
+            Profile::Sigma { radius } => (radius, 1.0, flag::SIGMA, Interval::new(0.0, 2.0 * ISO)),
         };
         let mut p = vec![0.0; prim::SHAPE];
         p[prim::RADIUS] = r;
@@ -172,7 +172,7 @@ impl TapeBuilder {
         self.emit(op::HEIGHT, flags, &q);
         self.push(Entry {
             support: EVERYWHERE_BOX,
-            range: Interval::new(0.0, 2.0 * T),
+            range: Interval::new(0.0, 2.0 * ISO),
         });
         Ok(())
     }
@@ -190,7 +190,7 @@ impl TapeBuilder {
         self.emit(op::SFIELD, index, &q);
         self.push(Entry {
             support: sf.support(),
-            range: Interval::new(0.0, 2.0 * T),
+            range: Interval::new(0.0, 2.0 * ISO),
         });
         Ok(())
     }
@@ -228,9 +228,9 @@ impl TapeBuilder {
                 },
             ),
             Combine::Difference => {
-                let carved = Interval::new(2.0 * T - b.range.hi, 2.0 * T - b.range.lo);
+                let carved = Interval::new(2.0 * ISO - b.range.hi, 2.0 * ISO - b.range.lo);
                 // Outside a's support the result is min(0, 2T − b): zero unless b > 2T.
-                let support = if b.range.hi <= 2.0 * T {
+                let support = if b.range.hi <= 2.0 * ISO {
                     a.support
                 } else {
                     a.support.union(b.support)
