@@ -1,4 +1,4 @@
-//! The Feature Curve pipeline on the thesis's benchmark scene (seed 000 Table 7.1): a
+//! The Feature Curve pipeline on the thesis's benchmark scene (Becher 2016, Table 7.1): a
 //! ridge from three curves, full pipeline with distance propagation, at 64×32×64,
 //! 128×64×128 and 256×128×256 voxels (z up here: x × y × z = 128 × 128 × 64 and so on),
 //! with and without varying noise parameters (the noise diffusion stage); and the S-field

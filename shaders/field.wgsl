@@ -40,7 +40,7 @@ fn wyvill_slope(lo_in: f32, hi_in: f32) -> f32 {
 
 fn sigma(x: f32, r: f32) -> f32 {
     let u = clamp(x / r, -1.0, 1.0);
-    return clamp(T * (1.0 + 1.5 * u - 0.5 * u * u * u), 0.0, 2.0 * T);
+    return clamp(ISO * (1.0 + 1.5 * u - 0.5 * u * u * u), 0.0, 2.0 * ISO);
 }
 
 // max σ' over [lo, hi]: the slope is largest where |x| is smallest.
@@ -50,7 +50,7 @@ fn sigma_slope(lo: f32, hi: f32, r: f32) -> f32 {
         nearest = min(abs(lo), abs(hi));
     }
     let u = clamp(nearest / r, -1.0, 1.0);
-    return 1.5 * T / r * (1.0 - u * u);
+    return 1.5 * ISO / r * (1.0 - u * u);
 }
 
 fn param3(o: u32) -> vec3<f32> {
@@ -437,7 +437,7 @@ fn eval_tape(p_in: vec3<f32>, c_in: vec3<f32>, r_in: f32) -> vec2<f32> {
                 } else if ins.x == OP_INTER {
                     v = vec2<f32>(min(a.x, b.x), max(a.y, b.y));
                 } else {
-                    v = vec2<f32>(min(a.x, 2.0 * T - b.x), max(a.y, b.y));
+                    v = vec2<f32>(min(a.x, 2.0 * ISO - b.x), max(a.y, b.y));
                 }
                 stack[sp - 1u] = v;
             }

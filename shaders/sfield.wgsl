@@ -161,7 +161,7 @@ fn sfield(o: u32, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
     if inside {
         let e = min(p - lo, hi - p);
         let d = max(min(e.x, min(e.y, e.z)), 0.0);
-        v = min(sigma(sign * s_at.x, trans), 2.0 * T * (1.0 - wyvill(d / fall)));
+        v = min(sigma(sign * s_at.x, trans), 2.0 * ISO * (1.0 - wyvill(d / fall)));
     }
     if !overlaps {
         return vec2<f32>(v, 0.0);
@@ -175,6 +175,6 @@ fn sfield(o: u32, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
     let dh = min(cmax - lo, hi - cmin);
     let d_lo = max(min(dl.x, min(dl.y, dl.z)), 0.0);
     let d_hi = max(min(dh.x, min(dh.y, dh.z)), 0.0);
-    let face = 2.0 * T * wyvill_slope(d_lo / fall, d_hi / fall) / fall;
+    let face = 2.0 * ISO * wyvill_slope(d_lo / fall, d_hi / fall) / fall;
     return vec2<f32>(v, max(sig, face));
 }

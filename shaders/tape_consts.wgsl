@@ -2,8 +2,8 @@
 // definitions (src/tape/format.rs and those named below). Do not edit: regenerate
 // with `KARSTIC_BLESS=1 cargo test --locked --test tests tape_header`.
 
-// The field (src/field/falloff.rs): solid where f > T; Wyvill's steepest slope.
-const T: f32 = 0.5;
+// The field (src/field/falloff.rs): solid where f > ISO; Wyvill's steepest slope.
+const ISO: f32 = 0.5;
 const WYVILL_MAX_SLOPE: f32 = 1.7173008;
 const WYVILL_PEAK_X: f32 = 0.4472136;
 

@@ -110,7 +110,7 @@ fn march_step(ray: ptr<function, Ray>, ev_in: vec2<f32>) -> u32 {
     if !segment {
         ev.y = u.trace.x;
     }
-    let e = ev.x - T;
+    let e = ev.x - ISO;
     (*ray).steps += 1u;
     var s_now = -1.0;
     if e > 0.0 {
@@ -374,7 +374,7 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
         if phase == PH_MARCH {
             phase = march_step(&ray, ev);
         } else if phase == PH_REFINE {
-            if !refine_step(&ray, ev.x - T) {
+            if !refine_step(&ray, ev.x - ISO) {
                 phase = PH_END;
             }
         } else {

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use glam::Vec3;
 use karstic::curves::{FeatureVolumeSpec, Features, Orientation};
-use karstic::field::{Aabb, Field, Interval, Rect, T, ZBands};
+use karstic::field::{Aabb, Field, ISO, Interval, Rect, ZBands};
 use karstic::voxel::{Interpolation, SField, run};
 
 fn load(name: &str) -> (FeatureVolumeSpec, Features) {
@@ -75,7 +75,7 @@ fn check_soundness(f: &SField, seed: u64, loose: f32) {
     for _ in 0..4000 {
         let p = rng.in_box(&support);
         let (v, g) = f.value_grad(p);
-        if (v - T).abs() < 0.05 && g.length() > 1e-3 {
+        if (v - ISO).abs() < 0.05 && g.length() > 1e-3 {
             ratios.push(f.lipschitz_box(&Aabb::around(p, 0.5)) / g.length());
         }
     }
@@ -227,7 +227,7 @@ fn bounds_are_sound_on_a_carving_tunnel() {
     let f = spec.build_features(&feats, 0, 1 << 32).unwrap();
     check_soundness(&f, 2, 5.0);
     // Air orientation: the tunnel's inside is the solid of the carving field.
-    assert!(f.value(feats.tunnels[0].path.eval(0.5)) > T);
+    assert!(f.value(feats.tunnels[0].path.eval(0.5)) > ISO);
 }
 
 /// A scene of `trees/curves/` with tricubic interpolation, and with trilinear.
@@ -332,10 +332,10 @@ fn z_bands_contain_the_surface() {
         f.z_bands(&fp, Interval::new(d.min.z - 1.0, d.max.z + 1.0), &mut bands);
         for _ in 0..10 {
             let xy = fp.min + (fp.max - fp.min) * glam::Vec2::new(rng.f32(), rng.f32());
-            let mut last = f.value(xy.extend(d.max.z + 1.0)) > T;
+            let mut last = f.value(xy.extend(d.max.z + 1.0)) > ISO;
             for k in 0..400 {
                 let z = d.max.z + 1.0 - k as f32 * (d.size().z + 2.0) / 400.0;
-                let now = f.value(xy.extend(z)) > T;
+                let now = f.value(xy.extend(z)) > ISO;
                 if now != last {
                     let zc = z + 0.5 * (d.size().z + 2.0) / 400.0;
                     assert!(
@@ -430,9 +430,9 @@ fn tunnel_in_a_1024_cube_stays_under_a_gigabyte() {
         .unwrap()
         .tunnels[0]
         .path;
-    assert!(f.value(path.eval(0.5)) < T, "the tunnel is open");
+    assert!(f.value(path.eval(0.5)) < ISO, "the tunnel is open");
     assert!(
-        f.value(path.eval(0.5) + Vec3::Z * 30.0) > T,
+        f.value(path.eval(0.5) + Vec3::Z * 30.0) > ISO,
         "rock above it"
     );
 }

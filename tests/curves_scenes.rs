@@ -1,11 +1,11 @@
-//! The thesis's examples (seed 000 §7.2) as scenes in `trees/curves/`: each is built by
+//! The thesis's examples (Becher 2016 §7.2) as scenes in `trees/curves/`: each is built by
 //! the voxel pipeline and its S field is checked against what the curves ask for.
 
 use crate::curves_util;
 
 use glam::Vec3;
 use karstic::curves::{CurveSample, FeatureVolumeSpec, Features};
-use karstic::field::{Field, T};
+use karstic::field::{Field, ISO};
 use karstic::voxel::SField;
 
 /// A scene of `trees/curves/`: values come from the compiled tree, parameters and
@@ -64,7 +64,7 @@ impl Scene {
                 self.field.value(s.pos + n * h),
                 self.field.value(s.pos - n * h),
             );
-            if !(front < T && back > T) {
+            if !(front < ISO && back > ISO) {
                 bad.push((s.pos, front, back));
             }
         }
@@ -132,11 +132,11 @@ impl Scene {
         let m = self.leaf.params().falloff + 2.0 * self.h();
         let (top, bottom) = (d.max.z - m, d.min.z + m);
         let steps = ((top - bottom) / (0.25 * self.h())) as usize;
-        let mut last = self.field.value(Vec3::new(x, y, top)) > T;
+        let mut last = self.field.value(Vec3::new(x, y, top)) > ISO;
         let mut n = 0;
         for i in 0..=steps {
             let z = top - i as f32 * 0.25 * self.h();
-            let now = self.field.value(Vec3::new(x, y, z)) > T;
+            let now = self.field.value(Vec3::new(x, y, z)) > ISO;
             n += (now != last) as usize;
             last = now;
         }
@@ -146,7 +146,7 @@ impl Scene {
     /// True when the segment `a → b` stays in the air.
     fn clear(&self, a: Vec3, b: Vec3) -> bool {
         let n = (a.distance(b) / (0.25 * self.h())).ceil() as usize;
-        (0..=n).all(|i| self.field.value(a.lerp(b, i as f32 / n as f32)) < T)
+        (0..=n).all(|i| self.field.value(a.lerp(b, i as f32 / n as f32)) < ISO)
     }
 }
 
@@ -156,7 +156,7 @@ fn cliff() {
     s.assert_surface_through_seeds();
     s.assert_constraint_normals(20.0);
     // Plateau behind the edge, air in front of the face all the way down.
-    assert!(s.field.value(Vec3::new(48.0, 50.0, 30.0)) > T);
+    assert!(s.field.value(Vec3::new(48.0, 50.0, 30.0)) > ISO);
     assert!(s.clear(Vec3::new(48.0, 15.0, 8.0), Vec3::new(48.0, 15.0, 56.0)));
 }
 
@@ -199,7 +199,7 @@ fn riverbed() {
     let top = |y: f32| {
         (0..256)
             .map(|i| 63.0 - i as f32 * 0.25)
-            .find(|&z| s.field.value(Vec3::new(64.0, y, z)) > T)
+            .find(|&z| s.field.value(Vec3::new(64.0, y, z)) > ISO)
             .unwrap()
     };
     assert!(top(64.0) < top(24.0) - 8.0 && top(64.0) < top(104.0) - 8.0);
@@ -217,7 +217,7 @@ fn hill() {
     let top = |x: f32, y: f32| {
         (0..256)
             .map(|i| 63.0 - i as f32 * 0.25)
-            .find(|&z| s.field.value(Vec3::new(x, y, z)) > T)
+            .find(|&z| s.field.value(Vec3::new(x, y, z)) > ISO)
             .unwrap()
     };
     eprintln!("hill top {} ground {}", top(64.0, 64.0), top(10.0, 10.0));
@@ -256,7 +256,7 @@ fn arch_has_no_rock_far_from_its_curves() {
                     2.0 * j as f32,
                     ground + 6.0 + 2.0 * k as f32,
                 );
-                if s.field.value(p) > T && !beam.contains(p, 2.0 * s.h()) {
+                if s.field.value(p) > ISO && !beam.contains(p, 2.0 * s.h()) {
                     far.push(p);
                 }
             }
@@ -271,7 +271,7 @@ fn arch_has_no_rock_far_from_its_curves() {
     // In particular the top corners of the domain are air.
     for x in [d.min.x + 6.0, d.max.x - 6.0] {
         for y in [d.min.y + 6.0, 64.0, d.max.y - 6.0] {
-            assert!(s.field.value(Vec3::new(x, y, d.max.z - 6.0)) < T);
+            assert!(s.field.value(Vec3::new(x, y, d.max.z - 6.0)) < ISO);
         }
     }
 }
@@ -288,13 +288,13 @@ fn arch_without_ground_stands_in_air() {
     assert!(levels[0].seeds == 0 && levels.last().unwrap().seeds > 0);
     // The top of the slab's crown.
     let apex = f.arches[0].beam().path.eval(0.5) + Vec3::Z * 0.5 * f.arches[0].thickness;
-    assert!(leaf.value(apex - Vec3::Z * 4.5) > T, "rock in the beam");
-    assert!(leaf.value(apex + Vec3::Z * 6.0) < T, "air above it");
-    assert!(leaf.value(apex - Vec3::Z * 20.0) < T, "air under it");
+    assert!(leaf.value(apex - Vec3::Z * 4.5) > ISO, "rock in the beam");
+    assert!(leaf.value(apex + Vec3::Z * 6.0) < ISO, "air above it");
+    assert!(leaf.value(apex - Vec3::Z * 20.0) < ISO, "air under it");
     let d = leaf.params().domain;
     for p in [d.min, d.max, Vec3::new(d.min.x, d.max.y, d.max.z)] {
         let q = p + (d.center() - p).signum() * 8.0;
-        assert!(leaf.value(q) < T, "air at {q}");
+        assert!(leaf.value(q) < ISO, "air at {q}");
     }
 }
 
@@ -381,8 +381,8 @@ fn single_tunnel() {
     let pts: Vec<Vec3> = (0..=400).map(|i| path.eval(i as f32 / 400.0)).collect();
     assert!(pts.windows(2).all(|w| s.clear(w[0], w[1])));
     // Rock around it.
-    assert!(s.field.value(path.eval(0.5) + Vec3::Z * 12.0) > T);
-    assert!(s.field.value(path.eval(0.5) - Vec3::Z * 12.0) > T);
+    assert!(s.field.value(path.eval(0.5) + Vec3::Z * 12.0) > ISO);
+    assert!(s.field.value(path.eval(0.5) - Vec3::Z * 12.0) > ISO);
 }
 
 #[test]

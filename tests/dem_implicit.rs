@@ -1,5 +1,6 @@
-//! The implicit heightfield leaf (seed 002 §5.1): every bound is checked by sampling, on the
-//! real UTM DEM (with its nodata edges) and on synthetic grids with polygons and bicubic.
+//! The implicit heightfield leaf (Paris et al. 2019 §5.1): every bound is checked by
+//! sampling, on the real UTM DEM (with its nodata edges) and on synthetic grids with
+//! polygons and bicubic.
 
 use crate::common::Rng;
 
@@ -8,7 +9,7 @@ use std::path::Path;
 use glam::{Vec2, Vec3};
 use karstic::dem::{Heightfield, HeightfieldField, HeightfieldSpec, ImplicitParams, Interpolation};
 use karstic::field::falloff::sigma;
-use karstic::field::{Aabb, Field, Interval, Rect, T, ZBands};
+use karstic::field::{Aabb, Field, ISO, Interval, Rect, ZBands};
 
 fn utm_leaf(r: f32, interp: Interpolation) -> HeightfieldField {
     let ron = format!(
@@ -73,7 +74,7 @@ fn intervals_contain_sampled_values() {
         for _ in 0..1500 {
             let b = random_box(&f, &mut rng);
             let iv = f.interval(&b);
-            informative += (iv.width() < 2.0 * T) as usize;
+            informative += (iv.width() < 2.0 * ISO) as usize;
             for _ in 0..20 {
                 let p = rng.in_box(&b);
                 let v = f.value(p);
@@ -180,10 +181,10 @@ fn z_bands_contain_every_sampled_crossing() {
                 let xy = Vec2::new(rng.range(fp.min.x, fp.max.x), rng.range(fp.min.y, fp.max.y));
                 let n = 2000;
                 let dz = zr.width() / n as f32;
-                let mut prev = f.value(xy.extend(zr.lo)) - T;
+                let mut prev = f.value(xy.extend(zr.lo)) - ISO;
                 for k in 1..=n {
                     let z = zr.lo + k as f32 * dz;
-                    let cur = f.value(xy.extend(z)) - T;
+                    let cur = f.value(xy.extend(z)) - ISO;
                     if (prev > 0.0) != (cur > 0.0) {
                         crossings += 1;
                         let seg = Interval::new(z - dz, z);
@@ -238,7 +239,7 @@ fn elevation_answers_only_where_the_field_is_the_heightfield() {
                     sigma(h - z, f.params().falloff),
                     "{name}: f is not σ(h − z) at {xy}, {z}"
                 );
-                assert_eq!(v > T, z < h, "{name}");
+                assert_eq!(v > ISO, z < h, "{name}");
             }
         }
         assert!(some > 100 && none > 100, "{name}: {some} Some, {none} None");
@@ -254,7 +255,7 @@ fn field_vanishes_outside_the_support_and_the_domain() {
         for _ in 0..20000 {
             let p = rng.in_box(&big);
             let v = f.value(p);
-            assert!((0.0..=2.0 * T).contains(&v), "{name}: {v}");
+            assert!((0.0..=2.0 * ISO).contains(&v), "{name}: {v}");
             if !s.contains(p) {
                 assert_eq!(v, 0.0, "{name}: f({p}) = {v} outside the support {s:?}");
             }
@@ -276,11 +277,11 @@ fn solid_is_the_terrain_inside_and_closed_by_walls() {
     // centre of the DEM: solid below the terrain, empty above
     let xy = hf.origin() + Vec2::new(170.0, 180.0) * hf.cell();
     let h = f.height(xy);
-    assert!(f.value(xy.extend(h - 1.0)) > T && f.value(xy.extend(h + 1.0)) < T);
-    assert!((f.value(xy.extend(h)) - T).abs() < 1e-6);
+    assert!(f.value(xy.extend(h - 1.0)) > ISO && f.value(xy.extend(h + 1.0)) < ISO);
+    assert!((f.value(xy.extend(h)) - ISO).abs() < 1e-6);
     // far below the prism floor: empty again (the block has a bottom)
     let dz = f.prism_z();
-    assert!(f.value(xy.extend(dz.lo - 100.0)) < T && f.value(xy.extend(dz.lo - 10.0)) > T);
+    assert!(f.value(xy.extend(dz.lo - 100.0)) < ISO && f.value(xy.extend(dz.lo - 10.0)) > ISO);
 }
 
 #[test]
@@ -408,7 +409,7 @@ fn small_boxes_near_the_terrain_have_sound_and_sharp_bounds() {
             }
             if lift > 8.0 && f.elevation(&b.footprint()).is_some() {
                 above += 1;
-                known += (iv.hi < T) as usize;
+                known += (iv.hi < ISO) as usize;
             }
         }
         assert!(

@@ -5,7 +5,7 @@ use crate::gltf_validator;
 
 use glam::{Vec2, Vec3};
 use karstic::dem::HeightfieldField;
-use karstic::field::{Aabb, Field, T, Tree};
+use karstic::field::{Aabb, Field, ISO, Tree};
 use karstic::job::{JobOptions, JobReport};
 use karstic::render::Ray;
 use karstic::render::raycast::MeshRaycaster;
@@ -17,11 +17,11 @@ fn tree() -> Tree {
 }
 
 fn crossings(t: &Tree, from: Vec3, to: Vec3, n: usize) -> usize {
-    let mut last = t.value(from) > T;
+    let mut last = t.value(from) > ISO;
     let mut count = 0;
     for i in 1..=n {
         let p = from.lerp(to, i as f32 / n as f32);
-        let s = t.value(p) > T;
+        let s = t.value(p) > ISO;
         count += usize::from(s != last);
         last = s;
     }
@@ -46,15 +46,15 @@ fn default_scene_has_an_open_tunnel_an_arch_and_a_grotto() {
     for i in 0..=400 {
         let p = Vec3::new(3800.0, 4950.0, 863.0)
             .lerp(Vec3::new(3480.0, 4972.0, 867.0), i as f32 / 400.0);
-        assert!(t.value(p) < T, "rock in the tunnel at {p}");
+        assert!(t.value(p) < ISO, "rock in the tunnel at {p}");
     }
     // That axis does run inside the hill: rock above it.
-    assert!(t.value(Vec3::new(3480.0, 4972.0, 886.0)) > T);
+    assert!(t.value(Vec3::new(3480.0, 4972.0, 886.0)) > ISO);
     // A horizontal ray under the arch's span, between the ground and the arch.
     for i in 0..=200 {
         let p = Vec3::new(4594.0, 4950.0, 642.0)
             .lerp(Vec3::new(4690.0, 4950.0, 642.0), i as f32 / 200.0);
-        assert!(t.value(p) < T, "the arch does not stand free at {p}");
+        assert!(t.value(p) < ISO, "the arch does not stand free at {p}");
     }
     let over_span = crossings(
         &t,

@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
-use karstic::field::{Aabb, Field, Grid, T, Tree, eval_grid};
+use karstic::field::{Aabb, Field, Grid, ISO, Tree, eval_grid};
 use karstic::mesh::{GridSpec, MeshOptions, polygonize};
 use karstic::scene::{NodeSpec, SceneFile, compile_scene};
 
@@ -56,7 +56,7 @@ fn bare(s: &SceneFile) -> Tree {
     compile_scene(&scene, &s.path, &s.base_dir).unwrap().tree
 }
 
-/// The top surface of every column of `region` (the highest crossing of `T`, linear
+/// The top surface of every column of `region` (the highest crossing of `ISO`, linear
 /// between samples), `cell` metres apart in plan and `dz` in height; NaN where none.
 fn tops(t: &Tree, region: &Aabb, cell: f32, dz: f32) -> (Vec<Vec2>, Vec<f32>) {
     let n = |len: f32, step: f32| (len / step).round() as usize + 1;
@@ -74,10 +74,10 @@ fn tops(t: &Tree, region: &Aabb, cell: f32, dz: f32) -> (Vec<Vec2>, Vec<f32>) {
         for i in 0..nx {
             xy.push(grid.point(i, j, 0).truncate());
             let at = |k: usize| v[i + nx * (j + ny * k)];
-            let k = (1..nz).rev().find(|&k| at(k - 1) > T && at(k) <= T);
+            let k = (1..nz).rev().find(|&k| at(k - 1) > ISO && at(k) <= ISO);
             top.push(k.map_or(f32::NAN, |k| {
                 let (a, b) = (at(k - 1), at(k));
-                region.min.z + (k as f32 - 1.0 + (a - T) / (a - b)) * dz
+                region.min.z + (k as f32 - 1.0 + (a - ISO) / (a - b)) * dz
             }));
         }
     }
@@ -176,7 +176,7 @@ fn solid_runs(t: &Tree, from: Vec3, to: Vec3, step: f32) -> Vec<f32> {
     let mut start = None;
     for i in 0..=n {
         let p = from.lerp(to, i as f32 / n as f32);
-        match (t.value(p) > T, start) {
+        match (t.value(p) > ISO, start) {
             (true, None) => start = Some(p),
             (false, Some(a)) => {
                 runs.push(a.distance(p));
@@ -244,7 +244,7 @@ fn the_arch_is_a_slab_thinnest_at_the_crown_over_open_air() {
 /// The height of the first solid point below `z = 1200` at `xy`.
 fn height(t: &Tree, xy: Vec2) -> f32 {
     let mut z = 1200.0;
-    while t.value(xy.extend(z)) <= T {
+    while t.value(xy.extend(z)) <= ISO {
         z -= 0.25;
     }
     z
@@ -259,7 +259,7 @@ fn a_tunnel_through_a_ridge_is_open_from_portal_to_portal() {
         Vec3::new(3250.0, 6200.0, 860.0),
         Vec3::new(4150.0, 6201.0, 858.0),
     );
-    assert!(b.value(a) < T && b.value(z) < T, "both ends in the air");
+    assert!(b.value(a) < ISO && b.value(z) < ISO, "both ends in the air");
     assert!(
         solid_runs(&b, a, z, 1.0).len() == 1,
         "the bare ridge is solid between them"

@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3};
 use karstic::field::noise::{NoiseSpec, Octaves};
 use karstic::field::skeleton::{Points, Polygon, Size3, ZRange};
 use karstic::field::{
-    Aabb, Field, Interval, Primitive, PrimitiveSpec, Rect, SkeletonSpec, T, ZBands,
+    Aabb, Field, ISO, Interval, Primitive, PrimitiveSpec, Rect, SkeletonSpec, ZBands,
 };
 use karstic::scene::{Dir3, Finite, NonNegative, P2, P3, Positive};
 use proptest::collection::vec;
@@ -274,9 +274,9 @@ proptest! {
                 };
                 let n = 400;
                 let zs = |k: usize| z.lo + z.width() * k as f32 / n as f32;
-                let mut last = prim.value(xy.extend(zs(0))) - T;
+                let mut last = prim.value(xy.extend(zs(0))) - ISO;
                 for k in 1..=n {
-                    let cur = prim.value(xy.extend(zs(k))) - T;
+                    let cur = prim.value(xy.extend(zs(k))) - ISO;
                     if (last > 0.0) != (cur > 0.0) {
                         let seg = Interval::new(zs(k - 1), zs(k));
                         prop_assert!(

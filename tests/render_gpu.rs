@@ -10,7 +10,7 @@ use common::{
 use glam::{Affine3A, Quat, Vec3};
 use indicatif::ProgressBar;
 use karstic::field::falloff::{sigma, wyvill};
-use karstic::field::{Aabb, Fbm, Field, T};
+use karstic::field::{Aabb, Fbm, Field, ISO};
 use karstic::render::gpu::{GpuContext, SHADER_MODULES, shader_source};
 use karstic::render::{Camera, Method, RenderSettings, render};
 use karstic::tape::{Combine, FEATURES, Profile, Shape, Tape, TapeBuilder};
@@ -149,7 +149,7 @@ fn mixed() -> (Tape, impl Fn(Vec3) -> f32) {
         let sd = d.max(Vec3::ZERO).length() + d.max_element().min(0.0);
         let boxed = sigma(-sd, 0.8);
         let sphere = 2.0 * wyvill((p.distance(ball) - 1.0).max(0.0) / 2.5);
-        let a = (capsule + boxed).min(2.0 * T - sphere);
+        let a = (capsule + boxed).min(2.0 * ISO - sphere);
         let b = 0.9 * wyvill(seg(sa, sb) / 1.5) + 0.1f32.min(wyvill(p.distance(sb) / 3.0));
         a.max(b)
     };

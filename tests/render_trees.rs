@@ -12,7 +12,7 @@ use common::{assert_frames_match, depth_agreement, gpu};
 use glam::Vec3;
 use indicatif::ProgressBar;
 use karstic::dem::{Heightfield, HeightfieldField, ImplicitParams, Interpolation};
-use karstic::field::{Aabb, Field, T, Tree, TreeBuilder};
+use karstic::field::{Aabb, Field, ISO, Tree, TreeBuilder};
 use karstic::mesh::{GridSpec, MeshOptions, polygonize};
 use karstic::render::raycast::MeshRaycaster;
 use karstic::render::trace::TraceParams;
@@ -82,7 +82,7 @@ fn solid_box(tree: &Tree) -> Aabb {
         for j in 0..64 {
             for i in 0..64 {
                 let p = s.min + Vec3::new(i as f32, j as f32, k as f32) * step;
-                if tree.value(p) > T {
+                if tree.value(p) > ISO {
                     b = b.include(p);
                 }
             }

@@ -14,7 +14,7 @@ use crate::common;
 
 use common::{Rng, assert_probes_match, check_segment_lipschitz, gpu};
 use glam::Vec3;
-use karstic::field::{Aabb, Field, T, Tree, TreeBuilder};
+use karstic::field::{Aabb, Field, ISO, Tree, TreeBuilder};
 use karstic::tape::format::{flag, op, shape};
 use karstic::tape::{FEATURES, Tape, tape_from_tree};
 
@@ -228,7 +228,7 @@ pub(crate) fn conform(name: &str, tree: &Tree, tape: &Tape, uses: &[Uses]) {
     let mut between = 0;
     for &p in &pts {
         let (v, t) = (tree.value(p), tape.value(p));
-        between += usize::from(v.abs() > 1e-3 && (v - 2.0 * T).abs() > 1e-3);
+        between += usize::from(v.abs() > 1e-3 && (v - 2.0 * ISO).abs() > 1e-3);
         assert!(
             (v - t).abs() <= 1e-4 * v.abs().max(1.0),
             "{name} at {p}: tree {v}, tape {t}"
@@ -339,12 +339,12 @@ pub(crate) fn sample_points(tree: &Tree, n: usize, seed: u64) -> (Vec<Vec3>, usi
         };
         let (p, q) = (point_in(&mut rng, &b), point_in(&mut rng, &b));
         pts.push(p);
-        let (fp, fq) = (tree.value(p) - T, tree.value(q) - T);
+        let (fp, fq) = (tree.value(p) - ISO, tree.value(q) - ISO);
         if fp * fq < 0.0 {
             let (mut a, mut z) = (p, q);
             for _ in 0..30 {
                 let m = 0.5 * (a + z);
-                if (tree.value(m) - T) * fp > 0.0 {
+                if (tree.value(m) - ISO) * fp > 0.0 {
                     a = m;
                 } else {
                     z = m;

@@ -19,6 +19,7 @@ mod dem_fuzz;
 mod dem_implicit;
 mod dem_mesh;
 mod dem_readers;
+mod docs;
 mod main_job;
 mod meld;
 mod mesh_cli;

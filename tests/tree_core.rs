@@ -12,7 +12,8 @@ use glam::{Affine3A, Quat, Vec3};
 use karstic::field::falloff::{WYVILL_MAX_SLOPE, wyvill, wyvill_d, wyvill_interval, wyvill_slope};
 use karstic::field::skeleton::Point;
 use karstic::field::{
-    Aabb, Fbm, Field, Grid, Interval, Line, NodeId, Primitive, Rect, Skeleton, T, Transition, Tree,
+    Aabb, Fbm, Field, Grid, ISO, Interval, Line, NodeId, Primitive, Rect, Skeleton, Transition,
+    Tree,
     TreeBuilder, Warp, ZBands, eval_grid, eval_grid_naive,
 };
 use proptest::prelude::*;
@@ -273,10 +274,10 @@ proptest! {
         t.z_bands(&fp, Interval::new(-20.0, 20.0), &mut bands);
         for (i, j) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.5, 0.5), (1.0, 1.0)] {
             let (px, py) = (x + w * i, y + w * j);
-            let mut last = t.value(Vec3::new(px, py, -20.0)) - T;
+            let mut last = t.value(Vec3::new(px, py, -20.0)) - ISO;
             for k in 1..=800 {
                 let z = -20.0 + k as f32 * 0.05;
-                let v = t.value(Vec3::new(px, py, z)) - T;
+                let v = t.value(Vec3::new(px, py, z)) - ISO;
                 if (v > 0.0) != (last > 0.0) {
                     prop_assert!(bands.contains(z) || bands.contains(z - 0.05), "crossing at z={z} outside {bands:?}");
                 }

@@ -39,7 +39,7 @@ pub(super) struct BuildArgs {
     /// Tint vertices by slope and altitude (glTF COLOR_0, PLY colours).
     #[arg(long)]
     tint: bool,
-    /// Print extraction statistics (seed 002 Table 1 columns).
+    /// Print extraction statistics (the columns of Table 1 of Paris et al. 2019).
     #[arg(long)]
     stats: bool,
     /// No progress bar and no summary.

@@ -1,4 +1,4 @@
-//! Cubic B-splines with end-point interpolation (seed 000, definition 3.1.1).
+//! Cubic B-splines with end-point interpolation (Becher 2016, definition 3.1.1).
 //!
 //! The knot vector is clamped (multiplicity `n + 1` at both ends) and uniform inside, so
 //! the curve starts at the first control vertex and ends at the last. The parameter runs

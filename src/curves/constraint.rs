@@ -1,4 +1,4 @@
-//! Constraint Points and Feature Curves (seed 000, definitions 3.1.2 and 3.1.3).
+//! Constraint Points and Feature Curves (Becher 2016, definitions 3.1.2 and 3.1.3).
 //!
 //! A Feature Curve is a B-spline with Constraint Points `(b_l, b_r, α, β, t)` attached.
 //! Between two Constraint Points the noise parameters are interpolated linearly in `t`;

@@ -1,4 +1,4 @@
-//! Feature Curves and the other modelling primitives of seed 000 (ch. 3): cubic
+//! Feature Curves and the other modelling primitives of Becher 2016 (ch. 3): cubic
 //! B-splines with Constraint Points, simple shapes, compound tunnels and arches, and the
 //! proxy ribbon meshes they all turn into for the voxel pipeline ([`crate::voxel`]).
 

@@ -1,4 +1,4 @@
-//! Proxy ribbon meshes (seed 000 §3.3): the common triangle representation of every
+//! Proxy ribbon meshes (Becher 2016 §3.3): the common triangle representation of every
 //! modelling primitive, and the input of the voxel pipeline.
 //!
 //! A Feature Curve is cut into short segments; each segment gets two quads, one swept

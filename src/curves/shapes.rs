@@ -1,4 +1,4 @@
-//! Simple shapes (seed 000 §3.2): a quad of two triangles and a disc (triangle fan) that
+//! Simple shapes (Becher 2016 §3.2): a quad of two triangles and a disc (triangle fan) that
 //! enforce a normal, a bitangent orientation and noise parameters locally — to close a
 //! tunnel, level a plateau or set noise over a flat area.
 

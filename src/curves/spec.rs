@@ -232,7 +232,7 @@ pub enum Orientation {
     Air,
 }
 
-/// Surface propagation method (seed 000 §4.6).
+/// Surface propagation method (Becher 2016 §4.6).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub enum Propagation {
     /// Signed distance propagation (§4.6.2).
@@ -292,7 +292,7 @@ impl SurfaceNoiseSpec {
     }
 }
 
-/// Feature Curve expansion (seed 000 §4.5): `expansion: (length: 40)`. Each end of every
+/// Feature Curve expansion (Becher 2016 §4.5): `expansion: (length: 40)`. Each end of every
 /// seed Feature Curve is continued along the surface of a first run, for at most `length`
 /// metres or until it comes within `stop` of another curve; the pipeline then runs again
 /// with the continuations as seed curves.

@@ -301,7 +301,7 @@ impl Heightfield {
 
     /// Per cell: a bound on `|∇h|` over the cell (`[s, s]`; `[+∞, −∞]` for invalid cells).
     ///
-    /// Seed 001 §7.3.1, sharpened per axis: inside a bilinear cell `∂h/∂x` is a convex
+    /// Génevaux et al. 2015 §7.3.1, sharpened per axis: inside a bilinear cell `∂h/∂x` is a convex
     /// combination of the two x-edge differences over `dx` (likewise y), so
     /// `|∇h| ≤ √(Lx² + Ly²)`. Bicubic cells use the Catmull-Rom bound over their stencil.
     pub fn cell_slopes(&self, interp: Interpolation) -> Vec<[f32; 2]> {

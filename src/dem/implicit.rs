@@ -1,4 +1,4 @@
-//! The implicit heightfield primitive of seed 002 §5.1.
+//! The implicit heightfield primitive of Paris et al. 2019 §5.1.
 //!
 //! Given an elevation `h` over a horizontal domain Ω (see [`super::domain`]):
 //!
@@ -29,7 +29,7 @@ use super::pyramid::MinMaxPyramid;
 use super::{DemError, Georef};
 use crate::field::contract::{Elevation, ElevationSource};
 use crate::field::falloff::{
-    T, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope, wyvill,
+    ISO, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope, wyvill,
     wyvill_d, wyvill_interval, wyvill_slope,
 };
 use crate::field::{Aabb, Field, Interval, Rect, ZBands};
@@ -212,9 +212,9 @@ impl HeightfieldField {
         let dz = self.dist_z(z);
         let d2 = dxy * dxy + dz * dz;
         if d2 == 0.0 {
-            2.0 * T
+            2.0 * ISO
         } else {
-            2.0 * T * wyvill(d2.sqrt() / self.r)
+            2.0 * ISO * wyvill(d2.sqrt() / self.r)
         }
     }
 
@@ -231,8 +231,8 @@ impl HeightfieldField {
     /// defined on all of `fp`): `h` is `s`-Lipschitz on the cells under `fp` (`s` from the
     /// slope pyramid) and `fp` is convex, so `|h(x) − h(c)| ≤ s·|x − c|` around its centre
     /// `c`. For a footprint smaller than a cell this is far tighter than the cells' ranges —
-    /// it is what lets a ray step close to the terrain (seed 001 §7.2: the Lipschitz bound
-    /// of `h` along the ray).
+    /// it is what lets a ray step close to the terrain (Génevaux et al. 2015 §7.2: the
+    /// Lipschitz bound of `h` along the ray).
     #[inline]
     fn h_range_near(&self, fp: &Rect, cells: Interval, slope: f32, e_lo: f32) -> Interval {
         if e_lo <= 0.0 || cells.is_empty() {
@@ -302,11 +302,11 @@ impl Field for HeightfieldField {
         };
         let d = dxy.hypot(dz);
         let (fp, gfp) = if d == 0.0 {
-            (2.0 * T, Vec3::ZERO)
+            (2.0 * ISO, Vec3::ZERO)
         } else {
             let (g, dg) = wyvill_d(d / self.r);
             let gd = (dxy * (-ge)).extend(dz * gdz) / d;
-            (2.0 * T * g, gd * (2.0 * T * dg / self.r))
+            (2.0 * ISO * g, gd * (2.0 * ISO * dg / self.r))
         };
         if ft <= fp {
             (ft, gh.extend(-1.0) * dft)
@@ -333,7 +333,7 @@ impl Field for HeightfieldField {
         let z = b.z();
         let ft = sigma_interval(Interval::new(h.lo - z.hi, h.hi - z.lo), self.r);
         let d = self.dist_range(e, z);
-        let fp = wyvill_interval(d.scale(1.0 / self.r)).scale(2.0 * T);
+        let fp = wyvill_interval(d.scale(1.0 / self.r)).scale(2.0 * ISO);
         let f = ft.min(fp);
         if e.lo <= 0.0 {
             f.hull(Interval::ZERO)
@@ -344,7 +344,7 @@ impl Field for HeightfieldField {
 
     fn lipschitz(&self) -> f32 {
         let lt = sigma_max_slope(self.r) * (1.0 + self.lip_h * self.lip_h).sqrt();
-        let lp = 2.0 * T * WYVILL_MAX_SLOPE / self.r * self.domain.lipschitz();
+        let lp = 2.0 * ISO * WYVILL_MAX_SLOPE / self.r * self.domain.lipschitz();
         lt.max(lp)
     }
 
@@ -366,7 +366,7 @@ impl Field for HeightfieldField {
             sigma_slope(Interval::new(h.lo - z.hi, h.hi - z.lo), self.r) * (1.0 + s * s).sqrt()
         };
         let d = self.dist_range(e, z);
-        let lp = 2.0 * T * wyvill_slope(d.scale(1.0 / self.r)) / self.r * self.domain.lipschitz();
+        let lp = 2.0 * ISO * wyvill_slope(d.scale(1.0 / self.r)) / self.r * self.domain.lipschitz();
         lt.max(lp)
     }
 

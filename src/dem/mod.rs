@@ -10,8 +10,8 @@
 //!   georeference (CRS coordinates of that sample, in f64) lives beside it in [`Georef`], so
 //!   UTM eastings never pass through f32.
 //! * [`MinMaxPyramid`] ([`pyramid`]): conservative min/max over any footprint in O(1).
-//! * [`HeightfieldField`] ([`implicit`]): the implicit terrain primitive of seed 002 §5.1, and
-//!   [`HeightfieldSpec`] ([`spec`]) its node in tree files.
+//! * [`HeightfieldField`] ([`implicit`]): the implicit terrain primitive of
+//!   Paris et al. 2019 §5.1, and [`HeightfieldSpec`] ([`spec`]) its node in tree files.
 //!
 //! Library code never prints: notices (such as "cell size converted from degrees") are
 //! returned in [`Dem::notices`] for the caller to show.

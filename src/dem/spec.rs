@@ -1,4 +1,4 @@
-//! The `Heightfield(...)` node of tree files: a DEM implicitized as in seed 002 §5.1.
+//! The `Heightfield(...)` node of tree files: a DEM implicitized as in Paris et al. 2019 §5.1.
 //!
 //! ```ron
 //! Heightfield((

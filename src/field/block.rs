@@ -15,7 +15,7 @@ use glam::Vec3;
 
 use super::bounds::{Aabb, Interval};
 use super::contract::Field;
-use super::falloff::T;
+use super::falloff::ISO;
 use super::node::{Node, NodeId};
 use super::primitive::Primitive;
 use super::skeleton::Skeleton;
@@ -305,13 +305,13 @@ impl Tree {
                 let bi = self.interval_at(*base, bounds);
                 for &c in carves.iter() {
                     // The carve wins nowhere when 2T − f_c ≥ f_base throughout.
-                    if 2.0 * T - self.interval_at(c, bounds).hi >= bi.hi {
+                    if 2.0 * ISO - self.interval_at(c, bounds).hi >= bi.hi {
                         continue;
                     }
                     let mut v = s.values(out.len());
                     self.block(c, pts, bounds, &mut v, s);
                     for (o, v) in out.iter_mut().zip(&v) {
-                        *o = o.min(2.0 * T - v);
+                        *o = o.min(2.0 * ISO - v);
                     }
                     s.values.push(v);
                 }

@@ -4,7 +4,7 @@ use glam::{Affine3A, Vec3};
 
 use super::bounds::{Aabb, Interval};
 use super::contract::Field;
-use super::falloff::T;
+use super::falloff::ISO;
 use super::line::{Anywhere, Candidates};
 use super::node::{Node, NodeId};
 use super::replace::gap;
@@ -61,7 +61,7 @@ impl Tree {
             Node::Difference { base, carves } => {
                 carves.iter().fold(self.interval_at(*base, b), |r, &c| {
                     let ci = self.interval_at(c, b);
-                    r.min(Interval::new(2.0 * T - ci.hi, 2.0 * T - ci.lo))
+                    r.min(Interval::new(2.0 * ISO - ci.hi, 2.0 * ISO - ci.lo))
                 })
             }
             Node::Replace { base, by, mix } => {

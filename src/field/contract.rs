@@ -1,9 +1,9 @@
-//! The one contract every node of the field answers (DESIGN.md "What every node can answer").
+//! The one contract every node of the field answers (ARCHITECTURE.md, "Invariants").
 
 use glam::{Vec2, Vec3};
 
 use super::bounds::{Aabb, Interval, Rect, ZBands};
-use super::falloff::T;
+use super::falloff::ISO;
 
 /// A scalar field `f: R³ → R` in the BlobTree convention: solid where `f > T`.
 ///
@@ -62,7 +62,7 @@ pub trait Field: Send + Sync {
 
     /// When, over the footprint `fp`, the field is a heightfield's, returns it: for
     /// `p` in `fp × e.z`, `f(p) > T ⇔ p.z < e.height(p.xy)` and the surface is `z = h`.
-    /// The mesher then places vertices straight on the elevation (seed 002 §7).
+    /// The mesher then places vertices straight on the elevation (Paris et al. 2019 §7).
     fn elevation(&self, _fp: &Rect) -> Option<Elevation<'_>> {
         None
     }
@@ -96,7 +96,7 @@ const Z_BAND_DEPTH: u32 = 6;
 /// Sound z-bands by interval subdivision: keeps every slab whose interval contains `T`.
 pub fn z_bands_by_interval<F: Field + ?Sized>(f: &F, fp: &Rect, z: Interval, out: &mut ZBands) {
     fn rec<F: Field + ?Sized>(f: &F, fp: &Rect, z: Interval, depth: u32, out: &mut ZBands) {
-        if !f.interval(&fp.extrude(z)).contains(T) {
+        if !f.interval(&fp.extrude(z)).contains(ISO) {
             return;
         }
         if depth == 0 {

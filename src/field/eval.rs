@@ -4,7 +4,7 @@ use glam::Vec3;
 
 use super::contract::Field;
 
-use super::falloff::T;
+use super::falloff::ISO;
 use super::line::{Anywhere, Candidates};
 use super::node::{Node, NodeId};
 use super::tree::Tree;
@@ -47,7 +47,7 @@ impl Tree {
             Node::Difference { base, carves } => carves
                 .iter()
                 .fold(self.value_at_with(*base, p, at), |v, &c| {
-                    v.min(2.0 * T - self.value_at_with(c, p, at))
+                    v.min(2.0 * ISO - self.value_at_with(c, p, at))
                 }),
             // Only the child that matters where the weight is 0 or 1.
             Node::Replace { base, by, mix } => match mix.weight(p) {
@@ -112,8 +112,8 @@ impl Tree {
                 let mut best = self.value_grad_at_with(*base, p, at);
                 for &c in carves.iter() {
                     let (v, g) = self.value_grad_at_with(c, p, at);
-                    if 2.0 * T - v < best.0 {
-                        best = (2.0 * T - v, -g);
+                    if 2.0 * ISO - v < best.0 {
+                        best = (2.0 * ISO - v, -g);
                     }
                 }
                 best

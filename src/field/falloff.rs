@@ -1,4 +1,4 @@
-//! The two scalar profiles that turn distances into fields (DESIGN.md, seed 002 §3.3, §5.1).
+//! The two scalar profiles that turn distances into fields (Paris et al. 2019 §3.3, §5.1).
 //!
 //! * Wyvill's falloff `g(x) = (1 − x²)³` on `[0, 1]`, 0 beyond: skeletal primitives are
 //!   `energy · g(d / R)`.
@@ -6,15 +6,16 @@
 //!   vertical distance, the voxel S field, prism distance): `σ(0) = T`, `σ(x) = 2T` for
 //!   `x ≥ R`, `σ(x) = 0` for `x ≤ −R`, odd about `(0, T)` and C¹.
 //!
-//! Seed 002 §5.1 also asks `σ'(0) = 1`. With distances in metres and `R` in metres that
+//! Paris et al. 2019 §5.1 also asks `σ'(0) = 1`. With distances in metres and `R` in metres that
 //! cubic overshoots `2T` (it is monotone only for `R ≤ 3T`), so we keep the other three
 //! constraints and take the monotone odd cubic `σ(x) = T(1 + 3u/2 − u³/2)`, `u = x / R`,
 //! whose slope at 0 is `3T / (2R)`. The surface `σ = T` is still exactly `x = 0`.
 
 use super::bounds::Interval;
 
-/// The iso-value: solid where `f > T`.
-pub const T: f32 = 0.5;
+/// The iso-value `T` of the field convention (Paris et al. 2019 §5.1): solid where
+/// `f > T`, the surface at `f = T`. The papers' and the docs' formulas write it `T`.
+pub const ISO: f32 = 0.5;
 
 /// `max |g'(x)|` over `[0, 1]`, reached at `x = 1/√5`.
 pub const WYVILL_MAX_SLOPE: f32 = 1.717_300_8;
@@ -71,20 +72,20 @@ pub fn wyvill_slope(xs: Interval) -> f32 {
 #[inline]
 pub fn sigma(x: f32, r: f32) -> f32 {
     let u = (x / r).clamp(-1.0, 1.0);
-    (T * (1.0 + 1.5 * u - 0.5 * u * u * u)).clamp(0.0, 2.0 * T)
+    (ISO * (1.0 + 1.5 * u - 0.5 * u * u * u)).clamp(0.0, 2.0 * ISO)
 }
 
 /// `(σ_R(x), σ_R'(x))`.
 #[inline]
 pub fn sigma_d(x: f32, r: f32) -> (f32, f32) {
     let u = (x / r).clamp(-1.0, 1.0);
-    (sigma(x, r), 1.5 * T / r * (1.0 - u * u))
+    (sigma(x, r), 1.5 * ISO / r * (1.0 - u * u))
 }
 
 /// `max σ_R'` over all `x`: `3T / (2R)`.
 #[inline]
 pub fn sigma_max_slope(r: f32) -> f32 {
-    1.5 * T / r
+    1.5 * ISO / r
 }
 
 /// Range of `σ_R` over `xs` (σ is monotone).
@@ -124,8 +125,8 @@ mod tests {
     #[test]
     fn sigma_is_monotone_and_hits_its_constraints() {
         let r = 7.0;
-        assert_eq!(sigma(0.0, r), T);
-        assert_eq!(sigma(r, r), 2.0 * T);
+        assert_eq!(sigma(0.0, r), ISO);
+        assert_eq!(sigma(r, r), 2.0 * ISO);
         assert_eq!(sigma(-r, r), 0.0);
         assert_eq!(sigma_d(r, r).1, 0.0);
         let mut last = -1.0;
@@ -134,7 +135,7 @@ mod tests {
             let v = sigma(x, r);
             assert!(v >= last);
             assert!(
-                (sigma(-x, r) - (2.0 * T - v)).abs() < 1e-6,
+                (sigma(-x, r) - (2.0 * ISO - v)).abs() < 1e-6,
                 "odd about (0, T)"
             );
             last = v;

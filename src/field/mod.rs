@@ -30,7 +30,7 @@ pub use block::BRICK;
 pub use bounds::{Aabb, Interval, Rect, ZBands};
 pub use box_bounds::map_box;
 pub use contract::{Elevation, ElevationSource, Field};
-pub use falloff::T;
+pub use falloff::ISO;
 pub use grid::{Grid, eval_grid, eval_grid_naive, slab_count};
 pub use line::Line;
 pub use node::{Node, NodeId};

@@ -1,4 +1,4 @@
-//! The nodes of the compiled tree: leaves and the operators of seed 002 §5.3.
+//! The nodes of the compiled tree: leaves and the operators of Paris et al. 2019 §5.3.
 
 use std::sync::Arc;
 
@@ -59,7 +59,7 @@ pub enum Node {
         /// The region and its transition.
         mix: Box<Transition>,
     },
-    /// Localized turbulence warp `f(p) = f_child(p + δ(p)·f_D(p))` (seed 002 §5.3).
+    /// Localized turbulence warp `f(p) = f_child(p + δ(p)·f_D(p))` (Paris et al. 2019 §5.3).
     Warp {
         /// The warped subtree.
         child: NodeId,

@@ -1,4 +1,4 @@
-//! Seeded 3D simplex noise and fBm turbulence (seed 002 §3.3) with proven bounds.
+//! Seeded 3D simplex noise and fBm turbulence (Paris et al. 2019 §3.3) with proven bounds.
 //!
 //! * [`simplex`] / [`simplex_grad`]: gradient noise `n: R³ → [−1, 1]` on the skewed
 //!   simplex lattice (Perlin 2001, Gustavson's formulation) with value and analytic
@@ -53,9 +53,9 @@ pub const SIMPLEX_SCALE: f32 = 76.0;
 /// lattice vertex), so the bound is within 16% of the true supremum (sampling sees 6.88).
 pub const SIMPLEX_LIPSCHITZ: f32 = 7.8;
 
-/// Frequency ratio between successive octaves of [`Fbm`] (seed 002 §3.3: `2^k`).
+/// Frequency ratio between successive octaves of [`Fbm`] (Paris et al. 2019 §3.3: `2^k`).
 pub const LACUNARITY: f32 = 2.0;
-/// Amplitude ratio between successive octaves of [`Fbm`] (seed 002 §3.3: `1 / 2^k`).
+/// Amplitude ratio between successive octaves of [`Fbm`] (Paris et al. 2019 §3.3: `1 / 2^k`).
 pub const GAIN: f32 = 0.5;
 /// Most octaves a [`NoiseSpec`] accepts.
 pub const MAX_OCTAVES: u32 = 12;
@@ -213,7 +213,7 @@ pub struct NoiseSpec {
 }
 
 /// fBm turbulence `t(p) = Σ_{k<o} ½^k n_k(2^k p / λ + k·c) / Σ_{k<o} ½^k ∈ [−1, 1]`
-/// (seed 002 §3.3), each octave with its own seed and a fixed shift `k·c` so the octaves
+/// (Paris et al. 2019 §3.3), each octave with its own seed and a fixed shift `k·c` so the octaves
 /// do not share their zeros at the lattice vertices.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Fbm {

@@ -1,8 +1,8 @@
-//! The skeletal primitive (seed 002 §5.2): `f(p) = E · g(d̃(p))` with Wyvill's falloff
+//! The skeletal primitive (Paris et al. 2019 §5.2): `f(p) = E · g(d̃(p))` with Wyvill's falloff
 //! `g`, a [`Skeleton`], a radius of influence `R` and an energy `E` (negative carves).
 //!
 //! Without noise `d̃ = d / R`, `d` the Euclidean distance to the skeleton. With noise of
-//! amplitude `A < R` it is the anisotropic distance of seed 002 §5.2,
+//! amplitude `A < R` it is the anisotropic distance of Paris et al. 2019 §5.2,
 //! `d̃(p) = ‖p − s(p)‖ / (R + A·t(v(p)))` with `s` the projection on the skeleton,
 //! `u = (p − s)/‖p − s‖` and `v = s + R·u`: the turbulence `t` is read on the shell at
 //! distance `R`, so it is constant along each ray from the skeleton and every ray crosses
@@ -30,7 +30,7 @@ use thiserror::Error;
 
 use super::bounds::{Aabb, Interval, Rect, ZBands};
 use super::contract::{Field, z_bands_by_interval};
-use super::falloff::{T, WYVILL_MAX_SLOPE, wyvill, wyvill_d, wyvill_interval, wyvill_slope};
+use super::falloff::{ISO, WYVILL_MAX_SLOPE, wyvill, wyvill_d, wyvill_interval, wyvill_slope};
 use super::noise::{Fbm, NoiseSpec};
 use super::profile::LineProfile;
 use super::skeleton::{Project, Skeleton, SkeletonSpec};
@@ -313,11 +313,11 @@ impl Primitive {
     /// Distance from the skeleton within which the surface `f = T` can lie, or `None`
     /// when `f` never reaches `T`.
     fn surface_reach(&self) -> Option<f32> {
-        if self.energy < T {
+        if self.energy < ISO {
             return None;
         }
         // g(x) = T/E at x = √(1 − (T/E)^⅓).
-        let x = (1.0 - (T / self.energy).cbrt()).max(0.0).sqrt();
+        let x = (1.0 - (ISO / self.energy).cbrt()).max(0.0).sqrt();
         Some((self.radius + self.amplitude()) * x.min(1.0))
     }
 }

@@ -5,7 +5,7 @@ use std::collections::HashMap;
 
 use super::bounds::{Aabb, Interval};
 use super::box_bounds::map_box;
-use super::falloff::T;
+use super::falloff::ISO;
 use super::node::{Node, NodeId};
 use super::tree::{Tree, TreeBuilder};
 
@@ -101,14 +101,14 @@ impl Pruner<'_> {
                 for &c in carves.iter() {
                     let ci = tree.interval_at(c, b);
                     // The carve wins nowhere when 2T − f_c ≥ f_base throughout.
-                    if 2.0 * T - ci.hi >= bi.hi {
+                    if 2.0 * ISO - ci.hi >= bi.hi {
                         continue;
                     }
                     match self.node(c, b) {
                         Some(n) => kept.push(n),
                         None => {
                             // A zero carve gives 2T, which only matters if f_base can exceed it.
-                            if bi.hi > 2.0 * T {
+                            if bi.hi > 2.0 * ISO {
                                 kept.push(self.out.constant(0.0, None));
                             }
                         }

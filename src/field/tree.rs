@@ -7,7 +7,7 @@ use glam::{Affine3A, Vec3};
 use super::bounds::{Aabb, Interval, Rect, ZBands};
 use super::bvh::{BVH_MIN_CHILDREN, ChildBvh};
 use super::contract::{Elevation, Field};
-use super::falloff::T;
+use super::falloff::ISO;
 use super::node::{Node, NodeId, spectral_norm};
 use super::primitive::Primitive;
 use super::replace::{Transition, gap};
@@ -255,11 +255,11 @@ impl TreeBuilder {
                 let range = match carve_range {
                     Some(cr) => info(base)
                         .range
-                        .min(Interval::new(2.0 * T - cr.hi, 2.0 * T - cr.lo)),
+                        .min(Interval::new(2.0 * ISO - cr.hi, 2.0 * ISO - cr.lo)),
                     None => info(base).range,
                 };
                 let carve_range = carve_range.unwrap_or(Interval::ZERO);
-                let support = if carve_range.hi > 2.0 * T {
+                let support = if carve_range.hi > 2.0 * ISO {
                     carves
                         .iter()
                         .fold(info(base).support, |b, c| b.union(info(c).support))

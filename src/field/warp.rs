@@ -1,4 +1,4 @@
-//! The localized turbulence warp of seed 002 §5.3: `f̃(p) = f(ω⁻¹(p))` with
+//! The localized turbulence warp of Paris et al. 2019 §5.3: `f̃(p) = f(ω⁻¹(p))` with
 //! `ω⁻¹(p) = p + δ(p)·f_D(p)`, where `δ` is a turbulence displacement (three fBm, one per
 //! axis, of amplitude `A`) and `f_D ∈ [0, 1]` localizes it to a box with a Wyvill falloff.
 

@@ -1,9 +1,9 @@
-//! Where the surface can lie over a footprint (seed 002 §7): z-bands for the mesher's
+//! Where the surface can lie over a footprint (Paris et al. 2019 §7): z-bands for the mesher's
 //! pruning, and the heightfield shortcut for direct elevation extraction.
 
 use super::bounds::{Interval, Rect, ZBands};
 use super::contract::{Elevation, Field, z_bands_by_interval};
-use super::falloff::T;
+use super::falloff::ISO;
 use super::node::{Node, NodeId};
 use super::replace::Transition;
 use super::tree::Tree;
@@ -50,7 +50,7 @@ impl Tree {
         }
         match &self.nodes[id as usize] {
             Node::Constant(v) => {
-                if *v == T {
+                if *v == ISO {
                     out.push(z);
                 }
             }

@@ -1,4 +1,4 @@
-//! Bound pruning (seed 002 §7, Fig. 22): which cells of each grid column can hold the
+//! Bound pruning (Paris et al. 2019 §7, Fig. 22): which cells of each grid column can hold the
 //! surface, and which samples must therefore be evaluated.
 //!
 //! Paris et al. bound the surface's elevation at each grid *vertex* and dilate the bounds
@@ -22,7 +22,7 @@ use rayon::prelude::*;
 
 use super::grid::GridSpec;
 use super::{par_concat, split_parts};
-use crate::field::{Elevation, Field, Interval, Rect, T, ZBands};
+use crate::field::{Elevation, Field, ISO, Interval, Rect, ZBands};
 
 /// Grid columns per tile side.
 pub const TILE: usize = 32;
@@ -457,7 +457,7 @@ fn brick_runs(f: &dyn Field, fp: &Rect, grid: &GridSpec) -> Vec<[usize; 2]> {
         let b = (a + BRICK_LAYERS).min(ncz);
         if !f
             .interval(&fp.extrude(Interval::new(z_of(a), z_of(b))))
-            .contains(T)
+            .contains(ISO)
         {
             continue;
         }

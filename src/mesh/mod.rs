@@ -1,5 +1,5 @@
 //! Polygonization: bound-pruned Marching Cubes over fields and dense grids, the indexed
-//! mesh it produces, and its exporters (seed 002 §7).
+//! mesh it produces, and its exporters (Paris et al. 2019 §7).
 //!
 //! * [`polygonize`] extracts the surface `f = T` of any [`crate::field::Field`] on a
 //!   [`GridSpec`], evaluating only the samples of cells inside the field's z-bands and

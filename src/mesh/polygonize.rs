@@ -1,4 +1,4 @@
-//! Bound-pruned Marching Cubes over a [`Field`] (seed 002 §7): bands, samples, vertices,
+//! Bound-pruned Marching Cubes over a [`Field`] (Paris et al. 2019 §7): bands, samples, vertices,
 //! triangles, each stage parallel over tiles of grid columns.
 //!
 //! 1. **Bands** ([`columns::tile_bands`]): per cell column, the cell layers that can hold
@@ -36,7 +36,7 @@ use super::indexed::Mesh;
 use super::stats::MeshStats;
 use super::tables::{EDGE_AXIS, EDGE_CORNERS, TABLES};
 use super::{MeshError, par_concat, split_parts};
-use crate::field::{Aabb, Elevation, Field, Interval, T};
+use crate::field::{Aabb, Elevation, Field, ISO, Interval};
 use crate::io::{DEFAULT_MEMORY_BUDGET, check_budget};
 
 /// Most field evaluations per vertex with [`MeshOptions::refine`].
@@ -88,7 +88,7 @@ pub fn progress_steps(grid: &GridSpec) -> u64 {
 
 /// Extracts the surface `f = T` of `field` on `grid` (solid where `f > T`): a welded,
 /// crack-free, 2-manifold mesh wound counter-clockwise from outside, with outward
-/// normals, plus the statistics of seed 002's Table 1. Deterministic for any number of
+/// normals, plus the statistics of Table 1 of Paris et al. 2019. Deterministic for any number of
 /// threads. Errors when the sample storage would exceed `opts.budget`.
 pub fn polygonize(
     field: &dyn Field,
@@ -388,7 +388,7 @@ impl<'f> Ctx<'_, 'f> {
                     });
                     for (k, d) in dst.iter_mut().enumerate() {
                         let z = self.grid.point(i, j, s.k0 as usize + k).z;
-                        *d = T + (h - z) / dz;
+                        *d = ISO + (h - z) / dz;
                     }
                 } else if n < SHORT_SPAN {
                     for (k, d) in dst.iter_mut().enumerate() {
@@ -434,7 +434,7 @@ impl<'f> Ctx<'_, 'f> {
             for (si, s) in spans.iter().enumerate() {
                 for k in s.k0..s.k1 {
                     let p = s.offset + (k - s.k0) as usize;
-                    let solid = values[p] > T;
+                    let solid = values[p] > ISO;
                     let z_next = if k + 1 < s.k1 {
                         Some((p + 1, s))
                     } else {
@@ -456,18 +456,18 @@ impl<'f> Ctx<'_, 'f> {
                         let Some((q, qs, [qi, qj])) = nb else {
                             continue;
                         };
-                        if solid == (values[q] > T) {
+                        if solid == (values[q] > ISO) {
                             continue;
                         }
                         let a = End {
                             p: self.grid.point(i, j, k as usize),
-                            v: values[p] - T,
+                            v: values[p] - ISO,
                             elevation: s.elevation,
                         };
                         let kq = if axis == 2 { k + 1 } else { k };
                         let b = End {
                             p: self.grid.point(qi, qj, kq as usize),
-                            v: values[q] - T,
+                            v: values[q] - ISO,
                             elevation: qs.elevation,
                         };
                         slots[p - base][axis] = out.positions.len() as u32;
@@ -508,15 +508,15 @@ impl<'f> Ctx<'_, 'f> {
         } else {
             let (mut va, mut vb) = (a.v, b.v);
             if a.elevation {
-                va = f.value(a.p) - T;
+                va = f.value(a.p) - ISO;
                 out.evaluations += 1;
             } else if b.elevation {
-                vb = f.value(b.p) - T;
+                vb = f.value(b.p) - ISO;
                 out.evaluations += 1;
             }
             let mut t = edge_t(va, vb);
             if self.refine {
-                let g = |s: f32| f.value(a.p.lerp(b.p, s)) - T;
+                let g = |s: f32| f.value(a.p.lerp(b.p, s)) - ISO;
                 t = regula_falsi(g, t, va, vb, &mut out.evaluations);
             }
             let pos = a.p.lerp(b.p, t);
@@ -581,7 +581,7 @@ impl<'f> Ctx<'_, 'f> {
                                 == Some(p[c])),
                         "cell ({i}, {j}, {k}): corner samples not consecutive"
                     );
-                    let v: [f32; 8] = p.map(|q| values[q] - T);
+                    let v: [f32; 8] = p.map(|q| values[q] - ISO);
                     let mut case = 0usize;
                     for (c, &x) in v.iter().enumerate() {
                         case |= ((x > 0.0) as usize) << c;

@@ -7,7 +7,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::MeshError;
-use crate::field::{Aabb, Field, Grid, T, eval_grid};
+use crate::field::{Aabb, Field, Grid, ISO, eval_grid};
 use crate::io::check_budget;
 
 /// `dims` samples spanning `b` corner to corner (each axis needs at least 2).
@@ -69,7 +69,7 @@ impl Sidecar {
             shape: [nz, ny, nx],
             origin: spec.origin.into(),
             spacing: spec.step.into(),
-            iso: T,
+            iso: ISO,
             layout: "float32 C order, value[z][y][x] at origin + (x, y, z) * spacing".into(),
         }
     }
@@ -128,7 +128,7 @@ mod tests {
         assert_eq!(v.len(), 30);
         // Layer z = 2 is on the surface, below solid, above empty.
         assert!(v[..6].iter().all(|&x| x == 1.0));
-        assert!(v[12..18].iter().all(|&x| x == T));
+        assert!(v[12..18].iter().all(|&x| x == ISO));
         assert!(v[24..].iter().all(|&x| x == 0.0));
         let s = Sidecar::new(&spec);
         assert_eq!(s.shape, [5, 2, 3]);

@@ -1,9 +1,9 @@
-//! Extraction statistics: the columns of seed 002's Table 1 (#C, #C0, times per stage).
+//! Extraction statistics: the columns of Table 1 of Paris et al. 2019 (#C, #C0, times per stage).
 
 use std::fmt;
 use std::time::Duration;
 
-/// What an extraction did. `field_evaluations` is #C in seed 002 Table 1 and
+/// What an extraction did. `field_evaluations` is #C in Table 1 of Paris et al. 2019 and
 /// `grid_points` is #C0, what plain Marching Cubes evaluates on the same grid.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshStats {

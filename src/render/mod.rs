@@ -1,8 +1,9 @@
-//! Direct preview of the implicit surface `f = T` by ray tracing (seed 001 §7).
+//! Direct preview of the implicit surface `f = T` by ray tracing (Génevaux et al. 2015 §7).
 //!
 //! * [`camera`]: look-at pinhole camera, framed automatically from a support box.
-//! * [`trace`]: segment tracing with local Lipschitz bounds (seed 001 §7.2, Galin et al.
-//!   2020) and plain sphere tracing with the global bound, with per-ray step counts.
+//! * [`trace`]: segment tracing with local Lipschitz bounds (Génevaux et al. 2015 §7.2,
+//!   Galin et al. 2020) and plain sphere tracing with the global bound, with per-ray step
+//!   counts.
 //! * [`shade`]: terrain shading — sun, sky ambient, shadow rays, fog, slope/altitude tint.
 //! * [`cpu`]: the image renderer, tiles over rayon.
 //! * [`image`]: the rendered [`Frame`] and its PNG outputs (colour and step cost).

@@ -1,5 +1,5 @@
 //! Terrain shading: sun diffuse with shadow rays, a hemisphere sky ambient, distance fog,
-//! and a material tint by slope and altitude (seed 003: rock on steep faces, grass on
+//! and a material tint by slope and altitude (Frasson et al. §5: rock on steep faces, grass on
 //! low flats, snow on high flats).
 //!
 //! Colours are linear RGB in `[0, 1]`; [`to_srgb8`] encodes them for the PNG. The GPU

@@ -4,9 +4,9 @@
 //! steps that cannot skip the surface `f = T`: on a stretch of the ray where the field is
 //! λ-Lipschitz, `|f(t) − T| / λ` is a lower bound of the distance to the surface.
 //!
-//! * [`Method::Sphere`] is plain sphere tracing (Hart 1996; seed 001 §7.1) with the
+//! * [`Method::Sphere`] is plain sphere tracing (Hart 1996; Génevaux et al. 2015 §7.1) with the
 //!   field's **global** Lipschitz bound.
-//! * [`Method::Segment`] is the accelerated tracing of seed 001 §7.2, the same idea as
+//! * [`Method::Segment`] is the accelerated tracing of Génevaux et al. 2015 §7.2, the same idea as
 //!   segment tracing (Galin et al. 2020): at `t`, take a candidate segment `[t, t + δ]`,
 //!   ask the field for its Lipschitz bound λ on that segment only, and step by
 //!   `s = |f(t) − T| / λ`. When `s ≥ δ` the whole candidate is safe: step `δ` and double
@@ -23,12 +23,12 @@
 use glam::Vec3;
 
 use super::camera::Ray;
-use crate::field::{Field, Line, T, Tree};
+use crate::field::{Field, ISO, Line, Tree};
 
 /// Which step rule to use.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
 pub enum Method {
-    /// Local Lipschitz bounds over candidate segments (seed 001 §7.2).
+    /// Local Lipschitz bounds over candidate segments (Génevaux et al. 2015 §7.2).
     #[default]
     Segment,
     /// Plain sphere tracing with the global Lipschitz bound.
@@ -234,7 +234,7 @@ fn march(
     let mut side = 0.0f32;
     let (mut prev_t, mut prev_e) = (t0, 0.0);
     while steps < params.max_steps {
-        let e = along.value(t) - T;
+        let e = along.value(t) - ISO;
         steps += 1;
         let s_now = if e > 0.0 { 1.0 } else { -1.0 };
         if side == 0.0 {
@@ -308,7 +308,7 @@ fn refine(
             0.5 * (a + b)
         };
         m = m.clamp(a, b);
-        let e = along.value(m) - T;
+        let e = along.value(m) - ISO;
         n += 1;
         if (m - last).abs() < width {
             break;

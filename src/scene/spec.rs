@@ -39,11 +39,11 @@ pub struct Scene {
 /// One node of a tree file. In RON: `Blend(name: "root", children: [...])`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum NodeSpec {
-    /// A skeletal primitive (seed 002 §5.2): `energy · g(d̃ / R)` around a skeleton.
+    /// A skeletal primitive (Paris et al. 2019 §5.2): `energy · g(d̃ / R)` around a skeleton.
     Primitive(PrimitiveSpec),
-    /// A DEM as an implicit terrain (seed 002 §5.1): solid below the elevation.
+    /// A DEM as an implicit terrain (Paris et al. 2019 §5.1): solid below the elevation.
     Heightfield(HeightfieldSpec),
-    /// Feature Curves compiled by the voxel pipeline into an S-field primitive (seed 000).
+    /// Feature Curves compiled by the voxel pipeline into an S-field primitive (Becher 2016).
     FeatureVolume(FeatureVolumeSpec),
     /// A subtree placed on the terrain: its origin moved to `(x, y, h(x, y) + offset)`.
     Anchor(AnchorSpec),
@@ -59,7 +59,7 @@ pub enum NodeSpec {
     Transform(TransformSpec),
     /// A reference to a named node (in `defs` or the tree), so it can be reused.
     Instance(InstanceSpec),
-    /// Localized turbulence warp of a subtree (seed 002 §5.3).
+    /// Localized turbulence warp of a subtree (Paris et al. 2019 §5.3).
     Warp(WarpSpec),
     /// `by` stands in for `base` inside a region, with a smooth transition near the
     /// region's faces: how a terrain-aware Feature Volume goes into its terrain.

@@ -15,7 +15,7 @@ use super::noise::{nprim_head, twarp_params};
 use super::shape::{Profile, Shape};
 use super::{Tape, TapeError, sfield};
 use crate::field::replace::gap;
-use crate::field::{Aabb, Fbm, Field, Interval, Noise, T, Transition, Warp};
+use crate::field::{Aabb, Fbm, Field, ISO, Interval, Noise, Transition, Warp};
 use crate::voxel::SField;
 
 /// Ball radius standing for "everywhere" when computing the global bound.
@@ -129,7 +129,7 @@ impl TapeBuilder {
     pub fn primitive(&mut self, shape: Shape, profile: Profile) {
         let (r, e, sigma, range) = match profile {
             Profile::Wyvill { radius, energy } => (radius, energy, 0, Interval::new(0.0, energy)),
-            Profile::Sigma { radius } => (radius, 1.0, flag::SIGMA, Interval::new(0.0, 2.0 * T)),
+            Profile::Sigma { radius } => (radius, 1.0, flag::SIGMA, Interval::new(0.0, 2.0 * ISO)),
         };
         let mut p = vec![0.0; prim::SHAPE];
         p[prim::RADIUS] = r;
@@ -142,7 +142,7 @@ impl TapeBuilder {
         });
     }
 
-    /// Pushes the noisy primitive `energy · g(d̃)` of seed 002 §5.2 around a convex shape
+    /// Pushes the noisy primitive `energy · g(d̃)` of Paris et al. 2019 §5.2 around a convex shape
     /// (not a prism), with [`crate::field::Primitive`]'s anisotropic distance `d̃`.
     pub fn noisy_primitive(
         &mut self,
@@ -166,13 +166,13 @@ impl TapeBuilder {
     }
 
     /// Pushes `σ(h(x, y) − z, falloff)` for a heightfield (clamped at its edges).
-    /// Solid below the surface and unbounded: intersect it with a prism (seed 002 §5.1).
+    /// Solid below the surface and unbounded: intersect it with a prism (Paris et al. 2019 §5.1).
     pub fn heightfield(&mut self, grid: &HeightGrid<'_>, falloff: f32) -> Result<(), TapeError> {
         let (flags, q) = height::encode(grid, falloff, &mut self.heights)?;
         self.emit(op::HEIGHT, flags, &q);
         self.push(Entry {
             support: EVERYWHERE_BOX,
-            range: Interval::new(0.0, 2.0 * T),
+            range: Interval::new(0.0, 2.0 * ISO),
         });
         Ok(())
     }
@@ -190,7 +190,7 @@ impl TapeBuilder {
         self.emit(op::SFIELD, index, &q);
         self.push(Entry {
             support: sf.support(),
-            range: Interval::new(0.0, 2.0 * T),
+            range: Interval::new(0.0, 2.0 * ISO),
         });
         Ok(())
     }
@@ -228,9 +228,9 @@ impl TapeBuilder {
                 },
             ),
             Combine::Difference => {
-                let carved = Interval::new(2.0 * T - b.range.hi, 2.0 * T - b.range.lo);
+                let carved = Interval::new(2.0 * ISO - b.range.hi, 2.0 * ISO - b.range.lo);
                 // Outside a's support the result is min(0, 2T − b): zero unless b > 2T.
-                let support = if b.range.hi <= 2.0 * T {
+                let support = if b.range.hi <= 2.0 * ISO {
                     a.support
                 } else {
                     a.support.union(b.support)
@@ -349,7 +349,7 @@ impl TapeBuilder {
         self.max_warps = self.max_warps.max(self.warps.len());
     }
 
-    /// Enters the turbulence warp `w` (seed 002 §5.3) of the subtree emitted until
+    /// Enters the turbulence warp `w` (Paris et al. 2019 §5.3) of the subtree emitted until
     /// [`TapeBuilder::warp_end`]: the subtree is evaluated at `ω⁻¹(p)`.
     pub fn turbulence_begin(&mut self, w: &Warp) -> Result<(), TapeError> {
         if !(w.reach().is_finite() && w.lipschitz().is_finite()) {

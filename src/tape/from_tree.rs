@@ -30,7 +30,7 @@ use glam::Vec3;
 use super::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder, TapeError};
 use crate::dem::HeightfieldField;
 use crate::field::skeleton::Project;
-use crate::field::{Field, Node, NodeId, Primitive, Skeleton, T, Tree};
+use crate::field::{Field, ISO, Node, NodeId, Primitive, Skeleton, Tree};
 use crate::voxel::SField;
 
 /// The GPU tape of a compiled tree, or the first node without an encoding.
@@ -322,7 +322,7 @@ fn heightfield(
         },
         Profile::Wyvill {
             radius: r,
-            energy: 2.0 * T,
+            energy: 2.0 * ISO,
         },
     );
     b.combine(Combine::Intersection)

@@ -1,6 +1,6 @@
 //! The WGSL constant header, `shaders/tape_consts.wgsl`, generated from the Rust
 //! definitions: the [`format`] modules (ops, shape kinds, flags, limits, the named offset
-//! of every parameter), the field's `T` and Wyvill constants, the simplex noise's
+//! of every parameter), the field's iso-value `ISO` and Wyvill constants, the simplex noise's
 //! constants, the S-field bricks' sizes, and the pipeline-overridable [`FEATURES`].
 //!
 //! The shaders name no number that Rust defines: they read these constants. The header
@@ -15,7 +15,7 @@ use glam::Vec3;
 
 use super::FEATURES;
 use super::format::GROUPS;
-use crate::field::falloff::{T, WYVILL_MAX_SLOPE, WYVILL_PEAK_X};
+use crate::field::falloff::{ISO, WYVILL_MAX_SLOPE, WYVILL_PEAK_X};
 use crate::field::noise::{F3, G3, GAIN, LACUNARITY, OCTAVE_SHIFT, R2, SIMPLEX_SCALE};
 use crate::voxel::sparse::{BRICK, BRICK_NODES, NONE};
 
@@ -52,9 +52,9 @@ pub fn wgsl_header() -> String {
     };
     f32s(
         &mut line,
-        "The field (src/field/falloff.rs): solid where f > T; Wyvill's steepest slope.",
+        "The field (src/field/falloff.rs): solid where f > ISO; Wyvill's steepest slope.",
         &[
-            ("T", T),
+            ("ISO", ISO),
             ("WYVILL_MAX_SLOPE", WYVILL_MAX_SLOPE),
             ("WYVILL_PEAK_X", WYVILL_PEAK_X),
         ],
@@ -126,7 +126,7 @@ mod tests {
     fn f32_literals_read_back_exactly_as_wgsl_reads_them() {
         // WGSL reads a literal as an abstract float (f64), then converts it to f32.
         for v in [
-            T,
+            ISO,
             WYVILL_MAX_SLOPE,
             WYVILL_PEAK_X,
             F3,

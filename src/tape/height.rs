@@ -5,7 +5,7 @@
 //! cell, `nx`, `ny`), the samples' offset, then the offsets of the `n` levels of a max
 //! pyramid of per-cell bounds of `|∇h|` (`slope_under`). The bound over a ball is σ's
 //! slope over the range of `h − z` on the ball, times `√(1 + s²)` with `s` the slope
-//! under the ball (seed 001 §7.3.1).
+//! under the ball (Génevaux et al. 2015 §7.3.1).
 
 use glam::{Vec2, Vec3};
 
@@ -61,7 +61,7 @@ pub(super) fn encode(
         )));
     }
     // The CPU leaf's own bounds of |∇h| per cell (from its samples or stencil), as a
-    // max pyramid, so a ball's slope is that of the cells under it (seed 001 §7.3.1).
+    // max pyramid, so a ball's slope is that of the cells under it (Génevaux et al. 2015 §7.3.1).
     let slopes = Heightfield::new(nx, ny, origin, Vec2::splat(cell), z.to_vec())
         .map_err(|e| TapeError::Invalid(format!("heightfield: {e}")))?
         .cell_slopes(interpolation);

@@ -9,7 +9,7 @@ use glam::Vec3;
 use super::format::{Instr, constant, get3, guard, limit, op, replace, twarp, unwarp, warp};
 use super::noise::{noisy_primitive, twarp_apply};
 use super::{height, sfield, shape};
-use crate::field::{Aabb, Fbm, Field, Interval, T, Transition};
+use crate::field::{Aabb, Fbm, Field, ISO, Interval, Transition};
 use crate::voxel::SField;
 
 /// A compiled tape: what the GPU uploads, and a [`Field`] on the CPU.
@@ -91,7 +91,7 @@ impl Tape {
                         op::BLEND => (a.0 + b.0, a.1 + b.1),
                         op::UNION => (a.0.max(b.0), a.1.max(b.1)),
                         op::INTER => (a.0.min(b.0), a.1.max(b.1)),
-                        _ => (a.0.min(2.0 * T - b.0), a.1.max(b.1)),
+                        _ => (a.0.min(2.0 * ISO - b.0), a.1.max(b.1)),
                     };
                 }
                 op::REPLACE => {

@@ -1,7 +1,7 @@
 //! Noise on the tape: the encoding of an [`Fbm`] for `shaders/noise.wgsl` (the same seeded
 //! simplex noise, hash and gradients, in f32), the noisy primitive `NPRIM` (the
-//! anisotropic distance of seed 002 §5.2) and the turbulence warp `TWARP` (seed 002 §5.3),
-//! with their CPU twins.
+//! anisotropic distance of Paris et al. 2019 §5.2) and the turbulence warp `TWARP`
+//! (Paris et al. 2019 §5.3), with their CPU twins.
 //!
 //! The CPU twins evaluate the noise with the tree's own [`Fbm`] (kept in [`Tape::noises`],
 //! indexed by the encoding), so the tape's values are the tree's and the tests compare

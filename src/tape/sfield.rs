@@ -39,7 +39,7 @@ use super::TapeError;
 use super::format::{fbm, limit, set3, sf_level, sfield};
 use super::noise::encode_fbm;
 use crate::curves::Orientation;
-use crate::field::falloff::{T, sigma_slope, wyvill_slope};
+use crate::field::falloff::{ISO, sigma_slope, wyvill_slope};
 use crate::field::{Aabb, Interval};
 use crate::voxel::SField;
 use crate::voxel::sparse::BRICK_NODES;
@@ -146,7 +146,7 @@ pub fn bound(sf: &SField, s_c: f32, c: Vec3, r: f32) -> f32 {
     let lo = (bc.min - d.min).min(d.max - bc.max).min_element().max(0.0);
     let hi = (bc.max - d.min).min(d.max - bc.min).min_element().max(0.0);
     let f = p.falloff;
-    let face = 2.0 * T * wyvill_slope(Interval::new(lo / f, hi / f)) / f;
+    let face = 2.0 * ISO * wyvill_slope(Interval::new(lo / f, hi / f)) / f;
     sig.max(face)
 }
 

@@ -67,11 +67,12 @@ pub enum Shape {
         /// Semi-axes along x, y, z (positive).
         radii: Vec3,
     },
-    /// The prism of an implicit heightfield ([`crate::dem::HeightfieldField`], seed 002
-    /// §5.1): its distance is `√(d_xy² + d_z²)` with `d_xy` the largest excess of `x, y`
-    /// over `[min, max]` (the leaf's `R − clearance` of its rectangle, so `min, max` is the
-    /// rectangle eroded by `R`) and `d_z` the distance from `z` to `[min.z, max.z]`. Not a
-    /// Euclidean distance at the corners, but 1-Lipschitz like the others.
+    /// The prism of an implicit heightfield ([`crate::dem::HeightfieldField`],
+    /// Paris et al. 2019 §5.1): its distance is `√(d_xy² + d_z²)` with `d_xy` the largest
+    /// excess of `x, y` over `[min, max]` (the leaf's `R − clearance` of its rectangle, so
+    /// `min, max` is the rectangle eroded by `R`) and `d_z` the distance from `z` to
+    /// `[min.z, max.z]`. Not a Euclidean distance at the corners, but 1-Lipschitz like the
+    /// others.
     Prism {
         /// Lower corner (`min > max` along x or y is allowed: a domain narrower than 2R).
         min: Vec3,

@@ -1,4 +1,4 @@
-//! Guidance field diffusion (seed 000 §4.3) and noise field diffusion (§4.4) on one level
+//! Guidance field diffusion (Becher 2016 §4.3) and noise field diffusion (§4.4) on one level
 //! of the sparse grid, and the Jacobi driver every stencil of the pipeline runs on.
 //!
 //! * Normals: Perona–Malik anisotropic diffusion with `g(x) = 1 / (1 + (x/k)²)` of

@@ -1,4 +1,4 @@
-//! Feature Curve expansion (seed 000 §4.5, optional): each end of every seed Feature Curve
+//! Feature Curve expansion (Becher 2016 §4.5, optional): each end of every seed Feature Curve
 //! is continued by a curve traced through the guidance field of a first run, until it has
 //! covered a given length, comes close to another Feature Curve, or reaches the domain's
 //! faces; the traced curves join the seeds and the pipeline runs again.

@@ -1,4 +1,4 @@
-//! The voxel pipeline of seed 000 (ch. 4) on a sparse, multi-level grid, and the S-field
+//! The voxel pipeline of Becher 2016 (ch. 4) on a sparse, multi-level grid, and the S-field
 //! primitive it produces ([`SField`]).
 
 pub mod diffuse;

@@ -1,4 +1,4 @@
-//! The voxel pipeline (seed 000 ch. 4) on a stack of sparse levels, coarse to fine.
+//! The voxel pipeline (Becher 2016, ch. 4) on a stack of sparse levels, coarse to fine.
 //!
 //! Levels halve the voxel size from a coarsest level of at most 8 nodes per axis down to
 //! the requested voxel. Every level is voxelized (§4.2). The normal, bitangent and noise

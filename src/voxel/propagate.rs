@@ -1,4 +1,4 @@
-//! Surface propagation (seed 000 §4.6): the surface field S from the seed nodes and the
+//! Surface propagation (Becher 2016 §4.6): the surface field S from the seed nodes and the
 //! normal field.
 //!
 //! * [`waves`]: signed distance propagation (§4.6.2). Wave after wave, every unset node

@@ -25,7 +25,7 @@ use super::sparse::{BRICK, Bricks, NONE, locate, trilinear_grad};
 use super::tricubic::{Cubic, CubicBounds, Interpolation};
 use crate::curves::Orientation;
 use crate::field::falloff::{
-    T, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope, wyvill,
+    ISO, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope, wyvill,
     wyvill_d, wyvill_interval, wyvill_slope,
 };
 use crate::field::{Aabb, Fbm, Field, Interval};
@@ -433,7 +433,7 @@ impl SField {
     }
 
     fn face_falloff(&self, d: f32) -> f32 {
-        2.0 * T * (1.0 - wyvill(d / self.params.falloff))
+        2.0 * ISO * (1.0 - wyvill(d / self.params.falloff))
     }
 }
 
@@ -461,9 +461,9 @@ impl Field for SField {
         let (d, gd) = self.d_in(p);
         let rf = self.params.falloff;
         let (w, dw) = wyvill_d(d / rf);
-        let face = 2.0 * T * (1.0 - w);
+        let face = 2.0 * ISO * (1.0 - w);
         if face < v {
-            (face, gd * (-2.0 * T * dw / rf))
+            (face, gd * (-2.0 * ISO * dw / rf))
         } else {
             (v, gs * (sign * dv))
         }
@@ -491,7 +491,7 @@ impl Field for SField {
         let v = sigma_interval(x, self.params.transition);
         let d = self.d_in_range(&bc);
         let wi = wyvill_interval(d.scale(1.0 / self.params.falloff));
-        let face = Interval::new(2.0 * T * (1.0 - wi.hi), 2.0 * T * (1.0 - wi.lo));
+        let face = Interval::new(2.0 * ISO * (1.0 - wi.hi), 2.0 * ISO * (1.0 - wi.lo));
         let f = v.min(face);
         if self.params.domain.contains_box(b) {
             f
@@ -505,7 +505,7 @@ impl Field for SField {
             return 0.0;
         }
         let sig = sigma_max_slope(self.params.transition) * (self.lip_s + self.lip_noise);
-        sig.max(2.0 * T * WYVILL_MAX_SLOPE / self.params.falloff)
+        sig.max(2.0 * ISO * WYVILL_MAX_SLOPE / self.params.falloff)
     }
 
     fn lipschitz_box(&self, b: &Aabb) -> f32 {
@@ -521,7 +521,8 @@ impl Field for SField {
         };
         let sig = sigma_slope(x, self.params.transition) * ls;
         let d = self.d_in_range(&bc);
-        let face = 2.0 * T * wyvill_slope(d.scale(1.0 / self.params.falloff)) / self.params.falloff;
+        let face =
+            2.0 * ISO * wyvill_slope(d.scale(1.0 / self.params.falloff)) / self.params.falloff;
         sig.max(face)
     }
 

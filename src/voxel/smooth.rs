@@ -1,4 +1,4 @@
-//! Gaussian smoothing of the surface field (seed 000 §4.6.3): separable binomial passes
+//! Gaussian smoothing of the surface field (Becher 2016 §4.6.3): separable binomial passes
 //! `[1 2 1] / 4` along x, y and z (a Gaussian of variance ½ voxel² per pass). A node on
 //! the domain's face is left unchanged along that axis (linear extrapolation), so a
 //! linear S — a plane's distance — is preserved exactly.

@@ -1,4 +1,4 @@
-//! Voxelization (seed 000 §4.2): every node whose cell (the cube of side `h` centred on
+//! Voxelization (Becher 2016 §4.2): every node whose cell (the cube of side `h` centred on
 //! it) intersects a proxy triangle gathers the triangle's normal, bitangent (left and
 //! right separately) and noise parameters; the gathered values are then averaged, with
 //! the sign-invariant bitangent pairing of §4.2.1. Nodes touched by seed triangles get

@@ -43,7 +43,7 @@ pub fn sigma_sphere(s: &SigmaSphere) -> Tape {
     t.finish().unwrap()
 }
 
-/// A DEM as `σ(h − z)` inside a σ box prism (seed 002 §5.1) with a tunnel carved by
+/// A DEM as `σ(h − z)` inside a σ box prism (Paris et al. 2019 §5.1) with a tunnel carved by
 /// a σ capsule through the middle at the median elevation.
 pub fn dem_with_cave(d: &Dem) -> Tape {
     let falloff = 2.0 * d.cell;

@@ -2,7 +2,7 @@
 
 use glam::{Vec2, Vec3};
 use karstic::field::falloff::{sigma, sigma_max_slope, sigma_slope};
-use karstic::field::{Aabb, Field, Interval, T};
+use karstic::field::{Aabb, Field, ISO, Interval};
 
 /// A terrain chunk: `min(σ(h(x, y) − z, R), σ(−d_box(p), R))`, solid under the
 /// heightfield `h` and inside `bounds`.
@@ -73,7 +73,7 @@ impl Field for Terrain {
     }
     fn interval(&self, b: &Aabb) -> Interval {
         let _ = b;
-        Interval::new(0.0, 2.0 * T)
+        Interval::new(0.0, 2.0 * ISO)
     }
     fn lipschitz(&self) -> f32 {
         sigma_max_slope(self.falloff) * (1.0 + self.slope() * self.slope()).sqrt()

@@ -9,7 +9,7 @@ use karstic::field::falloff::{
     WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope, wyvill,
     wyvill_d, wyvill_interval,
 };
-use karstic::field::{Aabb, Elevation, ElevationSource, Field, Interval, Rect, T, ZBands};
+use karstic::field::{Aabb, Elevation, ElevationSource, Field, ISO, Interval, Rect, ZBands};
 
 /// Range of `|p − c|` over a box.
 fn dist_range(b: &Aabb, c: Vec3) -> Interval {
@@ -124,7 +124,7 @@ impl Gyroid {
         let (sz, cz) = q.z.sin_cos();
         let v = sx * cy + sy * cz + sz * cx;
         let d = Vec3::new(cx * cy - sz * sx, -sx * sy + cy * cz, -sy * sz + cz * cx) * self.freq;
-        (T + self.amp * v, self.amp * d)
+        (ISO + self.amp * v, self.amp * d)
     }
     /// Signed distance to the clip box, positive inside (exact outside, a bound inside).
     fn inside(&self, p: Vec3) -> (f32, Vec3) {
@@ -167,8 +167,8 @@ impl Field for Gyroid {
         let lg = self.amp * self.freq * 2.0 * 3f32.sqrt();
         let r = b.radius();
         let gi = Interval::new(
-            (g - lg * r).max(T - 1.5 * self.amp),
-            (g + lg * r).min(T + 1.5 * self.amp),
+            (g - lg * r).max(ISO - 1.5 * self.amp),
+            (g + lg * r).min(ISO + 1.5 * self.amp),
         );
         let s = self.inside(b.center()).0;
         gi.min(sigma_interval(Interval::new(s - r, s + r), self.falloff))

@@ -1,5 +1,6 @@
-//! Skeletons of the skeletal primitives (seed 002 §5.2, seed 001 §4.1): the geometry a
-//! primitive's field falls off from, with its exact Euclidean distance.
+//! Skeletons of the skeletal primitives (Paris et al. 2019 §5.2,
+//! Génevaux et al. 2015 §4.1): the geometry a primitive's field falls off from, with its
+//! exact Euclidean distance.
 //!
 //! * thin: [`Point`], [`Segment`], polyline and Catmull-Rom curve ([`Chain`]), [`Disc`],
 //!   square plane patch ([`PlanePatch`]);
