@@ -13,8 +13,7 @@ use karstic::field::falloff::{WYVILL_MAX_SLOPE, wyvill, wyvill_d, wyvill_interva
 use karstic::field::skeleton::Point;
 use karstic::field::{
     Aabb, Fbm, Field, Grid, ISO, Interval, Line, NodeId, Primitive, Rect, Skeleton, Transition,
-    Tree,
-    TreeBuilder, Warp, ZBands, eval_grid, eval_grid_naive,
+    Tree, TreeBuilder, Warp, ZBands, eval_grid, eval_grid_naive,
 };
 use proptest::prelude::*;
 

@@ -703,7 +703,11 @@ impl FeatureVolumeSpec {
     /// The volume's primitives in world coordinates, `Ground(..)` points resolved on
     /// `opts.ground`, and with `on_terrain` the terrain sampled over the domain: what
     /// [`FeatureVolumeSpec::build_with`] runs the pipeline on.
-    pub fn resolve(&self, base_dir: &Path, opts: &BuildOptions<'_>) -> Result<Features, CurveError> {
+    pub fn resolve(
+        &self,
+        base_dir: &Path,
+        opts: &BuildOptions<'_>,
+    ) -> Result<Features, CurveError> {
         let no_ground = |_: Vec2| None;
         let set = self.feature_set(base_dir)?;
         let mut features = set
