@@ -183,6 +183,16 @@ conformance! {
         "Difference(base: Primitive(shape: Box(center: (0, 0, 0), half_size: (5, 4, 2)), falloff: 2), \
          carves: [Primitive(shape: Sphere(center: (2, 2, 2), radius: 2), falloff: 1.5, energy: 1.4), \
          Primitive(shape: Capsule(a: (-6, 0, 0), b: (6, -1, 0), radius: 0.5), falloff: 1.5)])");
+    replace: [Op(op::REPLACE)] => scene(
+        "Replace(base: Primitive(shape: Box(center: (0, 0, 0), half_size: (6, 5, 2)), falloff: 2), \
+         by: Primitive(shape: Sphere(center: (1, 0, 1), radius: 3), falloff: 2.5, energy: 1.3), \
+         region: (min: (-3, -4, -3), max: (5, 3, 4)), blend: 2.5)");
+    replace_the_dem_by_a_terrain_aware_volume: [Op(op::REPLACE), Op(op::SFIELD), Op(op::HEIGHT)] =>
+        scene(&format!(
+            "Replace(base: Heightfield({DEM}), by: FeatureVolume(curves: Inline(tunnels: \
+             [(path: [Abs(3700, 4950, 852), Abs(3560, 4958, 860)], width: Const(12), \
+             height: Const(10))]), domain: ((3530, 4910, 800), (3720, 5000, 940)), voxel: 2.0, \
+             on_terrain: true))"));
     transform: [Op(op::WARP), Op(op::UNWARP)] => scene(
         "Transform(translate: (-9, 9, 2), rotate: (axis: (1, 1, 0.3), degrees: 35), \
          scale: (1.2, 0.7, 1.0), child: Primitive(shape: Box(center: (0, 0, 1), \

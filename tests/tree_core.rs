@@ -425,3 +425,41 @@ fn blend_bvh_answers_like_a_linear_scan() {
         assert!((t.value(p) - direct).abs() < 1e-5);
     }
 }
+
+/// Replacing one flat field by another: the whole slope is the transition's, `|f_by −
+/// f_base|·g'_max/W`, which the children's own bounds (0 here) do not see.
+#[test]
+fn replace_bounds_hold_across_the_transition() {
+    let mut b = TreeBuilder::new();
+    let (base, by) = (b.constant(0.2, None), b.constant(0.9, None));
+    let region = Aabb::new(Vec3::new(-2.0, -1.0, -3.0), Vec3::new(4.0, 2.0, 1.0));
+    let root = b.replace(base, by, Transition::new(region, 0.5), None);
+    let t = b.build(root);
+    let mut rng = Rng(3);
+    let around = region.dilate(1.0);
+    let mut steepest = 0.0f32;
+    for _ in 0..4000 {
+        let p = rng.in_box(&around);
+        let q = p + rng.dir() * 0.05 * rng.f32();
+        let (df, d) = ((t.value(p) - t.value(q)).abs(), p.distance(q));
+        steepest = steepest.max(df / d.max(1e-9));
+        let bx = Aabb::new(p.min(q), p.max(q));
+        for l in [
+            t.lipschitz(),
+            t.lipschitz_box(&bx),
+            t.lipschitz_segment(p, q),
+        ] {
+            assert!(df <= l * d + 1e-5, "{df} > {l}·{d} at {p}");
+        }
+        let iv = t.interval(&bx);
+        assert!(iv.contains(t.value(p)) && iv.contains(t.value(q)));
+    }
+    // The slope is really there (0.7 · g'_max / W = 2.4): the bound is not vacuous.
+    assert!(steepest > 2.0, "{steepest}");
+    // Inside the core and outside the region the field is flat and bounded as such.
+    let core = Aabb::new(Vec3::new(0.0, 0.0, -1.0), Vec3::new(1.0, 1.0, 0.0));
+    let outside = Aabb::new(Vec3::new(6.0, 0.0, 0.0), Vec3::new(7.0, 1.0, 1.0));
+    assert_eq!(t.lipschitz_box(&core), 0.0);
+    assert_eq!(t.lipschitz_box(&outside), 0.0);
+    assert_eq!(t.interval(&core), Interval::point(0.9));
+}
