@@ -27,48 +27,35 @@ struct Component {
     volume: f32,
 }
 
-/// Connected components (by shared vertices), largest first.
+/// Connected components (by shared vertices, [`Mesh::components`]), largest first.
 fn components(m: &Mesh) -> Vec<Component> {
-    let mut parent: Vec<u32> = (0..m.positions.len() as u32).collect();
-    fn root(p: &mut [u32], mut i: u32) -> u32 {
-        while p[i as usize] != i {
-            p[i as usize] = p[p[i as usize] as usize];
-            i = p[i as usize];
-        }
-        i
-    }
-    for t in &m.triangles {
-        for k in 1..3 {
-            let (a, b) = (root(&mut parent, t[0]), root(&mut parent, t[k]));
-            parent[a as usize] = b;
-        }
-    }
-    // (vertices, edges, faces, volume) per component root.
-    let mut count: HashMap<u32, (i64, i64, i64, f32)> = HashMap::new();
+    let (labels, count) = m.components();
+    // (vertices, edges, faces, volume) per component.
+    let mut per = vec![(0i64, 0i64, 0i64, 0f32); count];
     let mut edges = Vec::new();
-    let mut used = vec![false; m.positions.len()];
-    for t in &m.triangles {
-        let c = count.entry(root(&mut parent, t[0])).or_default();
+    let mut seen = vec![false; m.positions.len()];
+    for (t, &l) in m.triangles.iter().zip(&labels) {
+        let c = &mut per[l as usize];
         c.2 += 1;
         let [a, b, cc] = t.map(|v| m.position(v));
         c.3 += a.dot(b.cross(cc)) / 6.0;
         for k in 0..3 {
             let (a, b) = (t[k], t[(k + 1) % 3]);
-            edges.push((a.min(b), a.max(b)));
-            if !used[a as usize] {
-                used[a as usize] = true;
-                count.entry(root(&mut parent, a)).or_default().0 += 1;
+            edges.push((a.min(b), a.max(b), l));
+            if !seen[a as usize] {
+                seen[a as usize] = true;
+                c.0 += 1;
             }
         }
     }
     edges.sort_unstable();
     edges.dedup();
-    for (a, _) in edges {
-        count.entry(root(&mut parent, a)).or_default().1 += 1;
+    for (_, _, l) in edges {
+        per[l as usize].1 += 1;
     }
-    let mut out: Vec<Component> = count
-        .values()
-        .map(|&(v, e, f, volume)| Component {
+    let mut out: Vec<Component> = per
+        .into_iter()
+        .map(|(v, e, f, volume)| Component {
             triangles: f as usize,
             euler: v - e + f,
             volume,

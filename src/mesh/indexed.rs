@@ -66,9 +66,9 @@ impl Topology {
 }
 
 impl Mesh {
-    /// The face count of each connected component (triangles sharing a vertex are
-    /// connected), largest first: floating debris shows up as small components.
-    pub fn component_sizes(&self) -> Vec<usize> {
+    /// The connected component of each triangle (triangles sharing a vertex are
+    /// connected), numbered `0..count` in the order of their first triangles, and `count`.
+    pub fn components(&self) -> (Vec<u32>, usize) {
         let mut parent: Vec<u32> = (0..self.positions.len() as u32).collect();
         fn root(parent: &mut [u32], mut v: u32) -> u32 {
             while parent[v as usize] != v {
@@ -84,11 +84,31 @@ impl Mesh {
                 parent[b as usize] = a;
             }
         }
-        let mut faces = vec![0usize; self.positions.len()];
-        for t in &self.triangles {
-            faces[root(&mut parent, t[0]) as usize] += 1;
+        let mut number = vec![u32::MAX; self.positions.len()];
+        let mut count = 0;
+        let labels = self
+            .triangles
+            .iter()
+            .map(|t| {
+                let r = root(&mut parent, t[0]) as usize;
+                if number[r] == u32::MAX {
+                    number[r] = count;
+                    count += 1;
+                }
+                number[r]
+            })
+            .collect();
+        (labels, count as usize)
+    }
+
+    /// The face count of each connected component, largest first: floating debris shows
+    /// up as small components.
+    pub fn component_sizes(&self) -> Vec<usize> {
+        let (labels, count) = self.components();
+        let mut sizes = vec![0usize; count];
+        for l in labels {
+            sizes[l as usize] += 1;
         }
-        let mut sizes: Vec<usize> = faces.into_iter().filter(|&n| n > 0).collect();
         sizes.sort_unstable_by(|a, b| b.cmp(a));
         sizes
     }
