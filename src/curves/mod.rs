@@ -222,20 +222,45 @@ impl Features {
         out
     }
 
+    /// Every tube: the tunnels, then the arches' slabs.
+    fn tubes(&self) -> impl Iterator<Item = Tube> + '_ {
+        self.tunnels
+            .iter()
+            .cloned()
+            .chain(self.arches.iter().map(Arch::beam))
+    }
+
+    /// The largest noise roughness β of the primitives (0 without noise).
+    pub fn max_roughness(&self) -> f32 {
+        let curves = self
+            .curves
+            .iter()
+            .flat_map(|c| c.constraints.iter().map(|k| k.roughness));
+        let tubes = self.tunnels.iter().map(|t| t.noise.y);
+        let arches = self.arches.iter().map(|a| a.noise.y);
+        let shapes = self.quads.iter().map(|q| q.noise.y);
+        let discs = self.discs.iter().map(|d| d.noise.y);
+        let meshes = self
+            .meshes
+            .iter()
+            .flat_map(|m| m.vertices.iter().map(|v| v.noise.y));
+        curves
+            .chain(tubes)
+            .chain(arches)
+            .chain(shapes)
+            .chain(discs)
+            .chain(meshes)
+            .fold(0.0, f32::max)
+    }
+
     /// Balls around the tubes (tunnels, arch beams) whose section lies in
     /// `[min_section, 2·min_section)`, grown by `margin`: those that first appear on a
     /// level admitting sections of `min_section` (the coarser one admits twice that).
     /// The guidance the coarser levels diffused there knows nothing of them.
     pub fn fresh_room(&self, min_section: f32, margin: f32) -> Room {
         let fresh = |t: &Tube| (min_section..2.0 * min_section).contains(&t.section());
-        let tubes = self
-            .tunnels
-            .iter()
-            .cloned()
-            .chain(self.arches.iter().map(Arch::beam))
-            .filter(fresh);
         let mut out = Vec::new();
-        for tube in tubes {
+        for tube in self.tubes().filter(fresh) {
             out.extend(
                 tube.balls(min_section / 3.0)
                     .into_iter()
@@ -255,12 +280,7 @@ impl Features {
             .iter()
             .map(|s| (s.pos, ribbon + clearance))
             .collect();
-        let tubes = self
-            .tunnels
-            .iter()
-            .cloned()
-            .chain(self.arches.iter().map(Arch::beam));
-        for tube in tubes {
+        for tube in self.tubes() {
             let side = |p: Vec3| {
                 if tube.inward {
                     self.tunnel_side(p)

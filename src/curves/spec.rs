@@ -743,12 +743,7 @@ impl FeatureVolumeSpec {
         let h = self.voxel.0;
         let (a, b) = (self.domain.0.0, self.domain.1.0);
         let clearance = self.clearance.map_or(4.0 * h, |c| c.0);
-        let beta = features
-            .proxy(h, h, h, 0.0)
-            .vertices
-            .iter()
-            .map(|v| v.noise.y)
-            .fold(0.0, f32::max);
+        let beta = features.max_roughness();
         let mut surface = TerrainSurface::new(ground, &Aabb::new(a, b), h, clearance, beta);
         // The compounds' sides of the ground are read off the surface itself.
         let on = Features {

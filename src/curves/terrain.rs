@@ -40,9 +40,9 @@ pub struct TerrainSurface {
 }
 
 impl TerrainSurface {
-    /// Samples `ground` every `spacing` metres over `domain`'s footprint; every cell whose
-    /// corners lie in the domain's z-range becomes two seed triangles (see
-    /// [`TerrainSurface::make_room`]).
+    /// Samples `ground` every `spacing` metres over `domain`'s footprint. It has no
+    /// triangles until [`TerrainSurface::make_room`] makes them: every cell whose corners
+    /// lie in the domain's z-range and outside the features' room becomes two.
     ///
     /// The features on the terrain keep `clearance` metres from the ground: their curves
     /// stop that far above (an arch) or below it (a tunnel), and the ground's triangles
@@ -70,7 +70,7 @@ impl TerrainSurface {
                 ground(xy).filter(|h| h.is_finite()).unwrap_or(f32::NAN)
             })
             .collect();
-        let mut s = TerrainSurface {
+        TerrainSurface {
             origin,
             spacing,
             dims,
@@ -79,13 +79,11 @@ impl TerrainSurface {
             clearance,
             beta,
             mesh: ProxyMesh::default(),
-        };
-        s.mesh = s.triangles(&Room::default());
-        s
+        }
     }
 
-    /// Leaves out the seed triangles whose cell centre lies in a ball of `room`: there the
-    /// features take over.
+    /// Makes the seed triangles, leaving out those whose cell centre lies in a ball of
+    /// `room`: there the features take over.
     pub fn make_room(&mut self, room: &Room) {
         self.mesh = self.triangles(room);
     }
@@ -208,6 +206,8 @@ mod tests {
         let domain = Aabb::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(40.0, 20.0, 30.0));
         let ball = (Vec3::new(20.0, 10.0, 15.0), 5.0);
         let mut s = TerrainSurface::new(&ground, &domain, 2.0, 1.0, 0.1);
+        assert!(s.mesh().triangles.is_empty());
+        s.make_room(&Room::default());
         let full = s.mesh().triangles.len();
         s.make_room(&Room::new(vec![ball]));
         assert!(s.mesh().triangles.len() < full);
@@ -233,7 +233,8 @@ mod tests {
         }
         // Triangles only where the ground is inside the domain's z-range: x ≤ 80 here.
         let lower = Aabb::new(Vec3::ZERO, Vec3::new(40.0, 20.0, 15.0));
-        let s = TerrainSurface::new(&ground, &lower, 2.0, 1.0, 0.1);
+        let mut s = TerrainSurface::new(&ground, &lower, 2.0, 1.0, 0.1);
+        s.make_room(&Room::default());
         assert!(s.mesh().vertices.iter().all(|v| v.pos.z <= 15.0));
         assert!(s.mesh().vertices.iter().any(|v| v.pos.x >= 18.0));
     }

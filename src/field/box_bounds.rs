@@ -7,7 +7,7 @@ use super::contract::Field;
 use super::falloff::ISO;
 use super::line::{Anywhere, Candidates};
 use super::node::{Node, NodeId};
-use super::replace::gap;
+use super::replace::{Transition, gap};
 use super::tree::Tree;
 
 /// The box of `b`'s corners mapped by `m`: contains the image of `b`.
@@ -71,7 +71,11 @@ impl Tree {
                 } else if w.lo >= 1.0 {
                     self.interval_at(*by, b)
                 } else {
-                    mix.mix_interval(b, self.interval_at(*base, b), self.interval_at(*by, b))
+                    Transition::mix_interval(
+                        w,
+                        self.interval_at(*base, b),
+                        self.interval_at(*by, b),
+                    )
                 }
             }
             Node::Affine {

@@ -118,9 +118,8 @@ impl Transition {
         Interval::new(self.ramp(lo), self.ramp(hi))
     }
 
-    /// The range of `(1 − w)·a + w·b` for `a ∈ base`, `b ∈ by` and `w` over the box `bx`.
-    pub fn mix_interval(&self, bx: &Aabb, base: Interval, by: Interval) -> Interval {
-        let w = self.interval(bx);
+    /// The range of `(1 − w)·a + w·b` for `a ∈ base`, `b ∈ by` and `w ∈ w`.
+    pub fn mix_interval(w: Interval, base: Interval, by: Interval) -> Interval {
         // Linear in w for fixed values: the extremes are at w's ends.
         let at = |w: f32| {
             Interval::new(

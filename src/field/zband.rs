@@ -140,17 +140,17 @@ impl Tree {
             return self.z_bands_at(base, fp, z, out);
         }
         let inside = z.intersect(region.z());
-        // Above and below the region: the base alone.
-        for outside in [
-            Interval::new(z.lo, inside.lo.min(z.hi)),
-            Interval::new(inside.hi.max(z.lo), z.hi),
-        ] {
-            if !inside.is_empty() && outside.width() > 0.0 {
-                self.z_bands_at(base, fp, outside, out);
-            }
-        }
         if inside.is_empty() {
             return self.z_bands_at(base, fp, z, out);
+        }
+        // Above and below the region: the base alone.
+        for outside in [
+            Interval::new(z.lo, inside.lo),
+            Interval::new(inside.hi, z.hi),
+        ] {
+            if outside.width() > 0.0 {
+                self.z_bands_at(base, fp, outside, out);
+            }
         }
         let mut own = ZBands::new();
         self.z_bands_at(base, fp, inside, &mut own);
