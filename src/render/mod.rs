@@ -16,6 +16,7 @@ pub mod cpu;
 pub mod fallback;
 pub mod gpu;
 pub mod image;
+pub mod material;
 pub mod raycast;
 pub mod shade;
 pub mod trace;
@@ -24,6 +25,7 @@ pub use camera::{Camera, Ray};
 pub use cpu::{RenderSettings, render};
 pub use fallback::{Device, Fallback, Renderable};
 pub use image::Frame;
+pub use material::{Cover, Materials};
 pub use shade::Shading;
 pub use trace::{Method, Trace, TraceParams, Tracer};
 

@@ -25,6 +25,8 @@ pub struct Compiled {
     pub outline: Vec<(usize, NodeId)>,
     /// Things the user should know (e.g. a DEM in degrees given metric cells).
     pub notices: Vec<String>,
+    /// The scene's terrain: its `terrain` heightfield, or its only one (`None` without).
+    pub ground: Option<Arc<HeightfieldField>>,
 }
 
 struct Compiler<'s> {
@@ -337,9 +339,11 @@ impl<'s> Compiler<'s> {
 
     fn run(mut self) -> Result<Compiled, SceneError> {
         let root = self.node(&self.scene.root, 0)?;
+        let ground = self.terrain(&self.scene.root).ok();
         let tree = self.builder.build(root);
         Ok(Compiled {
             tree,
+            ground,
             outline: self.outline,
             notices: self.dems.notices().to_vec(),
         })

@@ -1,0 +1,155 @@
+//! Surface materials shared by the preview and the exported meshes: bare rock on steep
+//! faces and on the surfaces of carved and added features, soil on medium slopes, grass
+//! on gentle ones, and snow only when the tree asks for it (Frasson et al. §5 tint terrain
+//! by slope and altitude; the feature rule is ours).
+//!
+//! A surface point belongs to a *feature* when it lies away from the ground: more than
+//! [`Materials::feature_depth`] above or below the scene's terrain heightfield (a cave's
+//! walls and roof, an arch's underside, an overhang). Without a terrain the rule falls
+//! back to slope alone. Boundaries between materials wander with a low-frequency noise
+//! so the cover does not follow contour lines.
+//!
+//! Colours are linear RGB albedos in `[0, 1]`. The GPU shader (`shaders/trace.wgsl`)
+//! mirrors [`Materials::cover`] and [`Materials::albedo`]; keep the two in step.
+
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3};
+
+use crate::dem::HeightfieldField;
+use crate::field::Aabb;
+use crate::field::noise::simplex;
+
+/// Seed of the noise that moves material boundaries.
+pub const VARIATION_SEED: u32 = 0x5eed_c01;
+
+/// How much of each material covers a surface point (each weight in `[0, 1]`; the
+/// materials layer as grass → soil → snow → rock, each over the ones before).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Cover {
+    /// Bare rock: steep faces and feature surfaces.
+    pub rock: f32,
+    /// Soil over grass on medium slopes.
+    pub soil: f32,
+    /// Snow over soil and grass above the snow line (0 without one).
+    pub snow: f32,
+    /// The surface belongs to a feature: away from the ground, above or below it.
+    pub feature: f32,
+    /// The surface lies under the ground or faces down: a cave or an overhang.
+    pub under: f32,
+}
+
+/// Altitude snow, when a tree asks for it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SnowLine {
+    /// Altitude (metres) where flats turn from soil and grass to snow.
+    pub altitude: f32,
+    /// Width (metres) of the transition.
+    pub blend: f32,
+}
+
+/// The material model of a scene.
+#[derive(Clone, Debug)]
+pub struct Materials {
+    /// Albedo of bare rock.
+    pub rock: Vec3,
+    /// Albedo of soil.
+    pub soil: Vec3,
+    /// Albedo of grass.
+    pub grass: Vec3,
+    /// Albedo of snow.
+    pub snow: Vec3,
+    /// Normal `z` below which the surface is bare rock, and above which it is not (smooth
+    /// blend between the two).
+    pub rock_slope: (f32, f32),
+    /// Normal `z` below which soil shows through the grass, and above which it is grass.
+    pub soil_slope: (f32, f32),
+    /// Altitude snow (`None`: no snow).
+    pub snow_line: Option<SnowLine>,
+    /// Vertical distances (metres) from the ground over which a surface turns into
+    /// feature rock.
+    pub feature_depth: (f32, f32),
+    /// Amplitude of the noise added to the normal's `z` before the slope rules.
+    pub variation: f32,
+    /// Wavelength (metres) of that noise.
+    pub variation_wavelength: f32,
+    /// The scene's terrain, whose surface tells features from ground.
+    pub ground: Option<Arc<HeightfieldField>>,
+}
+
+impl Materials {
+    /// Defaults for a scene in `support` over `ground`: noise wavelength and feature depth
+    /// scale with the scene (a 1 km terrain: boundaries wander over ≈ 60 m, features
+    /// start 1.5 m off the ground).
+    pub fn for_scene(support: &Aabb, ground: Option<Arc<HeightfieldField>>) -> Self {
+        let r = support.radius().max(1e-3);
+        Materials {
+            rock: Vec3::new(0.23, 0.2, 0.17),
+            soil: Vec3::new(0.2, 0.15, 0.09),
+            grass: Vec3::new(0.1, 0.17, 0.05),
+            snow: Vec3::new(0.8, 0.82, 0.86),
+            rock_slope: (0.62, 0.8),
+            soil_slope: (0.82, 0.95),
+            snow_line: None,
+            feature_depth: (0.0015 * r, 0.005 * r),
+            variation: 0.08,
+            variation_wavelength: 0.07 * r,
+            ground,
+        }
+    }
+
+    /// Vertical offset of `p` from the ground (0 without a terrain or off its cells).
+    pub fn off_ground(&self, p: Vec3) -> f32 {
+        let h = self
+            .ground
+            .as_ref()
+            .map_or(f32::NAN, |g| g.height(Vec2::new(p.x, p.y)));
+        if h.is_finite() { p.z - h } else { 0.0 }
+    }
+
+    /// The cover at `p` with outward unit normal `n`.
+    pub fn cover(&self, p: Vec3, n: Vec3) -> Cover {
+        let off = self.off_ground(p);
+        let (d0, d1) = self.feature_depth;
+        let feature = smoothstep(d0, d1, off.abs());
+        let wander = simplex(VARIATION_SEED, p / self.variation_wavelength);
+        let nz = n.z + self.variation * wander;
+        let steep = 1.0 - smoothstep(self.rock_slope.0, self.rock_slope.1, nz);
+        let soil = 1.0 - smoothstep(self.soil_slope.0, self.soil_slope.1, nz);
+        let snow = self.snow_line.map_or(0.0, |s| {
+            smoothstep(
+                s.altitude - s.blend,
+                s.altitude + s.blend,
+                p.z + s.blend * wander,
+            ) * smoothstep(self.rock_slope.0, self.rock_slope.1, nz)
+        });
+        let under = smoothstep(d0, d1, -off).max(smoothstep(-0.1, -0.4, n.z));
+        Cover {
+            rock: steep.max(feature),
+            soil,
+            snow,
+            feature,
+            under,
+        }
+    }
+
+    /// Albedo of a point with this cover.
+    pub fn albedo_of(&self, c: &Cover) -> Vec3 {
+        self.grass
+            .lerp(self.soil, c.soil)
+            .lerp(self.snow, c.snow)
+            .lerp(self.rock, c.rock)
+    }
+
+    /// Albedo at `p` with outward unit normal `n`.
+    pub fn albedo(&self, p: Vec3, n: Vec3) -> Vec3 {
+        self.albedo_of(&self.cover(p, n))
+    }
+}
+
+/// Hermite step from 0 at `a` to 1 at `b` (`a > b` steps down).
+#[inline]
+pub fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
+    let u = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    u * u * (3.0 - 2.0 * u)
+}
