@@ -11,14 +11,21 @@ struct Uniforms {
     box_max: vec4<f32>,   // w = cone
     trace: vec4<f32>,     // x = global Lipschitz, y = grow, z = grad step, w = method (0 segment, 1 sphere)
     sun: vec4<f32>,       // xyz, w = shadows (0 / 1)
-    sun_color: vec4<f32>, // w = fog distance
-    sky: vec4<f32>,       // w = snow line
-    ground: vec4<f32>,    // w = snow blend
-    fog: vec4<f32>,       // w = rock slope lower end
-    rock: vec4<f32>,      // w = rock slope upper end
-    grass: vec4<f32>,
-    snow: vec4<f32>,
-    dims: vec4<u32>,      // width, height, max steps, unused
+    sun_color: vec4<f32>, // w = haze distance
+    zenith: vec4<f32>,
+    horizon: vec4<f32>,   // w = occlusion radius
+    bounce: vec4<f32>,    // w = exposure
+    rock: vec4<f32>,      // w = rock slope lower end
+    soil: vec4<f32>,      // w = rock slope upper end
+    grass: vec4<f32>,     // w = soil slope lower end
+    snow: vec4<f32>,      // w = soil slope upper end
+    snow_line: vec4<f32>, // altitude, blend (0: no snow), variation, variation wavelength
+    feature: vec4<f32>,   // feature depths d0, d1, dry-grass scale
+    dry: vec4<f32>,       // dry grass
+    disk_u: vec4<f32>,    // the sun's disk (shade.rs Shading::sun_disk)
+    disk_v: vec4<f32>,
+    dims: vec4<u32>,      // width, height, max steps, ground parameters + 1 (0: no ground)
+    consts: vec4<u32>,    // variation seed, occlusion samples, ground flags, sun seed
 }
 
 // A storage buffer, not a uniform one: llvmpipe compiles a variant of the shader for
@@ -210,24 +217,77 @@ fn smooth_step(a: f32, b: f32, x: f32) -> f32 {
     return v * v * (3.0 - 2.0 * v);
 }
 
+// shade.rs Shading::sky.
 fn sky(d: vec3<f32>) -> vec3<f32> {
     let k = sqrt(clamp(d.z, 0.0, 1.0));
-    return mix(u.fog.xyz, u.sky.xyz * 0.9, k);
+    let glow = pow(max(dot(d, u.sun.xyz), 0.0), 8.0);
+    return mix(u.horizon.xyz, u.zenith.xyz, k) + u.sun_color.xyz * (0.12 * glow);
 }
 
-fn albedo(z: f32, n: vec3<f32>) -> vec3<f32> {
-    let flat_ = smooth_step(u.fog.w, u.rock.w, n.z);
-    let snowy = smooth_step(u.sky.w - u.ground.w, u.sky.w + u.ground.w, z);
-    let top = mix(u.grass.xyz, u.snow.xyz, snowy);
-    return mix(u.rock.xyz, top, flat_);
+// material.rs Materials::off_ground: p.z − h(p.xy), 0 without a ground or off its grid.
+fn off_ground(p: vec3<f32>) -> f32 {
+    if u.dims.w == 0u {
+        return 0.0;
+    }
+    let o = u.dims.w - 1u;
+    let lo = vec2<f32>(params[o + HEIGHT_ORIGIN], params[o + HEIGHT_ORIGIN + 1u]);
+    let hi = lo + params[o + HEIGHT_CELL] * (vec2<f32>(params[o + HEIGHT_NX], params[o + HEIGHT_NY]) - 1.0);
+    if any(p.xy < lo) || any(p.xy > hi) {
+        return 0.0;
+    }
+    return p.z - elevation(u.consts.z, o, p.x, p.y);
 }
 
-fn surface(p: vec3<f32>, n: vec3<f32>, t: f32, lit: f32) -> vec3<f32> {
+// material.rs Materials::albedo (cover, then albedo_of).
+fn albedo(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let off = off_ground(p);
+    let feature = smooth_step(u.feature.x, u.feature.y, abs(off));
+    let wander = simplex(u.consts.x, p / u.snow_line.w);
+    let nz = n.z + u.snow_line.z * wander;
+    let steep = 1.0 - smooth_step(u.rock.w, u.soil.w, nz);
+    let soil = 1.0 - smooth_step(u.grass.w, u.snow.w, nz);
+    var snow = 0.0;
+    if u.snow_line.y > 0.0 {
+        let b = u.snow_line.y;
+        snow = smooth_step(u.snow_line.x - b, u.snow_line.x + b, p.z + b * wander)
+            * smooth_step(u.rock.w, u.soil.w, nz);
+    }
+    let rock = max(steep, feature);
+    let dry = smooth_step(-0.2, 0.5, simplex(u.consts.x ^ 1u, p / (u.feature.z * u.snow_line.w)));
+    let grass = mix(u.grass.xyz, u.dry.xyz, dry);
+    return mix(mix(mix(grass, u.soil.xyz, soil), u.snow.xyz, snow), u.rock.xyz, rock);
+}
+
+// shade.rs Shading::light.
+fn light(n: vec3<f32>, lit: f32, ao: f32) -> vec3<f32> {
     let diffuse = max(dot(n, u.sun.xyz), 0.0) * lit;
-    let ambient = mix(u.ground.xyz, u.sky.xyz, 0.5 + 0.5 * n.z);
-    let c = albedo(p.z, n) * (u.sun_color.xyz * diffuse + ambient);
+    let ambient = mix(u.bounce.xyz, mix(u.zenith.xyz, u.horizon.xyz, 0.5), 0.5 + 0.5 * n.z);
+    return u.sun_color.xyz * diffuse + ambient * ao;
+}
+
+// shade.rs Shading::haze.
+fn haze(c: vec3<f32>, t: f32) -> vec3<f32> {
     let k = 1.0 - exp(-t / u.sun_color.w);
-    return mix(c, u.fog.xyz, k);
+    return mix(c, u.horizon.xyz, k);
+}
+
+// shade.rs aces, after the exposure (Shading::display).
+fn display(c_in: vec3<f32>) -> vec3<f32> {
+    let x = max(c_in * u.bounce.w, vec3<f32>(0.0));
+    return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), vec3<f32>(0.0), vec3<f32>(1.0));
+}
+
+// shade.rs Shading::sun_towards: the shadow ray of pixel (i, j).
+fn sun_towards(i: u32, j: u32) -> vec3<f32> {
+    let h = mix32(i ^ mix32(j ^ u.consts.w));
+    let r = sqrt(f32(h & 0xffffu) / 65536.0);
+    let phi = 6.2831855 * f32(h >> 16u) / 65536.0;
+    return normalize(u.sun.xyz + u.disk_u.xyz * (r * cos(phi)) + u.disk_v.xyz * (r * sin(phi)));
+}
+
+// shade.rs Shading::ao_step.
+fn ao_step(k: u32) -> f32 {
+    return u.horizon.w * f32(k + 1u) / f32(u.consts.y);
 }
 
 // Quantised to 1/4095 before encoding, like the CPU's gamma table (shade.rs::to_srgb8).
@@ -245,7 +305,8 @@ struct Saved {
     march: vec4<f32>,   // delta, side, prev_t, prev_e
     bracket: vec4<f32>, // a, ea, b, eb
     refine: vec4<f32>,  // m, last, width, hit_t
-    g: vec4<f32>,       // the normal's sum, unused
+    g: vec4<f32>,       // the normal's sum, the occlusion's weighted sum
+    ao: vec4<f32>,      // the occlusion's weights, unused
     counts: vec4<u32>,  // phase | shadow << 8 | corner << 16 | (kept + 1) << 24, ray.steps, ray.n, hit steps
 }
 
@@ -265,12 +326,13 @@ fn budget_left() -> bool {
     return k >= 2u;
 }
 
-// One primary ray: march, refine, normal, shadow ray (march, refine), shade. The phases
-// are states of one loop whose body evaluates the tape once, so `eval_tape` has a single
-// call site: drivers inline every call site (the shader's size drives lavapipe's compile
-// time), and diverging invocations of a SIMD group stay on the same code. A pixel whose
-// loop budget runs out (lavapipe) saves its state and is resumed by the next dispatch
-// (pass) of its tile; `progress` tells the host how many are left.
+// One primary ray: march, refine, normal, occlusion samples, shadow ray (march, refine),
+// shade. The phases are states of one loop whose body evaluates the tape once, so
+// `eval_tape` has a single call site: drivers inline every call site (the shader's size
+// drives lavapipe's compile time), and diverging invocations of a SIMD group stay on the
+// same code. A pixel whose loop budget runs out (lavapipe) saves its state and is resumed
+// by the next dispatch (pass) of its tile; `progress` tells the host how many are left.
+// `corner` counts the normal's 4 samples, then the occlusion's (cpu.rs occlusion).
 @compute @workgroup_size(8, 8, 1)
 fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     let w = u.dims.x;
@@ -287,12 +349,15 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     let sv = (1.0 - 2.0 * y / u.forward.w) * u.eye.w;
     let o = u.eye.xyz;
     let d = normalize(u.forward.xyz + u.right.xyz * su + u.up.xyz * sv);
+    let ao_end = 4u + select(u.consts.y, 0u, u.horizon.w <= 0.0);
     var phase = PH_DONE;
     var ray: Ray;
     var shadow = false;
     var hit_t = MISS;
     var hit_steps = 0u;
     var g = vec3<f32>(0.0);
+    var ao_sum = 0.0;
+    var ao_norm = 0.0;
     var corner = 0u;
     let per_pass = atomicLoad(&progress[5]);
     if atomicLoad(&progress[4]) == 0u {
@@ -315,12 +380,14 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
         hit_t = sv.refine.w;
         hit_steps = sv.counts.w;
         g = sv.g.xyz;
+        ao_sum = sv.g.w;
+        ao_norm = sv.ao.x;
     }
     var p = o + d * hit_t;
     var n = vec3<f32>(0.0, 0.0, 1.0);
-    let grad_sum = g / (4.0 * u.trace.z);
-    if corner == 4u && length(grad_sum) > 0.0 {
-        n = -grad_sum / length(grad_sum);
+    var slope = length(g / (4.0 * u.trace.z));
+    if corner >= 4u && slope > 0.0 {
+        n = -g / (4.0 * u.trace.z) / slope;
     }
     var lit = 1.0;
     var evals = 0u;
@@ -332,6 +399,21 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         if phase == PH_REFINE && !refine_next(&ray) {
             phase = PH_END;
+        }
+        if phase == PH_NORMAL && corner == ao_end {
+            // The normal and the occlusion are done: the shadow ray.
+            phase = PH_DONE;
+            if u.sun.w > 0.0 && dot(n, u.sun.xyz) > 0.0 {
+                let tol = u.box_min.w + u.box_max.w * hit_t;
+                let so = p + n * (2.0 * tol);
+                let sd = sun_towards(id.x, row);
+                let sspan = clip(so, sd);
+                if sspan.x <= sspan.y {
+                    ray = start_ray(so, sd, sspan.x, sspan.y);
+                    shadow = true;
+                    phase = PH_MARCH;
+                }
+            }
         }
         if phase == PH_END {
             phase = PH_DONE;
@@ -356,8 +438,13 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
         var qc = qp;
         var qr = 0.0;
         if phase == PH_NORMAL {
-            qp = p + normal_offset(corner) * u.trace.z;
-            qc = qp;
+            if corner < 4u {
+                qp = p + normal_offset(corner) * u.trace.z;
+                qc = qp;
+            } else {
+                qp = p + n * ao_step(corner - 4u);
+                qc = qp;
+            }
         } else if phase == PH_REFINE {
             qp = ray.o + ray.d * ray.m;
             qc = qp;
@@ -377,34 +464,33 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
             if !refine_step(&ray, ev.x - ISO) {
                 phase = PH_END;
             }
-        } else {
+        } else if corner < 4u {
             g += normal_offset(corner) * ev.x;
             corner += 1u;
             if corner == 4u {
                 let grad = g / (4.0 * u.trace.z);
-                let l = length(grad);
-                if l > 0.0 {
-                    n = -grad / l;
-                }
-                phase = PH_DONE;
-                if u.sun.w > 0.0 && dot(n, u.sun.xyz) > 0.0 {
-                    let tol = u.box_min.w + u.box_max.w * hit_t;
-                    let so = p + n * (2.0 * tol);
-                    let sspan = clip(so, u.sun.xyz);
-                    if sspan.x <= sspan.y {
-                        ray = start_ray(so, u.sun.xyz, sspan.x, sspan.y);
-                        shadow = true;
-                        phase = PH_MARCH;
-                    }
+                slope = length(grad);
+                if slope > 0.0 {
+                    n = -grad / slope;
                 }
             }
+        } else {
+            // cpu.rs occlusion.
+            let k = corner - 4u;
+            var open = 1.0;
+            if slope > 0.0 {
+                open = (ISO - ev.x) / min(slope * ao_step(k), ISO);
+            }
+            ao_sum += clamp(open, 0.0, 1.0) / f32(k + 1u);
+            ao_norm += 1.0 / f32(k + 1u);
+            corner += 1u;
         }
     }
     if phase != PH_DONE {
         let flags = phase | (u32(shadow) << 8u) | (corner << 16u) | (u32(ray.kept + 1) << 24u);
         saved[slot] = Saved(vec4<f32>(ray.o, ray.t), vec4<f32>(ray.d, ray.t1),
             vec4<f32>(ray.delta, ray.side, ray.prev_t, ray.prev_e), vec4<f32>(ray.a, ray.ea, ray.b, ray.eb),
-            vec4<f32>(ray.m, ray.last, ray.width, hit_t), vec4<f32>(g, 0.0),
+            vec4<f32>(ray.m, ray.last, ray.width, hit_t), vec4<f32>(g, ao_sum), vec4<f32>(ao_norm, 0.0, 0.0, 0.0),
             vec4<u32>(flags, ray.steps, ray.n, hit_steps));
         atomicAdd(&progress[0], 1u);
         if evals == 0u {
@@ -416,10 +502,16 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     out_steps[at] = hit_steps;
     out_depth[at] = hit_t;
     if hit_t == MISS {
-        out_rgba[at] = srgb8(sky(d));
+        out_rgba[at] = srgb8(display(sky(d)));
         return;
     }
-    out_rgba[at] = srgb8(surface(p, n, hit_t, lit));
+    // shade.rs ambient_occlusion.
+    var ao = 1.0;
+    if ao_norm > 0.0 {
+        ao = ao_sum / ao_norm;
+    }
+    let c = haze(albedo(p, n) * light(n, lit, ao), hit_t);
+    out_rgba[at] = srgb8(display(c));
 }
 
 // Tape probes for the tests: (p.xyz, r) -> (f(p), Lipschitz bound over B(p, r)).

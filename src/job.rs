@@ -64,6 +64,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
     let compiled = file.compile_with(opts.budget)?;
     stages.push(("load + compile", t.elapsed()));
     let tree = compiled.tree;
+    let ground = compiled.ground;
     let job = file.scene.job.clone();
     let support = tree.support();
     anyhow::ensure!(
@@ -136,7 +137,8 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         None => None,
         Some(camera) => {
             let t = Instant::now();
-            let settings = RenderSettings::for_scene(&region, &camera, Method::Segment);
+            let settings = RenderSettings::for_scene(&region, &camera, Method::Segment)
+                .with_ground(ground.clone());
             let tiles = camera.width.div_ceil(cpu::TILE) * camera.height.div_ceil(cpu::TILE);
             let bar = progress(tiles as u64, "rendering", opts.quiet);
             let frame: Frame = cpu::render(&tree, &camera, &settings, &bar);

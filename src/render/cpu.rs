@@ -8,32 +8,46 @@ use rayon::prelude::*;
 
 use super::camera::{Camera, Ray};
 use super::image::Frame;
-use super::shade::{Shading, to_srgb8};
-use super::trace::{Method, Trace, TraceParams, Tracer};
+use super::material::Materials;
+use super::shade::{AO_SAMPLES, Shading, ambient_occlusion, to_srgb8};
+use super::trace::{Method, Trace, TraceParams, Tracer, outward};
 use glam::Vec3;
 
-use crate::field::{Aabb, Field, Tree};
+use crate::dem::HeightfieldField;
+use crate::field::{Aabb, Field, ISO, Tree};
+use std::sync::Arc;
 
 /// Side of the square tiles handed to rayon, pixels.
 pub const TILE: u32 = 16;
 
 /// How to trace and shade.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct RenderSettings {
     /// Primary-ray tracing parameters (shadow rays use the same ones).
     pub trace: TraceParams,
-    /// Lighting and materials.
+    /// Lighting and atmosphere.
     pub shading: Shading,
+    /// Surface materials.
+    pub materials: Materials,
 }
 
 impl RenderSettings {
-    /// Defaults for rendering `support` through `camera` with `method`.
+    /// Defaults for rendering `support` through `camera` with `method`, without a terrain
+    /// (materials by slope alone).
     pub fn for_scene(support: &Aabb, camera: &Camera, method: Method) -> Self {
         RenderSettings {
             trace: TraceParams::for_scene(method, 2.0 * support.radius())
                 .with_pixel_angle(camera.pixel_angle()),
             shading: Shading::for_scene(support),
+            materials: Materials::for_scene(support, None),
         }
+    }
+
+    /// The same settings with the scene's terrain, which tells features from ground
+    /// ([`Materials::ground`]).
+    pub fn with_ground(mut self, ground: Option<Arc<HeightfieldField>>) -> Self {
+        self.materials.ground = ground;
+        self
     }
 }
 
@@ -63,11 +77,11 @@ pub fn render(
         .into_par_iter()
         .map(|k| {
             let (x0, y0) = ((k % tx) * TILE, (k / tx) * TILE);
-            let rays: Vec<(Ray, Option<(f32, f32)>)> = (y0..(y0 + TILE).min(h))
+            let rays: Vec<PixelRay> = (y0..(y0 + TILE).min(h))
                 .flat_map(|j| (x0..(x0 + TILE).min(w)).map(move |i| (i, j)))
                 .map(|(i, j)| {
                     let ray = camera.pixel_ray(i, j);
-                    (ray, ray.clip(&support))
+                    (ray, ray.clip(&support), (i, j))
                 })
                 .collect();
             let out = tile(field, &support, &rays, settings);
@@ -124,65 +138,67 @@ fn pruned<'f>(field: &'f dyn Field, region: Option<Aabb>) -> Option<Box<dyn Fiel
 /// A ray and the span of it to trace.
 type Segment = (Ray, (f32, f32));
 
-/// Traces and shades the rays of one tile (`(ray, its span in the support)`, row-major).
-fn tile(
-    field: &dyn Field,
-    support: &Aabb,
-    rays: &[(Ray, Option<(f32, f32)>)],
-    s: &RenderSettings,
-) -> Vec<Pixel> {
+/// A primary ray, its span in the support, and its pixel.
+type PixelRay = (Ray, Option<(f32, f32)>, (u32, u32));
+
+/// Traces and shades the rays of one tile (row-major).
+fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings) -> Vec<Pixel> {
     let sh = &s.shading;
     let miss = Trace {
         t: f32::INFINITY,
         steps: 0,
     };
+    // Occlusion samples reach `ao_radius` off the hits: the primary field must hold there.
     let primary = pruned(
         field,
-        segments_box(rays.iter().filter_map(|(r, sp)| sp.map(|sp| (r, sp)))),
+        segments_box(rays.iter().filter_map(|(r, sp, _)| sp.map(|sp| (r, sp))))
+            .map(|b| b.dilate(2.0 * sh.ao_radius)),
     );
     let f = primary.as_deref().unwrap_or(field);
     let mut tracer = Tracer::new(f);
-    // Primary hits with their normals and shadow rays.
-    let hits: Vec<(Trace, Vec3, Option<Segment>)> = rays
+    // Primary hits with their normals, sky occlusion and shadow rays.
+    let hits: Vec<(Trace, Vec3, f32, Option<Segment>)> = rays
         .iter()
-        .map(|(ray, span)| {
+        .map(|&(ref ray, span, (i, j))| {
             let Some(span) = span else {
-                return (miss, Vec3::ZERO, None);
+                return (miss, Vec3::ZERO, 1.0, None);
             };
-            let tr = tracer.trace(ray, *span, &s.trace);
+            let tr = tracer.trace(ray, span, &s.trace);
             if !tr.hit() {
-                return (tr, Vec3::ZERO, None);
+                return (tr, Vec3::ZERO, 1.0, None);
             }
             let p = ray.at(tr.t);
-            let n = tracer.normal(ray, tr.t);
+            let g = tracer.gradient(ray, tr.t);
+            let n = outward(g);
+            let ao = occlusion(f, p, n, g.length(), sh);
             let shadow = (sh.shadows && n.dot(sh.sun) > 0.0)
                 .then(|| {
                     let tol = s.trace.epsilon + s.trace.cone * tr.t;
                     let shadow = Ray {
                         origin: p + n * (2.0 * tol),
-                        dir: sh.sun,
+                        dir: sh.sun_towards(i, j),
                     };
                     shadow.clip(support).map(|span| (shadow, span))
                 })
                 .flatten();
-            (tr, n, shadow)
+            (tr, n, ao, shadow)
         })
         .collect();
     let shadow_field = pruned(
         field,
         segments_box(
             hits.iter()
-                .filter_map(|(_, _, sr)| sr.as_ref().map(|(r, sp)| (r, *sp))),
+                .filter_map(|(_, _, _, sr)| sr.as_ref().map(|(r, sp)| (r, *sp))),
         ),
     );
     let fs = shadow_field.as_deref().unwrap_or(field);
     let mut shadows = Tracer::new(fs);
     rays.iter()
         .zip(hits)
-        .map(|((ray, _), (tr, n, shadow))| {
+        .map(|((ray, _, _), (tr, n, ao, shadow))| {
             if !tr.hit() {
                 return Pixel {
-                    rgba: to_srgb8(sh.sky(ray.dir)),
+                    rgba: to_srgb8(sh.display(sh.sky(ray.dir))),
                     trace: tr,
                 };
             }
@@ -191,12 +207,29 @@ fn tile(
                 _ => 1.0,
             };
             let p = ray.at(tr.t);
+            let albedo = s.materials.albedo(p, n);
+            let c = sh.surface(albedo, sh.light(n, lit, ao), tr.t);
             Pixel {
-                rgba: to_srgb8(sh.surface(p, n, tr.t, lit)),
+                rgba: to_srgb8(sh.display(c)),
                 trace: tr,
             }
         })
         .collect()
+}
+
+/// The share of the sky seen from the surface point `p` with outward normal `n` and
+/// gradient norm `slope` ([`super::shade`]): at each sample `q = p + δ n`, the drop
+/// `T − f(q)` over the drop `slope·δ` open ground gives (1 there, less where a wall or a
+/// roof keeps the field high). Fields in `[0, 2T]` cannot drop by more than `T` in the
+/// air: the expected drop is capped there, so a field saturated within `δ` is open.
+fn occlusion(field: &dyn Field, p: Vec3, n: Vec3, slope: f32, sh: &Shading) -> f32 {
+    if sh.ao_radius <= 0.0 || !(slope > 0.0) {
+        return 1.0;
+    }
+    ambient_occlusion((0..AO_SAMPLES).map(|k| {
+        let d = sh.ao_step(k);
+        (ISO - field.value(p + n * d)) / (slope * d).min(ISO)
+    }))
 }
 
 /// The depth image of `field` alone (no shading): ray parameters of the hits, `∞` for

@@ -23,14 +23,19 @@ use crate::field::noise::simplex;
 /// Seed of the noise that moves material boundaries.
 pub const VARIATION_SEED: u32 = 0x5eed_c01;
 
+/// Wavelength of the dry-grass patches, in units of [`Materials::variation_wavelength`].
+pub const DRY_SCALE: f32 = 2.5;
+
 /// How much of each material covers a surface point (each weight in `[0, 1]`; the
-/// materials layer as grass → soil → snow → rock, each over the ones before).
+/// materials layer as grass → dry grass → soil → snow → rock, each over the ones before).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Cover {
     /// Bare rock: steep faces and feature surfaces.
     pub rock: f32,
     /// Soil over grass on medium slopes.
     pub soil: f32,
+    /// Dry grass over lush grass, in patches.
+    pub dry: f32,
     /// Snow over soil and grass above the snow line (0 without one).
     pub snow: f32,
     /// The surface belongs to a feature: away from the ground, above or below it.
@@ -55,8 +60,10 @@ pub struct Materials {
     pub rock: Vec3,
     /// Albedo of soil.
     pub soil: Vec3,
-    /// Albedo of grass.
+    /// Albedo of lush grass.
     pub grass: Vec3,
+    /// Albedo of dry grass, which patches of the grass turn to.
+    pub dry: Vec3,
     /// Albedo of snow.
     pub snow: Vec3,
     /// Normal `z` below which the surface is bare rock, and above which it is not (smooth
@@ -86,12 +93,13 @@ impl Materials {
         Materials {
             rock: Vec3::new(0.23, 0.2, 0.17),
             soil: Vec3::new(0.2, 0.15, 0.09),
-            grass: Vec3::new(0.1, 0.17, 0.05),
+            grass: Vec3::new(0.08, 0.16, 0.04),
+            dry: Vec3::new(0.2, 0.19, 0.08),
             snow: Vec3::new(0.8, 0.82, 0.86),
             rock_slope: (0.62, 0.8),
             soil_slope: (0.82, 0.95),
             snow_line: None,
-            feature_depth: (0.0015 * r, 0.005 * r),
+            feature_depth: (0.004 * r, 0.01 * r),
             variation: 0.08,
             variation_wavelength: 0.07 * r,
             ground,
@@ -124,9 +132,14 @@ impl Materials {
             ) * smoothstep(self.rock_slope.0, self.rock_slope.1, nz)
         });
         let under = smoothstep(d0, d1, -off).max(smoothstep(-0.1, -0.4, n.z));
+        let patches = simplex(
+            VARIATION_SEED ^ 1,
+            p / (DRY_SCALE * self.variation_wavelength),
+        );
         Cover {
             rock: steep.max(feature),
             soil,
+            dry: smoothstep(-0.2, 0.5, patches),
             snow,
             feature,
             under,
@@ -136,6 +149,7 @@ impl Materials {
     /// Albedo of a point with this cover.
     pub fn albedo_of(&self, c: &Cover) -> Vec3 {
         self.grass
+            .lerp(self.dry, c.dry)
             .lerp(self.soil, c.soil)
             .lerp(self.snow, c.snow)
             .lerp(self.rock, c.rock)

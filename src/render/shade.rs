@@ -1,108 +1,163 @@
-//! Terrain shading: sun diffuse with shadow rays, a hemisphere sky ambient, distance fog,
-//! and a material tint by slope and altitude (Frasson et al. §5: rock on steep faces, grass on
-//! low flats, snow on high flats).
+//! Terrain lighting: a sun with soft shadows, a sky dome seen through ambient occlusion
+//! computed from the field, aerial perspective, and a filmic tone curve. Albedos come
+//! from [`super::material`].
 //!
-//! Colours are linear RGB in `[0, 1]`; [`to_srgb8`] encodes them for the PNG. The GPU
-//! shader (`shaders/trace.wgsl`) mirrors these formulas; keep the two in step.
+//! * **Soft shadows.** Each pixel's shadow ray aims at a point of the sun's disk drawn from
+//!   a hash of the pixel, so shadow edges fade over the penumbra a sun of
+//!   [`Shading::sun_radius`] casts (dithered, one ray a pixel; the occlusion test itself
+//!   is exact). Estimating penumbrae from the march's safe distances, as distance-field
+//!   renderers do, drew false dark lines here: Lipschitz bounds of heightfields and
+//!   S fields are loose by varying factors, so their safe distances are not distances.
+//! * **Ambient occlusion** from the field: at `AO_SAMPLES` points `q_k = p + δ_k n` along
+//!   the normal, the field's drop `T − f(q_k)` is compared with the drop `|∇f(p)|·δ_k`
+//!   (capped at `T`, all a field in `[0, 2T]` can drop in the air) of open ground: over
+//!   open ground the ratio is 1; a wall or a roof nearby keeps the field high and the
+//!   ratio low. Near samples weigh more
+//!   (the screen-space methods' weighting, here exact in the scene). The radius stays
+//!   well inside the falloff of distance-like fields, where they are close to linear.
+//! * **Aerial perspective.** The colour at distance `t` fades to the horizon's colour by
+//!   `exp(−t / haze)`, with the haze distance a multiple of the scene's size so close-ups
+//!   and overviews read alike.
+//! * **Tone mapping.** Narkowicz's fit of the ACES filmic curve, then sRGB.
+//!
+//! Colours are linear RGB. The GPU shader (`shaders/trace.wgsl`) mirrors these formulas;
+//! keep the two in step.
 
 use glam::Vec3;
 
 use crate::field::Aabb;
+use crate::field::noise::mix32;
 
-/// Lighting, fog and material parameters.
+/// Points along the normal sampled for ambient occlusion.
+pub const AO_SAMPLES: u32 = 4;
+
+/// Seed of the hash that picks each pixel's point of the sun's disk.
+pub const SUN_SEED: u32 = 0x5_0a12;
+
+/// Lighting and atmosphere.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Shading {
     /// Unit vector towards the sun.
     pub sun: Vec3,
-    /// Sun radiance.
+    /// Sun irradiance.
     pub sun_color: Vec3,
-    /// Ambient light from the zenith.
-    pub sky_color: Vec3,
-    /// Ambient light from below the horizon (bounce off the ground).
-    pub ground_color: Vec3,
-    /// Colour of the air far away.
-    pub fog_color: Vec3,
-    /// Distance (metres) over which fog covers `1 − 1/e` of the colour; `∞` disables it.
-    pub fog_distance: f32,
+    /// Sky light from the zenith.
+    pub zenith: Vec3,
+    /// Sky light at the horizon; also the colour of the haze.
+    pub horizon: Vec3,
+    /// Light bounced from the ground below the horizon.
+    pub bounce: Vec3,
+    /// Distance (metres) over which the air veils `1 − 1/e` of a surface's colour; `∞`
+    /// disables it.
+    pub haze: f32,
     /// Trace shadow rays towards the sun.
     pub shadows: bool,
-    /// Albedo of steep faces.
-    pub rock: Vec3,
-    /// Albedo of low flats.
-    pub grass: Vec3,
-    /// Albedo of high flats.
-    pub snow: Vec3,
-    /// Normal `z` below which the surface is rock, and above which it is fully flat
-    /// material (smooth blend between the two).
-    pub rock_slope: (f32, f32),
-    /// Altitude (metres) where flats turn from grass to snow.
-    pub snow_line: f32,
-    /// Width (metres) of the grass–snow transition.
-    pub snow_blend: f32,
+    /// Angular radius (radians) of the sun's disk the shadow rays sample; 0 for hard
+    /// shadows.
+    pub sun_radius: f32,
+    /// Reach (metres) of the ambient occlusion's farthest sample; 0 disables it.
+    pub ao_radius: f32,
+    /// Exposure applied before the tone curve.
+    pub exposure: f32,
 }
 
 impl Shading {
-    /// Defaults for a scene in `support`: sun from the south-west at 40° elevation, fog
-    /// distance six times the box diagonal, snow on the top quarter of the box's height.
+    /// Defaults for a scene in `support`: the sun from the south-west at 38° elevation,
+    /// haze over eight times the box's radius, occlusion over 0.6% of it.
     pub fn for_scene(support: &Aabb) -> Self {
-        let height = support.size().z.max(1e-3);
+        let r = support.radius().max(1e-3);
         Shading {
-            sun: Vec3::new(-0.55, -0.45, 0.7).normalize(),
-            sun_color: Vec3::new(1.0, 0.92, 0.8) * 2.4,
-            sky_color: Vec3::new(0.2, 0.26, 0.38),
-            ground_color: Vec3::new(0.07, 0.06, 0.05),
-            fog_color: Vec3::new(0.6, 0.68, 0.8),
-            fog_distance: 12.0 * support.radius().max(1e-3),
+            sun: Vec3::new(-0.58, -0.5, 0.62).normalize(),
+            sun_color: Vec3::new(1.0, 0.9, 0.76) * 2.6,
+            zenith: Vec3::new(0.22, 0.36, 0.62),
+            horizon: Vec3::new(0.56, 0.66, 0.8),
+            bounce: Vec3::new(0.1, 0.09, 0.07),
+            haze: 8.0 * r,
             shadows: true,
-            rock: Vec3::new(0.2, 0.17, 0.14),
-            grass: Vec3::new(0.09, 0.2, 0.045),
-            snow: Vec3::new(0.8, 0.82, 0.86),
-            rock_slope: (0.6, 0.8),
-            snow_line: support.min.z + 0.75 * height,
-            snow_blend: 0.05 * height,
+            sun_radius: 0.02,
+            ao_radius: 0.006 * r,
+            exposure: 1.0,
         }
     }
 
-    /// Sky colour seen along a unit direction (a horizon-to-zenith gradient).
+    /// Distance of the `k`-th occlusion sample from the surface (`k < AO_SAMPLES`).
+    #[inline]
+    pub fn ao_step(&self, k: u32) -> f32 {
+        self.ao_radius * (k + 1) as f32 / AO_SAMPLES as f32
+    }
+
+    /// Two vectors spanning the sun's disk seen from the ground: orthogonal to the sun
+    /// and to each other, of length `tan(sun_radius)`.
+    pub fn sun_disk(&self) -> (Vec3, Vec3) {
+        let (a, b) = self.sun.any_orthonormal_pair();
+        let r = self.sun_radius.tan();
+        (a * r, b * r)
+    }
+
+    /// The shadow ray's direction at pixel `(i, j)`: a point of the sun's disk, uniform
+    /// over it, from a hash of the pixel.
+    pub fn sun_towards(&self, i: u32, j: u32) -> Vec3 {
+        let (a, b) = self.sun_disk();
+        let h = mix32(i ^ mix32(j ^ SUN_SEED));
+        let r = ((h & 0xffff) as f32 / 65536.0).sqrt();
+        let phi = std::f32::consts::TAU * (h >> 16) as f32 / 65536.0;
+        (self.sun + a * (r * phi.cos()) + b * (r * phi.sin())).normalize()
+    }
+
+    /// Sky radiance along a unit direction: horizon to zenith, with a glow around the sun.
     pub fn sky(&self, dir: Vec3) -> Vec3 {
         let k = dir.z.clamp(0.0, 1.0).sqrt();
-        self.fog_color.lerp(self.sky_color * 0.9, k)
+        let glow = dir.dot(self.sun).max(0.0).powi(8);
+        self.horizon.lerp(self.zenith, k) + self.sun_color * (0.12 * glow)
     }
 
-    /// Albedo at height `z` with outward normal `n`.
-    pub fn albedo(&self, z: f32, n: Vec3) -> Vec3 {
-        let flat = smoothstep(self.rock_slope.0, self.rock_slope.1, n.z);
-        let snowy = smoothstep(
-            self.snow_line - self.snow_blend,
-            self.snow_line + self.snow_blend,
-            z,
-        );
-        let top = self.grass.lerp(self.snow, snowy);
-        self.rock.lerp(top, flat)
-    }
-
-    /// Colour of a surface point `p` with outward normal `n`, hit at distance `t` along a
-    /// ray; `lit` is 1 when the sun reaches it and 0 in shadow.
-    pub fn surface(&self, p: Vec3, n: Vec3, t: f32, lit: f32) -> Vec3 {
-        let albedo = self.albedo(p.z, n);
+    /// Light reaching a surface with unit normal `n`, given the sun's visibility `lit`
+    /// (0 in shadow, 1 in full sun) and the sky's `ao` (1: open sky).
+    pub fn light(&self, n: Vec3, lit: f32, ao: f32) -> Vec3 {
         let diffuse = n.dot(self.sun).max(0.0) * lit;
-        let ambient = self.ground_color.lerp(self.sky_color, 0.5 + 0.5 * n.z);
-        let c = albedo * (self.sun_color * diffuse + ambient);
-        self.fog(c, t)
+        let up = 0.5 + 0.5 * n.z;
+        let ambient = self.bounce.lerp(self.zenith.lerp(self.horizon, 0.5), up);
+        self.sun_color * diffuse + ambient * ao
     }
 
-    /// Blends `c` seen at distance `t` towards the fog colour.
-    pub fn fog(&self, c: Vec3, t: f32) -> Vec3 {
-        let k = 1.0 - (-t / self.fog_distance).exp();
-        c.lerp(self.fog_color, k)
+    /// Colour of a surface of `albedo` lit by `light`, seen from distance `t`.
+    pub fn surface(&self, albedo: Vec3, light: Vec3, t: f32) -> Vec3 {
+        self.haze(albedo * light, t)
+    }
+
+    /// Blends `c` seen at distance `t` towards the horizon's colour.
+    pub fn haze(&self, c: Vec3, t: f32) -> Vec3 {
+        let k = 1.0 - (-t / self.haze).exp();
+        c.lerp(self.horizon, k)
+    }
+
+    /// The display colour (tone-mapped, linear `[0, 1]`) of radiance `c`.
+    pub fn display(&self, c: Vec3) -> Vec3 {
+        aces(c * self.exposure)
     }
 }
 
-/// Hermite step from 0 at `a` to 1 at `b`.
+/// Occlusion of the sky from [`AO_SAMPLES`] samples: `open[k]` is the distance estimate at
+/// the `k`-th sample over its step, clamped to `[0, 1]`; near samples weigh more. Returns
+/// the share of the sky seen, in `[0, 1]`.
+pub fn ambient_occlusion(open: impl Iterator<Item = f32>) -> f32 {
+    let (mut sum, mut norm) = (0.0, 0.0);
+    for (k, o) in open.enumerate() {
+        let w = 1.0 / (k + 1) as f32;
+        sum += w * o.clamp(0.0, 1.0);
+        norm += w;
+    }
+    if norm > 0.0 { sum / norm } else { 1.0 }
+}
+
+/// Narkowicz's fit of the ACES filmic tone curve, per channel, to `[0, 1]`.
 #[inline]
-pub fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
-    let u = ((x - a) / (b - a)).clamp(0.0, 1.0);
-    u * u * (3.0 - 2.0 * u)
+pub fn aces(c: Vec3) -> Vec3 {
+    let f = |x: f32| {
+        let x = x.max(0.0);
+        ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
+    };
+    Vec3::new(f(c.x), f(c.y), f(c.z))
 }
 
 /// Entries of the gamma table: linear values are quantised to 1/4095 before encoding.
@@ -130,27 +185,65 @@ mod tests {
     }
 
     #[test]
-    fn tint_follows_slope_and_altitude() {
+    fn shadow_occlusion_and_haze_darken_and_veil() {
         let s = scene();
-        assert_eq!(s.albedo(5.0, Vec3::Z), s.grass, "low flat is grass");
-        assert_eq!(s.albedo(39.0, Vec3::Z), s.snow, "high flat is snow");
-        assert_eq!(
-            s.albedo(39.0, Vec3::X),
-            s.rock,
-            "steep is rock at any height"
-        );
-        assert_eq!(s.albedo(5.0, Vec3::new(1.0, 0.0, 0.3).normalize()), s.rock);
+        let sunny = s.light(Vec3::Z, 1.0, 1.0);
+        let shaded = s.light(Vec3::Z, 0.0, 1.0);
+        let closed = s.light(Vec3::Z, 0.0, 0.2);
+        assert!(sunny.length() > 3.0 * shaded.length());
+        assert!(shaded.length() > 3.0 * closed.length());
+        let a = Vec3::splat(0.3);
+        let far = s.surface(a, sunny, 1e9);
+        assert!((far - s.horizon).length() < 1e-4);
+        assert_eq!(s.surface(a, sunny, 0.0), a * sunny);
     }
 
     #[test]
-    fn shadow_and_fog_darken_and_veil() {
+    fn shadow_rays_cover_the_sun_disk() {
         let s = scene();
-        let p = Vec3::new(0.0, 0.0, 5.0);
-        let lit = s.surface(p, Vec3::Z, 0.0, 1.0);
-        let dark = s.surface(p, Vec3::Z, 0.0, 0.0);
-        assert!(lit.length() > dark.length() * 1.5);
-        let far = s.surface(p, Vec3::Z, 1e9, 1.0);
-        assert!((far - s.fog_color).length() < 1e-4);
+        let cos_r = s.sun_radius.cos();
+        let dirs: Vec<Vec3> = (0..64)
+            .flat_map(|j| (0..64).map(move |i| (i, j)))
+            .map(|(i, j)| s.sun_towards(i, j))
+            .collect();
+        assert!(dirs.iter().all(|d| d.dot(s.sun) >= cos_r - 1e-6));
+        let mean = dirs.iter().sum::<Vec3>() / dirs.len() as f32;
+        assert!(mean.normalize().dot(s.sun) > 0.99999, "centred on the sun");
+        let spread = dirs
+            .iter()
+            .filter(|d| d.dot(s.sun) < (0.5 * s.sun_radius).cos())
+            .count();
+        assert!(
+            (2800..3300).contains(&spread),
+            "3/4 of a uniform disk lie outside r/2: {spread}"
+        );
+        let none = Shading {
+            sun_radius: 0.0,
+            ..s
+        };
+        assert_eq!(none.sun_towards(3, 4), none.sun);
+    }
+
+    #[test]
+    fn occlusion_weighs_near_samples_more() {
+        assert_eq!(ambient_occlusion([1.0; 4].into_iter()), 1.0);
+        assert_eq!(ambient_occlusion([0.0; 4].into_iter()), 0.0);
+        let near = ambient_occlusion([0.0, 1.0, 1.0, 1.0].into_iter());
+        let far = ambient_occlusion([1.0, 1.0, 1.0, 0.0].into_iter());
+        assert!(near < far, "{near} vs {far}");
+        assert_eq!(ambient_occlusion([2.0, -1.0].into_iter()), 2.0 / 3.0);
+    }
+
+    #[test]
+    fn tone_curve_is_monotone_and_bounded() {
+        let mut last = -1.0;
+        for k in 0..200 {
+            let v = aces(Vec3::splat(k as f32 * 0.05)).x;
+            assert!(v >= last && (0.0..=1.0).contains(&v));
+            last = v;
+        }
+        assert_eq!(aces(Vec3::ZERO), Vec3::ZERO);
+        assert!(aces(Vec3::splat(100.0)).x > 0.99);
         assert_eq!(to_srgb8(Vec3::ONE), [255, 255, 255, 255]);
         assert_eq!(to_srgb8(Vec3::ZERO), [0, 0, 0, 255]);
     }

@@ -149,15 +149,14 @@ impl<'f> Tracer<'f> {
         self.march(ray, span, params, true)
     }
 
-    /// The outward unit normal ([`normal`]) at `ray.at(t)`, for a hit `t` that
-    /// [`Tracer::trace`] just found along `ray`: through the line's lists when the tracer
-    /// keeps them and is still on that ray, else from the field.
-    pub fn normal(&mut self, ray: &Ray, t: f32) -> Vec3 {
-        let g = match &mut self.line {
+    /// The gradient of the field at `ray.at(t)`, for a hit `t` that [`Tracer::trace`]
+    /// just found along `ray`: through the line's lists when the tracer keeps them and is
+    /// still on that ray, else from the field. [`outward`] makes it the normal.
+    pub fn gradient(&mut self, ray: &Ray, t: f32) -> Vec3 {
+        match &mut self.line {
             Some(line) if line.runs_along(ray.origin, ray.dir) => line.value_grad(t).1,
             _ => self.field.value_grad(ray.at(t)).1,
-        };
-        outward(g)
+        }
     }
 
     /// [`occluded`] with this tracer.
@@ -338,8 +337,9 @@ pub fn normal(field: &dyn Field, p: Vec3) -> Vec3 {
     outward(field.value_grad(p).1)
 }
 
-/// `−g / |g|`, or `+Z` where the gradient vanishes or is not finite.
-fn outward(g: Vec3) -> Vec3 {
+/// The outward unit normal `−g / |g|` of a gradient `g`, or `+Z` where it vanishes or is
+/// not finite.
+pub fn outward(g: Vec3) -> Vec3 {
     let n = -g;
     let l = n.length();
     if l > 0.0 && l.is_finite() {

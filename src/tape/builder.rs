@@ -473,6 +473,7 @@ impl TapeBuilder {
             sf_table: self.sf_table,
             sf_data: self.sf_data,
             sfields: self.sfields,
+            ground: None,
             support,
             lipschitz: 0.0,
             grad_step: 0.0,

@@ -24,7 +24,11 @@ impl Tape {
     /// The parts of the GPU evaluator this tape uses, a bit per name of [`FEATURES`].
     pub fn features(&self) -> u32 {
         let on = |name: &str| 1u32 << FEATURES.iter().position(|&f| f == name).expect("a feature");
-        let mut bits = 0;
+        let mut bits = match self.ground {
+            Some((flags, _)) if flags & flag::BICUBIC != 0 => on("USE_HEIGHT") | on("USE_BICUBIC"),
+            Some(_) => on("USE_HEIGHT"),
+            None => 0,
+        };
         for ins in &self.instrs {
             let at = |k: usize| self.params[ins.param as usize + k];
             bits |= match ins.op {

@@ -45,6 +45,40 @@ impl Tape {
     pub fn from_tree(tree: &Tree) -> Result<Tape, TapeError> {
         tape_from_tree(tree)
     }
+
+    /// The same tape carrying the heightfield `ground` (its samples and parameters, see
+    /// [`Tape::ground`]) for the materials to tell features from ground on the GPU.
+    pub fn with_ground(mut self, ground: &HeightfieldField) -> Result<Tape, TapeError> {
+        let grid = height_grid(ground)
+            .map_err(|why| TapeError::Invalid(format!("the terrain of the materials: {why}")))?;
+        let (flags, q) = super::height::encode(&grid, ground.params().falloff, &mut self.heights)?;
+        self.ground = Some((flags, self.params.len() as u32));
+        self.params.extend_from_slice(&q);
+        Ok(self)
+    }
+}
+
+/// The grid of a heightfield leaf, or why the tape cannot hold it.
+fn height_grid(h: &HeightfieldField) -> Result<HeightGrid<'_>, &'static str> {
+    let grid = h.heightfield();
+    let cell = grid.cell();
+    if h.params().domain.is_some() {
+        return Err("a domain polygon is not encoded");
+    }
+    if grid.nodata_count() > 0 {
+        return Err("DEMs with nodata samples are not encoded");
+    }
+    if cell.x != cell.y {
+        return Err("only square cells are encoded");
+    }
+    Ok(HeightGrid {
+        origin: grid.origin(),
+        cell: cell.x,
+        nx: grid.nx(),
+        ny: grid.ny(),
+        z: grid.samples(),
+        interpolation: h.params().interpolation,
+    })
 }
 
 /// How to name node `id` in messages: its user name when it has one.
@@ -287,33 +321,11 @@ fn heightfield(
     id: NodeId,
     h: &HeightfieldField,
 ) -> Result<(), TapeError> {
-    let params = h.params();
-    let grid = h.heightfield();
-    let cell = grid.cell();
-    let refuse = |why: &str| Err(no_encoding(tree, id, "heightfield", why));
-    if params.domain.is_some() {
-        return refuse("a domain polygon is not encoded");
-    }
-    if grid.nodata_count() > 0 {
-        return refuse("DEMs with nodata samples are not encoded");
-    }
-    if cell.x != cell.y {
-        return refuse("only square cells are encoded");
-    }
-    let r = params.falloff;
-    b.heightfield(
-        &HeightGrid {
-            origin: grid.origin(),
-            cell: cell.x,
-            nx: grid.nx(),
-            ny: grid.ny(),
-            z: grid.samples(),
-            interpolation: params.interpolation,
-        },
-        r,
-    )?;
+    let r = h.params().falloff;
+    let grid = height_grid(h).map_err(|why| no_encoding(tree, id, "heightfield", why))?;
+    b.heightfield(&grid, r)?;
     // The leaf's prism field 2T·g(d_P/R), d_xy = R − clearance of the grid's rectangle.
-    let rect = grid.extent();
+    let rect = h.heightfield().extent();
     let dz = h.prism_z();
     b.primitive(
         Shape::Prism {

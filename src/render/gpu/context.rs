@@ -13,6 +13,8 @@ use crate::field::{Fbm, Field};
 use crate::render::camera::Camera;
 use crate::render::cpu::RenderSettings;
 use crate::render::image::Frame;
+use crate::render::material::{DRY_SCALE, VARIATION_SEED};
+use crate::render::shade::{AO_SAMPLES, SUN_SEED};
 use crate::render::trace::Method;
 use crate::tape::Tape;
 use crate::tape::noise::encode_fbm;
@@ -21,13 +23,14 @@ use crate::tape::noise::encode_fbm;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct Uniforms {
-    v: [[f32; 4]; 15],
+    v: [[f32; 4]; 21],
     dims: [u32; 4],
+    consts: [u32; 4],
 }
 
 /// Bytes of one pixel's saved state (`struct Saved` of `trace.wgsl`).
-const SAVED_BYTES: u64 = 7 * 16;
-/// Pixels per tile: the saved states of a tile fit one 56 MiB buffer.
+const SAVED_BYTES: u64 = 8 * 16;
+/// Pixels per tile: the saved states of a tile fit one 64 MiB buffer.
 const TILE_PIXELS: u64 = 1 << 19;
 /// Passes over a tile before giving up (each resumes every unfinished pixel).
 const MAX_PASSES: u32 = 100_000;
@@ -40,11 +43,15 @@ impl Uniforms {
     fn new(tape: &Tape, cam: &Camera, s: &RenderSettings) -> Self {
         let (right, up, forward, tan_half) = cam.basis();
         let sh = &s.shading;
+        let m = &s.materials;
         let b = tape.support();
         let method = match s.trace.method {
             Method::Segment => 0.0,
             Method::Sphere => 1.0,
         };
+        let snow = m.snow_line.map_or([0.0; 2], |l| [l.altitude, l.blend]);
+        let (disk_u, disk_v) = sh.sun_disk();
+        let (ground_flags, ground_at) = tape.ground.map_or((0, 0), |(f, at)| (f, at + 1));
         Uniforms {
             v: [
                 v4(cam.eye, tan_half),
@@ -55,15 +62,22 @@ impl Uniforms {
                 v4(b.max, s.trace.cone),
                 [tape.lipschitz(), s.trace.grow, tape.grad_step(), method],
                 v4(sh.sun, if sh.shadows { 1.0 } else { 0.0 }),
-                v4(sh.sun_color, sh.fog_distance),
-                v4(sh.sky_color, sh.snow_line),
-                v4(sh.ground_color, sh.snow_blend),
-                v4(sh.fog_color, sh.rock_slope.0),
-                v4(sh.rock, sh.rock_slope.1),
-                v4(sh.grass, 0.0),
-                v4(sh.snow, 0.0),
+                v4(sh.sun_color, sh.haze),
+                v4(sh.zenith, 0.0),
+                v4(sh.horizon, sh.ao_radius),
+                v4(sh.bounce, sh.exposure),
+                v4(m.rock, m.rock_slope.0),
+                v4(m.soil, m.rock_slope.1),
+                v4(m.grass, m.soil_slope.0),
+                v4(m.snow, m.soil_slope.1),
+                [snow[0], snow[1], m.variation, m.variation_wavelength],
+                [m.feature_depth.0, m.feature_depth.1, DRY_SCALE, 0.0],
+                v4(m.dry, 0.0),
+                v4(disk_u, 0.0),
+                v4(disk_v, 0.0),
             ],
-            dims: [cam.width, cam.height, s.trace.max_steps, 0],
+            dims: [cam.width, cam.height, s.trace.max_steps, ground_at],
+            consts: [VARIATION_SEED, AO_SAMPLES, ground_flags, SUN_SEED],
         }
     }
 }
@@ -355,6 +369,15 @@ impl GpuContext {
         let (w, h) = (camera.width, camera.height);
         let n = w as u64 * h as u64;
         self.check_size("the image", 4 * n)?;
+        // The materials' terrain travels with the tape's heightfields.
+        let grounded;
+        let tape = match &settings.materials.ground {
+            Some(g) => {
+                grounded = tape.clone().with_ground(g)?;
+                &grounded
+            }
+            None => tape,
+        };
         let tape_buffers = self.tape_buffers(tape)?;
         let uniforms = self.storage(
             "uniforms",
