@@ -11,7 +11,9 @@ use crate::field::{Aabb, Field, Tree};
 use crate::io::progress;
 use crate::mesh::export::{self, ExportOptions};
 use crate::mesh::{GridSpec, Mesh, MeshOptions, MeshStats, polygonize};
-use crate::render::{Camera, Frame, Method, RenderSettings, cpu};
+use crate::render::image::write_contact_sheet;
+use crate::render::material::SnowLine;
+use crate::render::{Camera, Frame, Method, RenderSettings, cpu, views};
 use crate::scene::{self, SceneFile};
 
 /// What to run.
@@ -21,8 +23,10 @@ pub struct JobOptions {
     pub out_dir: PathBuf,
     /// Mesh the whole scene at the job's coarse cell size instead of its region.
     pub full: bool,
-    /// Skip the preview image.
+    /// Skip the preview image (and the feature views).
     pub no_render: bool,
+    /// Skip the feature views.
+    pub no_views: bool,
     /// No progress bars.
     pub quiet: bool,
     /// Memory budget of the DEMs, grids and image, in bytes.
@@ -41,6 +45,9 @@ pub struct JobReport {
     pub mesh_path: PathBuf,
     /// The preview image, if rendered.
     pub image_path: Option<PathBuf>,
+    /// The feature views written, `(feature, image)`, then the contact sheet of the
+    /// preview and the views (`("sheet", …)`) when there were any.
+    pub views: Vec<(String, PathBuf)>,
     /// The mesh that was written.
     pub mesh: Mesh,
     /// Mesher statistics.
@@ -65,6 +72,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
     stages.push(("load + compile", t.elapsed()));
     let tree = compiled.tree;
     let ground = compiled.ground;
+    let mut notices = compiled.notices;
     let job = file.scene.job.clone();
     let support = tree.support();
     anyhow::ensure!(
@@ -101,7 +109,10 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
             .filter(|_| !opts.full)
             .map(|c| (c.eye.0, c.target.0));
         Frame::check_budget(w, h, opts.budget)?;
-        Some(Camera::view(look, &region, fov, w, h)?)
+        Some(match (look, region_of_job) {
+            (Some(_), _) | (None, Some(_)) if !opts.full => Camera::view(look, &region, fov, w, h)?,
+            _ => views::frame_surface(&tree, fov, w, h)?,
+        })
     };
 
     let t = Instant::now();
@@ -123,29 +134,80 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
 
     std::fs::create_dir_all(&opts.out_dir)
         .with_context(|| format!("cannot create the output folder {}", opts.out_dir.display()))?;
-    let stem = file.scene.name.clone().unwrap_or_else(|| {
-        path.file_stem()
-            .map_or("scene".into(), |s| s.to_string_lossy().into_owned())
-    });
+    // Named after the file, not the scene's `name`: two trees sharing a name must not
+    // overwrite each other's results.
+    let stem = path
+        .file_stem()
+        .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
     let suffix = if opts.full { "_full" } else { "" };
     let mesh_path = opts.out_dir.join(format!("{stem}{suffix}.glb"));
     let t = Instant::now();
     export::write(&mesh, &mesh_path, &ExportOptions { color: true })?;
     stages.push(("write mesh", t.elapsed()));
 
+    let mut views = Vec::new();
     let image_path = match camera {
         None => None,
         Some(camera) => {
             let t = Instant::now();
-            let settings = RenderSettings::for_scene(&region, &camera, Method::Segment)
-                .with_ground(ground.clone());
-            let tiles = camera.width.div_ceil(cpu::TILE) * camera.height.div_ceil(cpu::TILE);
-            let bar = progress(tiles as u64, "rendering", opts.quiet);
-            let frame: Frame = cpu::render(&tree, &camera, &settings, &bar);
-            bar.finish_and_clear();
+            let look = |camera: &Camera| {
+                let mut settings = RenderSettings::for_scene(&region, camera, Method::Segment)
+                    .with_ground(ground.clone());
+                settings.materials.snow_line = job
+                    .as_ref()
+                    .and_then(|j| j.snow_line)
+                    .map(|z| SnowLine::at(z.0, &region));
+                settings
+            };
+            let draw = |camera: &Camera, what: &str| {
+                let tiles = camera.width.div_ceil(cpu::TILE) * camera.height.div_ceil(cpu::TILE);
+                let bar = progress(tiles as u64, what, opts.quiet);
+                let frame = cpu::render(&tree, camera, &look(camera), &bar);
+                bar.finish_and_clear();
+                frame
+            };
+            let frame = draw(&camera, "rendering");
             let image_path = opts.out_dir.join(format!("{stem}{suffix}.png"));
             frame.write_png(&image_path)?;
             stages.push(("render", t.elapsed()));
+            if !opts.no_views {
+                let t = Instant::now();
+                let (w, h) = job
+                    .as_ref()
+                    .and_then(|j| j.view_image)
+                    .unwrap_or((camera.width / 2, camera.height / 2));
+                let fov = job.as_ref().map_or(40.0, |j| j.fov.0);
+                let mut frames = vec![frame];
+                for name in file.scene.feature_names() {
+                    let Some(id) = tree.find(name) else { continue };
+                    let fixed = job.as_ref().and_then(|j| j.views.get(name));
+                    let view = match fixed {
+                        Some(c) => Some(Camera::look_at(c.eye.0, c.target.0, fov, w, h)?),
+                        None => {
+                            let feature = tree.info(id).support.intersection(region);
+                            let m = look(&camera).materials;
+                            views::feature_view(&tree, &feature, &m, fov, (w, h))?
+                        }
+                    };
+                    let Some(view) = view else {
+                        notices.push(format!(
+                            "feature {name:?}: no camera outside the terrain sees it; no view written"
+                        ));
+                        continue;
+                    };
+                    let frame = draw(&view, name);
+                    let path = opts.out_dir.join(format!("{stem}{suffix}_{name}.png"));
+                    frame.write_png(&path)?;
+                    views.push((name.to_string(), path));
+                    frames.push(frame);
+                }
+                if frames.len() > 1 {
+                    let path = opts.out_dir.join(format!("{stem}{suffix}_sheet.png"));
+                    write_contact_sheet(&path, &frames.iter().collect::<Vec<_>>())?;
+                    views.push(("sheet".to_string(), path));
+                }
+                stages.push(("feature views", t.elapsed()));
+            }
             Some(image_path)
         }
     };
@@ -155,9 +217,10 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         cell,
         mesh_path,
         image_path,
+        views,
         mesh,
         mesh_stats,
         stages,
-        notices: compiled.notices,
+        notices,
     })
 }

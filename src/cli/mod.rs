@@ -62,17 +62,6 @@ fn corners(v: &[f32]) -> Aabb {
     Aabb::new(Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]))
 }
 
-/// An error and its sources, `outer: inner: …`, as `main` prints them.
-fn chain(e: &dyn std::error::Error) -> String {
-    let mut text = e.to_string();
-    let mut next = e.source();
-    while let Some(s) = next {
-        text.push_str(&format!(": {s}"));
-        next = s.source();
-    }
-    text
-}
-
 /// Loads a tree file, refuses `outputs` that are among the files it reads (the tree, its
 /// DEMs and curve files), and compiles it within `budget` bytes, printing the loader's
 /// notices.

@@ -7,7 +7,10 @@ use anyhow::Context;
 use glam::Vec3;
 
 use super::Budget;
+use karstic::field::Aabb;
 use karstic::io::progress;
+use karstic::render::material::SnowLine;
+use karstic::render::views::{frame_surface, surface_box};
 use karstic::render::{Camera, Device, Frame, Method, RenderSettings, Renderable, cpu};
 
 /// Arguments of `karstic render`.
@@ -27,17 +30,22 @@ pub(super) struct RenderArgs {
     /// Also write the steps-per-pixel image to this PNG.
     #[arg(long)]
     cost: Option<PathBuf>,
-    /// Camera eye and target (default: framed from the tree's support box, from the
-    /// south-east and above).
+    /// Camera eye and target (default: the tree's `job` camera when it has one, else the
+    /// box where the surface lies framed from the south-east and above).
     #[arg(long, num_args = 6, allow_negative_numbers = true,
           value_names = ["EYE_X", "EYE_Y", "EYE_Z", "TARGET_X", "TARGET_Y", "TARGET_Z"])]
     camera: Option<Vec<f32>>,
-    /// Vertical field of view, degrees.
-    #[arg(long, default_value_t = 40.0)]
-    fov: f32,
-    /// Trace on the GPU (wgpu); falls back to the CPU with a message when no adapter.
+    /// Vertical field of view, degrees (default: the job's, else 40).
+    #[arg(long)]
+    fov: Option<f32>,
+    /// Trace on the GPU (wgpu); falls back to the CPU with a message when no hardware
+    /// adapter can.
     #[arg(long)]
     gpu: bool,
+    /// With `--gpu`, use a software adapter (llvmpipe, lavapipe, WARP) too: many times
+    /// slower than the CPU renderer, for tests.
+    #[arg(long, requires = "gpu")]
+    software_gpu: bool,
     /// Skip the shadow rays.
     #[arg(long)]
     no_shadows: bool,
@@ -55,16 +63,37 @@ pub(super) fn run(args: RenderArgs) -> anyhow::Result<()> {
     let (w, h) = (args.size[0], args.size[1]);
     karstic::render::camera::check_size(w, h)?;
     Frame::check_budget(w, h, args.budget.max_memory)?;
-    let tree = super::load_tree(&args.tree, args.budget.max_memory, &outputs)?;
-    let subject = Renderable::from_tree(tree, args.gpu);
-    let support = subject.field.support();
+    let file = karstic::scene::load(&args.tree)?;
+    karstic::io::check_outputs(&file.inputs(), &outputs)?;
+    let compiled = file.compile_with(args.budget.max_memory)?;
+    for n in &compiled.notices {
+        eprintln!("notice: {n}");
+    }
+    let job = file.scene.job.as_ref();
+    let mut subject = Renderable::from_tree(compiled.tree, args.gpu);
+    subject.allow_software = args.software_gpu;
+    // The job's region sets the scale of the shading (haze, occlusion, materials); its
+    // camera is the default view.
+    let scene = job
+        .and_then(|j| j.region)
+        .map(|r| Aabb::new(r.min.0, r.max.0))
+        .unwrap_or_else(|| surface_box(subject.field.as_ref()));
     let look = args
         .camera
         .as_deref()
-        .map(|c| (Vec3::new(c[0], c[1], c[2]), Vec3::new(c[3], c[4], c[5])));
-    let camera = Camera::view(look, &support, args.fov, w, h)
-        .with_context(|| format!("{}: placing the camera", args.tree.display()))?;
-    let mut settings = RenderSettings::for_scene(&support, &camera, args.method);
+        .map(|c| (Vec3::new(c[0], c[1], c[2]), Vec3::new(c[3], c[4], c[5])))
+        .or_else(|| job.and_then(|j| j.camera).map(|c| (c.eye.0, c.target.0)));
+    let fov = args.fov.or(job.map(|j| j.fov.0)).unwrap_or(40.0);
+    let camera = match look {
+        Some((eye, target)) => Camera::look_at(eye, target, fov, w, h),
+        None => frame_surface(subject.field.as_ref(), fov, w, h),
+    }
+    .with_context(|| format!("{}: placing the camera", args.tree.display()))?;
+    let mut settings =
+        RenderSettings::for_scene(&scene, &camera, args.method).with_ground(compiled.ground);
+    settings.materials.snow_line = job
+        .and_then(|j| j.snow_line)
+        .map(|z| SnowLine::at(z.0, &scene));
     settings.shading.shadows = !args.no_shadows;
     let start = Instant::now();
     let tiles = w.div_ceil(cpu::TILE) * h.div_ceil(cpu::TILE);
@@ -72,7 +101,6 @@ pub(super) fn run(args: RenderArgs) -> anyhow::Result<()> {
     let (frame, device) = subject.render_with_fallback(&camera, &settings, &bar);
     bar.finish_and_clear();
     if let Device::CpuInstead(why) = &device {
-        let why = super::chain(why.error());
         eprintln!("--gpu: {why}; rendered on the CPU instead");
     }
     let elapsed = start.elapsed();
@@ -128,6 +156,7 @@ mod tests {
             "--fov",
             "30",
             "--gpu",
+            "--software-gpu",
             "--quiet",
             "--cost",
             "c.png",
@@ -137,12 +166,17 @@ mod tests {
         assert_eq!(a.size, vec![64, 48]);
         assert_eq!(a.method, Method::Sphere);
         assert_eq!(a.camera, Some(vec![-10.0, 5.0, 3.5, 0.0, 0.0, -1.0]));
-        assert!(a.gpu && a.quiet && a.cost.is_some());
+        assert!(a.gpu && a.software_gpu && a.quiet && a.cost.is_some());
+        assert_eq!(a.fov, Some(30.0));
         assert_eq!(a.budget.max_memory, 1 << 30);
         let d = args(&[]);
         assert_eq!(d.size, vec![960, 540]);
         assert_eq!(d.method, Method::Segment);
-        for bad in [&["--size", "5"][..], &["--method", "bogus"]] {
+        for bad in [
+            &["--size", "5"][..],
+            &["--method", "bogus"],
+            &["--software-gpu"],
+        ] {
             let mut argv = vec!["karstic", "render", "x.ron", "-o", "o.png"];
             argv.extend_from_slice(bad);
             assert!(Cli::try_parse_from(argv).is_err(), "{bad:?}");

@@ -18,9 +18,12 @@ pub(super) struct RunArgs {
     /// Mesh the whole scene at the job's coarse cell size (`full_cell`).
     #[arg(long)]
     full: bool,
-    /// Skip the preview image.
+    /// Skip the preview image and the feature views.
     #[arg(long)]
     no_render: bool,
+    /// Skip the feature views (a close-up of each named feature and a contact sheet).
+    #[arg(long)]
+    no_views: bool,
     /// Also print the mesher's statistics.
     #[arg(long)]
     stats: bool,
@@ -38,6 +41,7 @@ pub(super) fn run(args: RunArgs) -> anyhow::Result<()> {
         out_dir: args.out.clone(),
         full: args.full,
         no_render: args.no_render,
+        no_views: args.no_views,
         quiet: args.quiet,
         budget: args.budget.max_memory,
     };
@@ -60,6 +64,9 @@ pub(super) fn run(args: RunArgs) -> anyhow::Result<()> {
     );
     println!("wrote {}", report.mesh_path.display());
     if let Some(p) = &report.image_path {
+        println!("wrote {}", p.display());
+    }
+    for (_, p) in &report.views {
         println!("wrote {}", p.display());
     }
     let mut total = 0.0;

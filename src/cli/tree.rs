@@ -77,7 +77,7 @@ pub(super) fn run(args: TreeArgs) -> anyhow::Result<()> {
                 match scene::load(f).and_then(|s| s.compile().map(|_| ())) {
                     Ok(()) => println!("{}: ok", f.display()),
                     Err(e) => {
-                        eprintln!("{}", super::chain(&e));
+                        eprintln!("{}", karstic::io::chain(&e));
                         failed += 1;
                     }
                 }

@@ -9,6 +9,17 @@ pub use atomic::{write_atomic, write_bytes_atomic};
 pub use paths::check_outputs;
 pub use size::parse_byte_size;
 
+/// An error and its sources, one line: `outer: cause: root cause`.
+pub fn chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut next = e.source();
+    while let Some(s) = next {
+        text.push_str(&format!(": {s}"));
+        next = s.source();
+    }
+    text
+}
+
 use std::io::{self, Read};
 use std::path::{Path, PathBuf};
 

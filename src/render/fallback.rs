@@ -5,7 +5,7 @@ use indicatif::ProgressBar;
 
 use super::camera::Camera;
 use super::cpu::{self, RenderSettings};
-use super::gpu::{self, GpuError};
+use super::gpu::{GpuContext, GpuError};
 use super::image::Frame;
 use crate::field::{Field, Tree};
 use crate::tape::{Tape, tape_from_tree};
@@ -17,6 +17,10 @@ pub struct Renderable {
     /// When the GPU is wanted: the field's encoding, or why it has none (a node without
     /// an encoding). `None` renders on the CPU.
     pub tape: Option<Result<Tape, GpuError>>,
+    /// Render on a software adapter (llvmpipe, lavapipe, WARP) too. Off by default: one
+    /// runs the tracer many times slower than the CPU renderer (the main job took 246 s
+    /// on lavapipe against 1.5 s on the CPU), so the CPU renders instead.
+    pub allow_software: bool,
 }
 
 /// Why the CPU rendered an image the GPU was asked for.
@@ -26,14 +30,19 @@ pub enum Fallback<'a> {
     NoTape(&'a GpuError),
     /// The GPU could not be opened or failed while rendering.
     Failed(GpuError),
+    /// The only adapter is a software one (named), and software was not allowed.
+    Software(String),
 }
 
-impl Fallback<'_> {
-    /// The GPU's error.
-    pub fn error(&self) -> &GpuError {
+impl std::fmt::Display for Fallback<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            Fallback::NoTape(e) => e,
-            Fallback::Failed(e) => e,
+            Fallback::NoTape(e) => write!(f, "{}", crate::io::chain(*e)),
+            Fallback::Failed(e) => write!(f, "{}", crate::io::chain(e)),
+            Fallback::Software(name) => write!(
+                f,
+                "the only GPU adapter is a software one ({name}), slower than the CPU renderer (allow it with --software-gpu)"
+            ),
         }
     }
 }
@@ -41,8 +50,8 @@ impl Fallback<'_> {
 /// The device that rendered a frame.
 #[derive(Debug)]
 pub enum Device<'a> {
-    /// The GPU.
-    Gpu,
+    /// The GPU, with its adapter's name.
+    Gpu(String),
     /// The CPU, as asked.
     Cpu,
     /// The CPU, because the GPU was asked for but could not be used.
@@ -50,11 +59,11 @@ pub enum Device<'a> {
 }
 
 impl Device<'_> {
-    /// `"GPU"` or `"CPU"`.
-    pub fn name(&self) -> &'static str {
+    /// `"GPU (adapter)"` or `"CPU"`.
+    pub fn name(&self) -> String {
         match self {
-            Device::Gpu => "GPU",
-            Device::Cpu | Device::CpuInstead(_) => "CPU",
+            Device::Gpu(adapter) => format!("GPU ({adapter})"),
+            Device::Cpu | Device::CpuInstead(_) => "CPU".into(),
         }
     }
 }
@@ -67,6 +76,7 @@ impl Renderable {
         Renderable {
             field: Box::new(tree),
             tape,
+            allow_software: false,
         }
     }
 
@@ -83,10 +93,20 @@ impl Renderable {
         match &self.tape {
             None => (cpu(), Device::Cpu),
             Some(Err(e)) => (cpu(), Device::CpuInstead(Fallback::NoTape(e))),
-            Some(Ok(tape)) => match gpu::render(tape, camera, settings) {
-                Ok(frame) => (frame, Device::Gpu),
-                Err(e) => (cpu(), Device::CpuInstead(Fallback::Failed(e))),
-            },
+            Some(Ok(tape)) => {
+                let ctx = match GpuContext::new() {
+                    Ok(ctx) if ctx.software && !self.allow_software => {
+                        let why = Fallback::Software(ctx.adapter.clone());
+                        return (cpu(), Device::CpuInstead(why));
+                    }
+                    Ok(ctx) => ctx,
+                    Err(e) => return (cpu(), Device::CpuInstead(Fallback::Failed(e))),
+                };
+                match ctx.render(tape, camera, settings) {
+                    Ok(frame) => (frame, Device::Gpu(ctx.adapter.clone())),
+                    Err(e) => (cpu(), Device::CpuInstead(Fallback::Failed(e))),
+                }
+            }
         }
     }
 }

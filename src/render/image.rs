@@ -94,6 +94,44 @@ fn heat(x: f32) -> [u8; 4] {
     [c(0), c(1), c(2), 255]
 }
 
+/// Width of a thumbnail on a contact sheet, pixels.
+pub const SHEET_THUMB: u32 = 480;
+/// Thumbnails per row of a contact sheet.
+pub const SHEET_COLUMNS: usize = 3;
+/// Gap between thumbnails, pixels.
+const SHEET_GAP: u32 = 4;
+
+/// Writes `frames` as one contact sheet: thumbnails [`SHEET_THUMB`] pixels wide (each
+/// keeping its aspect) in rows of [`SHEET_COLUMNS`], in order, on a dark background.
+pub fn write_contact_sheet(path: &Path, frames: &[&Frame]) -> Result<(), RenderError> {
+    let thumbs: Vec<image::RgbaImage> = frames
+        .iter()
+        .filter_map(|f| image::RgbaImage::from_raw(f.width, f.height, f.rgba.clone()))
+        .map(|img| {
+            let h = (SHEET_THUMB as u64 * img.height() as u64 / img.width().max(1) as u64).max(1);
+            image::imageops::resize(&img, SHEET_THUMB, h as u32, image::imageops::Triangle)
+        })
+        .collect();
+    let rows: Vec<&[image::RgbaImage]> = thumbs.chunks(SHEET_COLUMNS).collect();
+    let row_h: Vec<u32> = rows
+        .iter()
+        .map(|r| r.iter().map(|t| t.height()).max().unwrap_or(0))
+        .collect();
+    let cols = thumbs.len().clamp(1, SHEET_COLUMNS) as u32;
+    let w = cols * SHEET_THUMB + (cols + 1) * SHEET_GAP;
+    let h = row_h.iter().sum::<u32>() + (rows.len() as u32 + 1) * SHEET_GAP;
+    let mut sheet = image::RgbaImage::from_pixel(w, h.max(1), image::Rgba([24, 24, 28, 255]));
+    let mut y = SHEET_GAP;
+    for (row, rh) in rows.iter().zip(&row_h) {
+        for (c, t) in row.iter().enumerate() {
+            let x = SHEET_GAP + c as u32 * (SHEET_THUMB + SHEET_GAP);
+            image::imageops::overlay(&mut sheet, t, x as i64, y as i64);
+        }
+        y += rh + SHEET_GAP;
+    }
+    write_rgba_png(path, sheet.width(), sheet.height(), sheet.as_raw())
+}
+
 fn write_rgba_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<(), RenderError> {
     let mut bytes = Vec::new();
     PngEncoder::new(&mut bytes)
@@ -130,5 +168,35 @@ mod tests {
         assert_eq!(&cost[20..24], &[255, 255, 255, 255], "max steps is white");
         assert!(Frame::check_budget(40_000, 40_000, 1 << 30).is_err());
         assert!(Frame::check_budget(500, 500, 1 << 30).is_ok());
+    }
+
+    #[test]
+    fn contact_sheets_tile_their_frames_in_order() {
+        let dir = tempfile::tempdir().unwrap();
+        let solid = |v: u8, w: u32, h: u32| {
+            let n = (w * h) as usize;
+            Frame::new(w, h, vec![v; 4 * n], vec![0.0; n], vec![0; n])
+        };
+        let (a, b, c, d) = (
+            solid(200, 960, 540),
+            solid(100, 480, 270),
+            solid(50, 480, 270),
+            solid(250, 960, 540),
+        );
+        let p = dir.path().join("sheet.png");
+        write_contact_sheet(&p, &[&a, &b, &c, &d]).unwrap();
+        let s = image::open(&p).unwrap().to_rgba8();
+        assert_eq!(s.width(), 3 * SHEET_THUMB + 4 * SHEET_GAP);
+        assert_eq!(s.height(), 2 * 270 + 3 * SHEET_GAP);
+        let at = |col: u32, row: u32| {
+            s.get_pixel(
+                SHEET_GAP + col * (SHEET_THUMB + SHEET_GAP) + 10,
+                SHEET_GAP + row * (270 + SHEET_GAP) + 10,
+            )[0]
+        };
+        assert_eq!(
+            [at(0, 0), at(1, 0), at(2, 0), at(0, 1)],
+            [200, 100, 50, 250]
+        );
     }
 }

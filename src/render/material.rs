@@ -21,7 +21,7 @@ use crate::field::Aabb;
 use crate::field::noise::simplex;
 
 /// Seed of the noise that moves material boundaries.
-pub const VARIATION_SEED: u32 = 0x5eed_c01;
+pub const VARIATION_SEED: u32 = 0x05ee_dc01;
 
 /// Wavelength of the dry-grass patches, in units of [`Materials::variation_wavelength`].
 pub const DRY_SCALE: f32 = 2.5;
@@ -51,6 +51,16 @@ pub struct SnowLine {
     pub altitude: f32,
     /// Width (metres) of the transition.
     pub blend: f32,
+}
+
+impl SnowLine {
+    /// Snow above `altitude`, blended over 2% of `scene`'s height.
+    pub fn at(altitude: f32, scene: &Aabb) -> Self {
+        SnowLine {
+            altitude,
+            blend: 0.02 * scene.size().z.max(1e-3),
+        }
+    }
 }
 
 /// The material model of a scene.

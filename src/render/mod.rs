@@ -4,11 +4,15 @@
 //! * [`trace`]: segment tracing with local Lipschitz bounds (Génevaux et al. 2015 §7.2,
 //!   Galin et al. 2020) and plain sphere tracing with the global bound, with per-ray step
 //!   counts.
-//! * [`shade`]: terrain shading — sun, sky ambient, shadow rays, fog, slope/altitude tint.
+//! * [`shade`]: lighting — sun with soft shadows, sky with ambient occlusion from the
+//!   field, aerial perspective, tone curve.
 //! * [`cpu`]: the image renderer, tiles over rayon.
 //! * [`image`]: the rendered [`Frame`] and its PNG outputs (colour and step cost).
 //! * [`raycast`]: triangle-mesh ray casting (obvhs), the ground truth for the tracer.
 //! * [`gpu`]: the same tracer as a wgpu compute shader over a flattened node tape.
+//! * [`views`]: the box where the surface lies (automatic framing), and a close-up
+//!   camera per feature.
+//! * [`material`]: surface materials shared with the exported meshes.
 //! * [`fallback`]: the GPU when it can, the CPU otherwise ([`Renderable`]).
 
 pub mod camera;
@@ -20,6 +24,7 @@ pub mod material;
 pub mod raycast;
 pub mod shade;
 pub mod trace;
+pub mod views;
 
 pub use camera::{Camera, Ray};
 pub use cpu::{RenderSettings, render};

@@ -185,6 +185,16 @@ pub struct JobSpec {
     /// Cell size of the whole-scene mesh made with `--full` (default: 4 × `cell`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub full_cell: Option<Positive>,
+    /// Cameras of feature views, by feature name, where the automatic close-up does not
+    /// suit (`karstic run` writes a view of each named feature).
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub views: std::collections::BTreeMap<String, CameraSpec>,
+    /// Size of the feature views in pixels (default: half the preview's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub view_image: Option<(u32, u32)>,
+    /// Altitude (metres) above which flats turn to snow (default: no snow).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub snow_line: Option<Finite>,
 }
 
 fn default_image() -> (u32, u32) {
@@ -374,6 +384,26 @@ impl NodeSpec {
 }
 
 impl Scene {
+    /// The names of the scene's features, in the tree's order: named Feature Volumes,
+    /// anchored nodes, and named carves of a `Difference` — what `karstic run` makes a
+    /// close-up of.
+    pub fn feature_names(&self) -> Vec<&str> {
+        let mut names = Vec::new();
+        for n in self.all_nodes() {
+            if let NodeSpec::Difference(d) = n {
+                names.extend(d.carves.iter().filter_map(NodeSpec::name));
+            }
+            if matches!(n, NodeSpec::FeatureVolume(_) | NodeSpec::Anchor(_))
+                && let Some(name) = n.name()
+            {
+                names.push(name);
+            }
+        }
+        let mut seen = std::collections::HashSet::new();
+        names.retain(|n| seen.insert(*n));
+        names
+    }
+
     /// Every node of the scene, `defs` first, parents before children.
     pub fn all_nodes(&self) -> Vec<&NodeSpec> {
         let mut v = Vec::new();
