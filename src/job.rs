@@ -1,5 +1,5 @@
-//! The main job (`karstic run`): a tree file in, a mesh of its region and a preview image
-//! out, with the time of every stage.
+//! The main job (`karstic run`): a tree file in, a mesh of its region, its texture masks
+//! and a preview image out, with the time of every stage.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -7,11 +7,12 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use indicatif::ProgressBar;
 
+use crate::analysis::{Masks, Raster, texture_frame};
 use crate::field::{Aabb, Field, Tree};
 use crate::io::progress;
-use crate::mesh::export::{self, ExportOptions};
+use crate::mesh::export::{self, ExportOptions, Origin};
 use crate::mesh::{GridSpec, Mesh, MeshOptions, MeshStats, polygonize};
-use crate::render::{Camera, Frame, Method, RenderSettings, cpu};
+use crate::render::{Camera, Frame, Materials, Method, RenderSettings, cpu};
 use crate::scene::{self, SceneFile};
 
 /// What to run.
@@ -27,6 +28,10 @@ pub struct JobOptions {
     pub quiet: bool,
     /// Memory budget of the DEMs, grids and image, in bytes.
     pub budget: u64,
+    /// Where the mesh's origin lies.
+    pub origin: Origin,
+    /// Write the texture masks (over the region's footprint, at the mesh's cell size).
+    pub masks: bool,
 }
 
 /// What a job made, and how long each stage took.
@@ -41,6 +46,8 @@ pub struct JobReport {
     pub mesh_path: PathBuf,
     /// The preview image, if rendered.
     pub image_path: Option<PathBuf>,
+    /// The texture masks and their sidecar, if written.
+    pub mask_paths: Vec<PathBuf>,
     /// The mesh that was written.
     pub mesh: Mesh,
     /// Mesher statistics.
@@ -66,6 +73,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
     let tree = compiled.tree;
     let job = file.scene.job.clone();
     let support = tree.support();
+    let materials = Materials::for_scene(&support, compiled.ground.clone());
     anyhow::ensure!(
         !support.is_empty(),
         "{}: the tree is empty everywhere",
@@ -103,6 +111,17 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         Some(Camera::view(look, &region, fov, w, h)?)
     };
 
+    // The masks and the mesh's UVs span the job's region, or the DEM for a full job.
+    let frame = texture_frame(
+        region_of_job.filter(|_| !opts.full).as_ref(),
+        compiled.ground.as_deref(),
+        &support,
+    );
+    let raster = match opts.masks {
+        true => Some(Raster::new(frame, cell, opts.budget)?),
+        false => None,
+    };
+
     let t = Instant::now();
     let grid = GridSpec::with_cell(&region, cell)?;
     let mesh_opts = MeshOptions {
@@ -129,8 +148,21 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
     let suffix = if opts.full { "_full" } else { "" };
     let mesh_path = opts.out_dir.join(format!("{stem}{suffix}.glb"));
     let t = Instant::now();
-    export::write(&mesh, &mesh_path, &ExportOptions { color: true })?;
+    let export_opts = ExportOptions {
+        materials: Some(materials.clone()),
+        origin: opts.origin,
+        uv_frame: Some(frame),
+    };
+    export::write(&mesh, &mesh_path, &export_opts)?;
     stages.push(("write mesh", t.elapsed()));
+
+    let mut mask_paths = Vec::new();
+    if let Some(raster) = raster {
+        let t = Instant::now();
+        let masks = Masks::compute(&tree, &materials, &raster);
+        mask_paths = masks.write(&opts.out_dir, &format!("{stem}{suffix}"))?;
+        stages.push(("masks", t.elapsed()));
+    }
 
     let image_path = match camera {
         None => None,
@@ -153,6 +185,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         cell,
         mesh_path,
         image_path,
+        mask_paths,
         mesh,
         mesh_stats,
         stages,

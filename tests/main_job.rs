@@ -85,6 +85,8 @@ fn job(dir: &std::path::Path, full: bool) -> JobReport {
         no_render: true,
         quiet: true,
         budget: karstic::io::DEFAULT_MEMORY_BUDGET,
+        origin: karstic::mesh::export::Origin::Dem,
+        masks: false,
     };
     karstic::job::run(std::path::Path::new(SCENE), &opts).unwrap()
 }

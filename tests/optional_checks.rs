@@ -40,7 +40,7 @@ fn khronos_validator_catches_wrong_bounds() {
     };
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("tetra.gltf");
-    export::write(&mesh, &path, &ExportOptions { color: false }).unwrap();
+    export::write(&mesh, &path, &ExportOptions::default()).unwrap();
     let (ok, report) = khronos_validate(&path).unwrap();
     assert!(ok, "{report}");
 

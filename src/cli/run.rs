@@ -6,6 +6,7 @@ use clap::Args;
 
 use super::Budget;
 use karstic::job::{self, JobOptions};
+use karstic::mesh::export::Origin;
 
 /// Arguments of `karstic run`.
 #[derive(Args, Debug)]
@@ -21,6 +22,14 @@ pub(super) struct RunArgs {
     /// Skip the preview image.
     #[arg(long)]
     no_render: bool,
+    /// Also write the texture masks (slope, rock, cave, flow PNGs over the region, at the
+    /// mesh's cell size; about as long as meshing on the main job).
+    #[arg(long)]
+    masks: bool,
+    /// Where the mesh's origin lies: `dem` (the tree's frame), `center` or `min` of its
+    /// box; the offset is kept as the glTF node's translation and in its extras.
+    #[arg(long, value_name = "center|min|dem", default_value = "dem")]
+    origin: Origin,
     /// Also print the mesher's statistics.
     #[arg(long)]
     stats: bool,
@@ -40,6 +49,8 @@ pub(super) fn run(args: RunArgs) -> anyhow::Result<()> {
         no_render: args.no_render,
         quiet: args.quiet,
         budget: args.budget.max_memory,
+        origin: args.origin,
+        masks: args.masks,
     };
     let report = job::run(&args.tree, &opts)?;
     for n in &report.notices {
@@ -60,6 +71,9 @@ pub(super) fn run(args: RunArgs) -> anyhow::Result<()> {
     );
     println!("wrote {}", report.mesh_path.display());
     if let Some(p) = &report.image_path {
+        println!("wrote {}", p.display());
+    }
+    for p in &report.mask_paths {
         println!("wrote {}", p.display());
     }
     let mut total = 0.0;
