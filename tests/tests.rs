@@ -21,6 +21,7 @@ mod dem_mesh;
 mod dem_readers;
 mod docs;
 mod main_job;
+mod masks;
 mod meld;
 mod mesh_cli;
 mod mesh_export;

@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 
 use karstic::field::Field;
 use karstic::mesh::export::{self, ExportOptions, Origin};
-use karstic::render::Materials;
 use karstic::mesh::{GridSpec, MeshOptions, polygonize};
+use karstic::render::Materials;
 
 /// Cells along the longest side of each scene's support.
 const RES: usize = 96;

@@ -53,8 +53,11 @@ impl<'t> ColumnProbe<'t> {
         self.tree.z_bands(&fp, self.z, &mut self.bands);
         self.bands.clip(self.z);
         let top = self.z.hi;
-        self.line
-            .restrict(Vec3::new(xy.x, xy.y, top), Vec3::NEG_Z, (0.0, self.z.width()));
+        self.line.restrict(
+            Vec3::new(xy.x, xy.y, top),
+            Vec3::NEG_Z,
+            (0.0, self.z.width()),
+        );
         // Above the highest band the sign is the one at the support's top.
         let mut solid = self.line.value(0.0) > ISO;
         if solid {

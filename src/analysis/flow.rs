@@ -53,11 +53,14 @@ impl PartialOrd for Low {
 /// The valid neighbours of sample `k` of an `nx × ny` grid, as indices.
 fn neighbours(k: usize, nx: usize, ny: usize) -> impl Iterator<Item = (usize, usize)> {
     let (i, j) = ((k % nx) as isize, (k / nx) as isize);
-    NEIGHBOURS.iter().enumerate().filter_map(move |(d, &(di, dj))| {
-        let (a, b) = (i + di, j + dj);
-        (a >= 0 && b >= 0 && (a as usize) < nx && (b as usize) < ny)
-            .then(|| (d, a as usize + nx * b as usize))
-    })
+    NEIGHBOURS
+        .iter()
+        .enumerate()
+        .filter_map(move |(d, &(di, dj))| {
+            let (a, b) = (i + di, j + dj);
+            (a >= 0 && b >= 0 && (a as usize) < nx && (b as usize) < ny)
+                .then(|| (d, a as usize + nx * b as usize))
+        })
 }
 
 /// The grid with every depression filled so that each valid sample has a strictly
@@ -116,7 +119,13 @@ pub fn drainage_area(filled: &Heightfield) -> Vec<f32> {
     order.sort_unstable_by(|&a, &b| z[b].total_cmp(&z[a]).then(a.cmp(&b)));
     let mut area: Vec<f64> = z
         .iter()
-        .map(|v| if v.is_nan() { 0.0 } else { f64::from(cell_area) })
+        .map(|v| {
+            if v.is_nan() {
+                0.0
+            } else {
+                f64::from(cell_area)
+            }
+        })
         .collect();
     let mut weights = [(0usize, 0f64); 8];
     for k in order {
@@ -170,7 +179,10 @@ mod tests {
                 return f32::NAN;
             }
             let (x, y) = (i as f32, j as f32);
-            100.0 + 5.0 * (x * 0.7).sin() * (y * 0.5).cos() + 0.3 * x + ((i * 7 + j * 13) % 5) as f32
+            100.0
+                + 5.0 * (x * 0.7).sin() * (y * 0.5).cos()
+                + 0.3 * x
+                + ((i * 7 + j * 13) % 5) as f32
         })
     }
 
@@ -212,7 +224,10 @@ mod tests {
         // The outlet (the east column) receives the whole domain.
         let outlet: f64 = (0..ny).map(|j| f64::from(area[nx - 1 + nx * j])).sum();
         let domain = (nx * ny) as f64 * f64::from(cell);
-        assert!((outlet - domain).abs() < 1e-6 * domain, "{outlet} ≠ {domain}");
+        assert!(
+            (outlet - domain).abs() < 1e-6 * domain,
+            "{outlet} ≠ {domain}"
+        );
     }
 
     #[test]

@@ -317,6 +317,12 @@ fn flow_mask(materials: &Materials, raster: &Raster, pixels: &[Pixel]) -> Vec<f3
     }
     let scale = 1.0 / (max / a).ln();
     area.iter()
-        .map(|&x| if x > 0.0 { ((x / a).ln() * scale).max(0.0) } else { 0.0 })
+        .map(|&x| {
+            if x > 0.0 {
+                ((x / a).ln() * scale).max(0.0)
+            } else {
+                0.0
+            }
+        })
         .collect()
 }

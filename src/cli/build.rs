@@ -69,7 +69,9 @@ pub(super) fn run(args: BuildArgs) -> anyhow::Result<()> {
             &outputs,
         )?;
         let (mesh, stats) = build_from_grid(&args)?;
-        let materials = args.tint.then(|| Materials::for_scene(&mesh.bounds(), None));
+        let materials = args
+            .tint
+            .then(|| Materials::for_scene(&mesh.bounds(), None));
         let opts = ExportOptions {
             materials,
             origin: args.origin,

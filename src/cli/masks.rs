@@ -66,7 +66,10 @@ pub(super) fn run(args: MasksArgs) -> anyhow::Result<()> {
     let materials = Materials::for_scene(&support, compiled.ground.clone());
     let masks = Masks::compute(tree, &materials, &raster);
     std::fs::create_dir_all(&args.output).map_err(|e| {
-        anyhow::anyhow!("cannot create the output folder {}: {e}", args.output.display())
+        anyhow::anyhow!(
+            "cannot create the output folder {}: {e}",
+            args.output.display()
+        )
     })?;
     let files = masks.write(&args.output, &stem)?;
     if !args.quiet {

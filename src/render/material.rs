@@ -21,7 +21,7 @@ use crate::field::Aabb;
 use crate::field::noise::simplex;
 
 /// Seed of the noise that moves material boundaries.
-pub const VARIATION_SEED: u32 = 0x5eed_c01;
+pub const VARIATION_SEED: u32 = 0x05ee_dc01;
 
 /// How much of each material covers a surface point (each weight in `[0, 1]`; the
 /// materials layer as grass → soil → snow → rock, each over the ones before).
