@@ -38,11 +38,11 @@ const CLEAR: Rect = Rect {
 fn main_job_masks_mark_the_caves_and_follow_the_dem() {
     let (masks, ground) = main_job_masks();
     let cave = |x: f32, y: f32| masks.at(Layer::Cave, Vec2::new(x, y)).unwrap();
-    // Columns over the tunnel (ground, roof, floor), the chamber above its inner end, the
+    // Columns over the tunnel inside the hill (ground, roof, floor), the chamber above its inner end, the
     // grotto under the northern slope and the arch's span over the valley.
     for (what, x, y) in [
-        ("tunnel", 3660.0, 4950.0),
         ("tunnel", 3560.0, 4958.0),
+        ("tunnel", 3450.0, 4984.0),
         ("chamber", 3470.0, 4980.0),
         ("grotto", 3645.0, 5220.0),
         ("arch", 4630.0, 4950.0),
