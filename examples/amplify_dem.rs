@@ -20,6 +20,7 @@ use karstic::field::skeleton::{Capsule, Chain, Segment, catmull_rom};
 use karstic::field::{Fbm, Field, Noise, Primitive, Skeleton, TreeBuilder};
 use karstic::mesh::export::{self, ExportOptions};
 use karstic::mesh::{GridSpec, MeshOptions, polygonize};
+use karstic::render::Materials;
 
 fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
@@ -125,7 +126,9 @@ fn main() -> anyhow::Result<()> {
     // The tree: (terrain + arch) with the cave carved out. Blend sums the fields, so the
     // arch's feet merge smoothly into the slopes.
     let mut tree = TreeBuilder::new();
-    let terrain = tree.leaf(Arc::new(terrain), Some("dem".into()));
+    let terrain = Arc::new(terrain);
+    let ground = terrain.clone();
+    let terrain = tree.leaf(terrain, Some("dem".into()));
     let arch = tree.primitive(arch, Some("arch".into()));
     let cave = tree.primitive(cave, Some("cave".into()));
     let rock = tree.blend(vec![terrain, arch], Some("rock".into()));
@@ -133,12 +136,18 @@ fn main() -> anyhow::Result<()> {
     let tree = tree.build(root);
 
     // Bound-pruned Marching Cubes over the region, then a Y-up glTF binary with vertex
-    // colours by slope and altitude.
+    // colours from the material model.
     let grid = GridSpec::with_cell(&region, cell)?;
     let (mesh, stats) = polygonize(&tree, &grid, &MeshOptions::default())?;
     std::fs::create_dir_all(&out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
     let path = out_dir.join("amplified.glb");
-    export::write(&mesh, &path, &ExportOptions { color: true })?;
+    // The preview's materials: rock on steep faces and on the features (away from the
+    // DEM's surface), soil and grass on gentler slopes.
+    let opts = ExportOptions {
+        materials: Some(Materials::for_scene(&tree.support(), Some(ground))),
+        ..ExportOptions::default()
+    };
+    export::write(&mesh, &path, &opts)?;
     println!(
         "{}: {} × {} × {} cells of {cell} m, {} triangles, {} field evaluations → {}",
         dem_path.display(),

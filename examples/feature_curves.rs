@@ -19,6 +19,7 @@ use karstic::curves::spec::{
 };
 use karstic::mesh::MeshOptions;
 use karstic::mesh::export::{self, ExportOptions};
+use karstic::render::Materials;
 use karstic::scene::{Finite, NonNegative, Unit};
 
 /// A control vertex at absolute coordinates (metres).
@@ -102,7 +103,11 @@ fn main() -> anyhow::Result<()> {
     let (mesh, _) = field.extract(None, &MeshOptions::default())?;
     std::fs::create_dir_all(&out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
     let path = out_dir.join("overhang.glb");
-    export::write(&mesh, &path, &ExportOptions { color: true })?;
+    let opts = ExportOptions {
+        materials: Some(Materials::for_scene(&mesh.bounds(), None)),
+        ..ExportOptions::default()
+    };
+    export::write(&mesh, &path, &opts)?;
     println!(
         "{} levels, {:.1} MiB of bricks, built in {:.2} s; {} triangles → {}",
         field.stats().levels.len(),

@@ -1,5 +1,5 @@
-//! The main job (`karstic run`): a tree file in, a mesh of its region and a preview image
-//! out, with the time of every stage.
+//! The main job (`karstic run`): a tree file in, a mesh of its region, its texture masks
+//! and a preview image out, with the time of every stage.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -7,13 +7,14 @@ use std::time::{Duration, Instant};
 use anyhow::Context;
 use indicatif::ProgressBar;
 
+use crate::analysis::{Masks, Raster, texture_frame};
 use crate::field::{Aabb, Field, Tree};
 use crate::io::progress;
-use crate::mesh::export::{self, ExportOptions};
+use crate::mesh::export::{self, ExportOptions, Origin};
 use crate::mesh::{GridSpec, Mesh, MeshOptions, MeshStats, polygonize};
 use crate::render::image::write_contact_sheet;
 use crate::render::material::SnowLine;
-use crate::render::{Camera, Frame, Method, RenderSettings, cpu, views};
+use crate::render::{Camera, Frame, Materials, Method, RenderSettings, cpu, views};
 use crate::scene::{self, SceneFile};
 
 /// What to run.
@@ -31,6 +32,10 @@ pub struct JobOptions {
     pub quiet: bool,
     /// Memory budget of the DEMs, grids and image, in bytes.
     pub budget: u64,
+    /// Where the mesh's origin lies.
+    pub origin: Origin,
+    /// Write the texture masks (over the region's footprint, at the mesh's cell size).
+    pub masks: bool,
 }
 
 /// What a job made, and how long each stage took.
@@ -48,6 +53,8 @@ pub struct JobReport {
     /// The feature views written, `(feature, image)`, then the contact sheet of the
     /// preview and the views (`("sheet", …)`) when there were any.
     pub views: Vec<(String, PathBuf)>,
+    /// The texture masks and their sidecar, if written.
+    pub mask_paths: Vec<PathBuf>,
     /// The mesh that was written.
     pub mesh: Mesh,
     /// Mesher statistics.
@@ -88,6 +95,13 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         (false, Some(r)) => r,
         _ => support,
     };
+    // One material model for the mesh's colours, the masks and the pictures, at the
+    // scale of the region.
+    let mut materials = Materials::for_scene(&region, ground.clone());
+    materials.snow_line = job
+        .as_ref()
+        .and_then(|j| j.snow_line)
+        .map(|z| SnowLine::at(z.0, &region));
     let fine = job
         .as_ref()
         .map_or(support.size().max_element() / 256.0, |j| j.cell.0);
@@ -113,6 +127,17 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
             (Some(_), _) | (None, Some(_)) if !opts.full => Camera::view(look, &region, fov, w, h)?,
             _ => views::frame_surface(&tree, fov, w, h)?,
         })
+    };
+
+    // The masks and the mesh's UVs span the job's region, or the DEM for a full job.
+    let frame = texture_frame(
+        region_of_job.filter(|_| !opts.full).as_ref(),
+        ground.as_deref(),
+        &support,
+    );
+    let raster = match opts.masks {
+        true => Some(Raster::new(frame, cell, opts.budget)?),
+        false => None,
     };
 
     let t = Instant::now();
@@ -142,22 +167,30 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
     let suffix = if opts.full { "_full" } else { "" };
     let mesh_path = opts.out_dir.join(format!("{stem}{suffix}.glb"));
     let t = Instant::now();
-    export::write(&mesh, &mesh_path, &ExportOptions { color: true })?;
+    let export_opts = ExportOptions {
+        materials: Some(materials.clone()),
+        origin: opts.origin,
+        uv_frame: Some(frame),
+    };
+    export::write(&mesh, &mesh_path, &export_opts)?;
     stages.push(("write mesh", t.elapsed()));
 
     let mut views = Vec::new();
+    let mut mask_paths = Vec::new();
+    if let Some(raster) = raster {
+        let t = Instant::now();
+        let masks = Masks::compute(&tree, &materials, &raster);
+        mask_paths = masks.write(&opts.out_dir, &format!("{stem}{suffix}"))?;
+        stages.push(("masks", t.elapsed()));
+    }
+
     let image_path = match camera {
         None => None,
         Some(camera) => {
             let t = Instant::now();
-            let look = |camera: &Camera| {
-                let mut settings = RenderSettings::for_scene(&region, camera, Method::Segment)
-                    .with_ground(ground.clone());
-                settings.materials.snow_line = job
-                    .as_ref()
-                    .and_then(|j| j.snow_line)
-                    .map(|z| SnowLine::at(z.0, &region));
-                settings
+            let look = |camera: &Camera| RenderSettings {
+                materials: materials.clone(),
+                ..RenderSettings::for_scene(&region, camera, Method::Segment)
             };
             let draw = |camera: &Camera, what: &str| {
                 let tiles = camera.width.div_ceil(cpu::TILE) * camera.height.div_ceil(cpu::TILE);
@@ -185,8 +218,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
                         Some(c) => Some(Camera::look_at(c.eye.0, c.target.0, fov, w, h)?),
                         None => {
                             let feature = tree.info(id).support.intersection(region);
-                            let m = look(&camera).materials;
-                            views::feature_view(&tree, &feature, &m, fov, (w, h))?
+                            views::feature_view(&tree, &feature, &materials, fov, (w, h))?
                         }
                     };
                     let Some(view) = view else {
@@ -218,6 +250,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         mesh_path,
         image_path,
         views,
+        mask_paths,
         mesh,
         mesh_stats,
         stages,

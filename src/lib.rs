@@ -7,6 +7,7 @@
 // `!(a < b)` is how this crate says "not less, or NaN": the negation is the point.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod analysis;
 pub mod curves;
 pub mod dem;
 pub mod field;

@@ -83,8 +83,11 @@ fn job(dir: &std::path::Path, full: bool) -> JobReport {
         out_dir: dir.to_path_buf(),
         full,
         no_render: true,
+        no_views: true,
         quiet: true,
         budget: karstic::io::DEFAULT_MEMORY_BUDGET,
+        origin: karstic::mesh::export::Origin::Dem,
+        masks: false,
     };
     karstic::job::run(std::path::Path::new(SCENE), &opts).unwrap()
 }

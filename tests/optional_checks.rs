@@ -1,9 +1,9 @@
 //! The tools of the optional checks, named in the log: `.ci/run` runs this module first
-//! with `--nocapture`, so its output says which GPU adapter the GPU comparisons use and
-//! which Khronos glTF validator the export tests use. Where a `KARSTIC_REQUIRE_*`
+//! with `--nocapture`, so its output says which GPU adapter the GPU comparisons use, which
+//! Khronos glTF validator and which trimesh the export tests use. Where a `KARSTIC_REQUIRE_*`
 //! variable is set (tests/common/optional.rs) a missing tool fails here first.
 
-use crate::common::gpu;
+use crate::common::{gpu, trimesh_version};
 use crate::gltf_validator::{khronos_validate, version};
 
 use glam::Vec3;
@@ -14,6 +14,13 @@ use karstic::mesh::export::{self, ExportOptions};
 fn gpu_adapter_opens() {
     if let Some(ctx) = gpu() {
         println!("optional checks: GPU adapter {}", ctx.adapter);
+    }
+}
+
+#[test]
+fn trimesh_imports() {
+    if let Some(v) = trimesh_version() {
+        println!("optional checks: trimesh {v}");
     }
 }
 
@@ -40,7 +47,7 @@ fn khronos_validator_catches_wrong_bounds() {
     };
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("tetra.gltf");
-    export::write(&mesh, &path, &ExportOptions { color: false }).unwrap();
+    export::write(&mesh, &path, &ExportOptions::default()).unwrap();
     let (ok, report) = khronos_validate(&path).unwrap();
     assert!(ok, "{report}");
 

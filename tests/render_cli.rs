@@ -11,7 +11,8 @@ use indicatif::ProgressBar;
 use karstic::field::Field;
 use karstic::render::{Camera, Device, Fallback, Method, RenderSettings, Renderable};
 
-fn karstic(args: &[&str]) -> (bool, String) {
+/// Runs the `karstic` binary: `(success, stderr)`.
+pub(crate) fn karstic(args: &[&str]) -> (bool, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_karstic"))
         .args(args)
         .output()
@@ -119,21 +120,24 @@ fn renders_png_and_cost_image_and_checks_the_budget() {
 fn the_gpu_renders_or_the_cpu_takes_over() {
     let terrain = Terrain::new(100.0, 12.0, 4.0);
     let tape = tapes::terrain(&terrain, 48);
+    // The tests ask for software adapters explicitly (lavapipe on CI).
     let subject = Renderable {
         field: Box::new(tape.clone()),
         tape: Some(Ok(tape)),
+        allow_software: true,
     };
     let (frame, device) = render(&subject, 48, 32);
     assert_eq!((frame.width, frame.height), (48, 32));
     assert!(frame.hits() > 0, "the terrain is in view");
     match device {
-        Device::Gpu => {}
+        Device::Gpu(adapter) => assert!(!adapter.is_empty()),
         Device::CpuInstead(Fallback::Failed(e)) => eprintln!("no GPU here: {e}"),
         other => panic!("a tape was given: {other:?}"),
     }
     let cpu = Renderable {
         field: Box::new(terrain),
         tape: None,
+        allow_software: false,
     };
     let (frame, device) = render(&cpu, 48, 32);
     assert!(matches!(device, Device::Cpu), "{device:?}");

@@ -7,8 +7,9 @@ use crate::gltf_validator;
 use std::path::{Path, PathBuf};
 
 use karstic::field::Field;
-use karstic::mesh::export::{self, ExportOptions};
+use karstic::mesh::export::{self, ExportOptions, Origin};
 use karstic::mesh::{GridSpec, MeshOptions, polygonize};
+use karstic::render::Materials;
 
 /// Cells along the longest side of each scene's support.
 const RES: usize = 96;
@@ -37,10 +38,10 @@ fn every_scene_in_trees_builds_a_closed_valid_mesh() {
         let name = path.file_stem().unwrap().to_string_lossy().into_owned();
         let file =
             karstic::scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let tree = file
+        let compiled = file
             .compile()
-            .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-            .tree;
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let tree = compiled.tree;
         let support = tree.support();
         if support.is_empty() {
             // Guidance curves alone make no surface (issue 5): nothing to mesh.
@@ -69,7 +70,14 @@ fn every_scene_in_trees_builds_a_closed_valid_mesh() {
             "{name}: debris among the mesh's pieces (faces): {pieces:?}"
         );
         let out = dir.path().join(format!("{name}.glb"));
-        export::write(&mesh, &out, &ExportOptions { color: true }).unwrap();
+        // The preview's materials over the tree's terrain, recentred: the export's
+        // materials, UVs and node translation pass the validator on every tree.
+        let opts = ExportOptions {
+            materials: Some(Materials::for_scene(&support, compiled.ground)),
+            origin: Origin::Center,
+            uv_frame: None,
+        };
+        export::write(&mesh, &out, &opts).unwrap();
         gltf_validator::assert_valid(&out);
     }
 }

@@ -6,12 +6,14 @@ use std::time::Instant;
 use super::Budget;
 use anyhow::{Context, bail};
 use clap::Args;
+use karstic::analysis::texture_frame;
 use karstic::field::{Aabb, Field};
 use karstic::io::{check_outputs, progress, read_regular};
-use karstic::mesh::export::{self, ExportOptions, Format};
+use karstic::mesh::export::{self, ExportOptions, Format, Origin};
 use karstic::mesh::polygonize::progress_steps;
 use karstic::mesh::sample::Sidecar;
 use karstic::mesh::{DenseGrid, GridSpec, Mesh, MeshOptions, MeshStats, mc_dense, npy, polygonize};
+use karstic::render::Materials;
 
 /// Build a mesh from a tree with bound-pruned Marching Cubes.
 #[derive(Args, Debug)]
@@ -36,9 +38,15 @@ pub(super) struct BuildArgs {
     /// Visit every cell (plain Marching Cubes, for comparison).
     #[arg(long)]
     no_prune: bool,
-    /// Tint vertices by slope and altitude (glTF COLOR_0, PLY colours).
+    /// Colour the vertices with the preview's materials: rock, soil, grass (glTF COLOR_0,
+    /// OBJ and PLY vertex colours).
     #[arg(long)]
     tint: bool,
+    /// Where the written positions' origin lies: `dem` (the tree's frame, the DEM's
+    /// south-west sample at 0), `center` or `min` of the mesh's box; the offset is kept as
+    /// the glTF node's translation (and in its extras), in OBJ and PLY header comments.
+    #[arg(long, value_name = "center|min|dem", default_value = "dem")]
+    origin: Origin,
     /// Print extraction statistics (the columns of Table 1 of Paris et al. 2019).
     #[arg(long)]
     stats: bool,
@@ -55,18 +63,41 @@ pub(super) fn run(args: BuildArgs) -> anyhow::Result<()> {
     let format = Format::from_path(&args.output)?;
     let outputs = export::written_files(&args.output)?;
     let started = Instant::now();
-    let (mesh, stats) = if is_npy(&args.tree) {
+    let (mesh, stats, export_opts) = if is_npy(&args.tree) {
         check_outputs(
             &[args.tree.clone(), Sidecar::path_for(&args.tree)],
             &outputs,
         )?;
-        build_from_grid(&args)?
+        let (mesh, stats) = build_from_grid(&args)?;
+        let materials = args
+            .tint
+            .then(|| Materials::for_scene(&mesh.bounds(), None));
+        let opts = ExportOptions {
+            materials,
+            origin: args.origin,
+            uv_frame: None,
+        };
+        (mesh, stats, opts)
     } else {
-        let tree = super::load_tree(&args.tree, args.budget.max_memory, &outputs)?;
-        build_from_field(&tree, &args)?
+        let compiled = super::load_compiled(&args.tree, args.budget.max_memory, &outputs)?;
+        let (mesh, stats) = build_from_field(&compiled.tree, &args)?;
+        let support = compiled.tree.support();
+        let bbox = args.bbox.as_deref().map(super::corners);
+        let opts = ExportOptions {
+            materials: args
+                .tint
+                .then(|| Materials::for_scene(&support, compiled.ground.clone())),
+            origin: args.origin,
+            uv_frame: Some(texture_frame(
+                bbox.as_ref(),
+                compiled.ground.as_deref(),
+                &support,
+            )),
+        };
+        (mesh, stats, opts)
     };
     let write = Instant::now();
-    export::write(&mesh, &args.output, &ExportOptions { color: args.tint })?;
+    export::write(&mesh, &args.output, &export_opts)?;
     if args.stats {
         println!("{stats}");
         println!(

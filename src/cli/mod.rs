@@ -4,6 +4,7 @@ mod build;
 mod curves;
 mod dem;
 mod eval;
+mod masks;
 mod render;
 mod run;
 mod sample;
@@ -42,6 +43,8 @@ enum Command {
     Sample(sample::SampleArgs),
     /// Render a PNG preview of a tree by tracing its implicit surface.
     Render(render::RenderArgs),
+    /// Write texture masks (slope, rock, cave/overhang, flow) as PNGs over the DEM frame.
+    Masks(masks::MasksArgs),
     /// Feature Curves: run the voxel pipeline on a `FeatureVolume` file.
     Curves(curves::CurvesArgs),
 }
@@ -70,13 +73,22 @@ fn load_tree(
     budget: u64,
     outputs: &[impl AsRef<Path>],
 ) -> anyhow::Result<karstic::field::Tree> {
+    Ok(load_compiled(path, budget, outputs)?.tree)
+}
+
+/// [`load_tree`], keeping what the compiler knows besides the tree (its terrain).
+fn load_compiled(
+    path: &Path,
+    budget: u64,
+    outputs: &[impl AsRef<Path>],
+) -> anyhow::Result<karstic::scene::Compiled> {
     let file = karstic::scene::load(path)?;
     karstic::io::check_outputs(&file.inputs(), outputs)?;
     let compiled = file.compile_with(budget)?;
     for n in &compiled.notices {
         eprintln!("notice: {n}");
     }
-    Ok(compiled.tree)
+    Ok(compiled)
 }
 
 /// Runs a parsed command line.
@@ -89,6 +101,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Eval(a) => eval::run(a),
         Command::Sample(a) => sample::run(a),
         Command::Render(a) => render::run(a),
+        Command::Masks(a) => masks::run(a),
         Command::Curves(a) => curves::run(a),
     }
 }

@@ -6,6 +6,7 @@ use clap::Args;
 
 use super::Budget;
 use karstic::job::{self, JobOptions};
+use karstic::mesh::export::Origin;
 
 /// Arguments of `karstic run`.
 #[derive(Args, Debug)]
@@ -24,6 +25,14 @@ pub(super) struct RunArgs {
     /// Skip the feature views (a close-up of each named feature and a contact sheet).
     #[arg(long)]
     no_views: bool,
+    /// Also write the texture masks (slope, rock, cave, flow PNGs over the region, at the
+    /// mesh's cell size; about as long as meshing on the main job).
+    #[arg(long)]
+    masks: bool,
+    /// Where the mesh's origin lies: `dem` (the tree's frame), `center` or `min` of its
+    /// box; the offset is kept as the glTF node's translation and in its extras.
+    #[arg(long, value_name = "center|min|dem", default_value = "dem")]
+    origin: Origin,
     /// Also print the mesher's statistics.
     #[arg(long)]
     stats: bool,
@@ -44,6 +53,8 @@ pub(super) fn run(args: RunArgs) -> anyhow::Result<()> {
         no_views: args.no_views,
         quiet: args.quiet,
         budget: args.budget.max_memory,
+        origin: args.origin,
+        masks: args.masks,
     };
     let report = job::run(&args.tree, &opts)?;
     for n in &report.notices {
@@ -66,7 +77,12 @@ pub(super) fn run(args: RunArgs) -> anyhow::Result<()> {
     if let Some(p) = &report.image_path {
         println!("wrote {}", p.display());
     }
-    for (_, p) in &report.views {
+    for p in report
+        .views
+        .iter()
+        .map(|(_, p)| p)
+        .chain(&report.mask_paths)
+    {
         println!("wrote {}", p.display());
     }
     let mut total = 0.0;

@@ -68,10 +68,11 @@ pub fn surface_box(field: &dyn Field) -> Aabb {
     if out.is_empty() { support } else { out }
 }
 
-/// The default view of `field`: [`Camera::frame`] of the part of the surface that view
-/// sees. A first framing of [`surface_box`] renders a small depth probe, and the box of
-/// its hits (the surface facing the camera, not an island's hidden underside) is framed
-/// again.
+/// The default view of `field`: a three-quarter view from the south-east that the
+/// visible surface fills. [`Camera::frame`] of [`surface_box`] renders a small depth probe;
+/// the camera then turns to the centre of what the probe hit, on the image, and moves
+/// along its view until that fills 90% of the frame (framing the box alone left an
+/// island's hidden underside and its falloff's margin empty in the image).
 pub fn frame_surface(
     field: &dyn Field,
     fov_y: f32,
@@ -79,8 +80,9 @@ pub fn frame_surface(
     height: u32,
 ) -> Result<Camera, RenderError> {
     let first = Camera::frame(&surface_box(field), fov_y, width, height)?;
-    let probe = Camera::frame(
-        &surface_box(field),
+    let probe = Camera::look_at(
+        first.eye,
+        first.eye + first.basis().2,
         fov_y,
         PROBE_WIDTH,
         (PROBE_WIDTH * height / width).max(8),
@@ -89,7 +91,23 @@ pub fn frame_surface(
     if seen.len() < MIN_FEATURE_PIXELS {
         return Ok(first);
     }
-    Camera::frame(&Aabb::from_points(seen), fov_y, width, height)
+    // The hits on the image plane at unit distance, and their depths.
+    let (right, up, forward, tan_v) = probe.basis();
+    let tan_h = tan_v * width as f32 / height as f32;
+    let (mut lo, mut hi, mut depth) = (glam::Vec2::MAX, glam::Vec2::MIN, 0.0);
+    for p in &seen {
+        let d = *p - probe.eye;
+        let z = d.dot(forward);
+        let uv = glam::Vec2::new(d.dot(right), d.dot(up)) / z;
+        (lo, hi, depth) = (lo.min(uv), hi.max(uv), depth + z);
+    }
+    let depth = depth / seen.len() as f32;
+    let c = 0.5 * (lo + hi);
+    let target = probe.eye + (forward + right * c.x + up * c.y) * depth;
+    let fill = ((hi.x - lo.x) / (2.0 * tan_h)).max((hi.y - lo.y) / (2.0 * tan_v)) / 0.9;
+    let back = (probe.eye - target).normalize();
+    let eye = target + back * (depth * fill.max(1e-3));
+    Camera::look_at(eye, target, fov_y, width, height)
 }
 
 /// Side of the square-ish probe images (pixels across) candidate views render.

@@ -3,7 +3,7 @@
 //! with analytic ground truth, a sum of many Wyvill point blobs with local Lipschitz
 //! bounds from a grid, a heightfield-like terrain chunk) and their GPU tapes; the
 //! Jacksboro DEM; bound and image checks; the GPU context; and the switch that makes a
-//! missing optional tool (GPU adapter, glTF validator) a failure.
+//! missing optional tool (GPU adapter, glTF validator, trimesh) a failure.
 
 pub mod dem;
 pub mod tapes;
@@ -16,6 +16,7 @@ mod optional;
 mod rng;
 mod sphere;
 mod terrain;
+mod trimesh;
 mod uv_sphere;
 
 pub use blobs::Blobs;
@@ -26,4 +27,5 @@ pub use optional::{REQUIRE_GLTF_VALIDATOR, REQUIRE_GPU, unavailable};
 pub use rng::Rng;
 pub use sphere::SigmaSphere;
 pub use terrain::Terrain;
+pub use trimesh::{trimesh_import, trimesh_version};
 pub use uv_sphere::uv_sphere;

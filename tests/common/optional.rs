@@ -1,13 +1,17 @@
 //! Checks that need a tool a machine may lack: the GPU comparisons need an adapter, the
-//! glTF export tests need Node and the Khronos validator. Locally a missing tool prints a
-//! notice and the check is skipped; where the tool's `KARSTIC_REQUIRE_*` variable is set
-//! (to anything but empty or `0`; `.ci/run` sets both) its absence fails the test.
+//! glTF export tests need Node and the Khronos validator, the import checks Python and
+//! trimesh. Locally a missing tool prints a notice and the check is skipped; where the
+//! tool's `KARSTIC_REQUIRE_*` variable is set (to anything but empty or `0`; `.ci/run`
+//! sets them all) its absence fails the test.
 
 /// Makes a missing GPU adapter a test failure.
 pub const REQUIRE_GPU: &str = "KARSTIC_REQUIRE_GPU";
 
 /// Makes a missing Node or Khronos glTF validator a test failure.
 pub const REQUIRE_GLTF_VALIDATOR: &str = "KARSTIC_REQUIRE_GLTF_VALIDATOR";
+
+/// Makes a missing Python or trimesh (the import checks of the exports) a test failure.
+pub const REQUIRE_TRIMESH: &str = "KARSTIC_REQUIRE_TRIMESH";
 
 /// Whether the environment variable `var` requires its tool: set, not empty, not `0`.
 fn required(var: &str) -> bool {

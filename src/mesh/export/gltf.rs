@@ -2,8 +2,15 @@
 //!
 //! glTF is Y-up: a karstic point `(x, y, z)` (Z up) is written as `(x, z, −y)`, a proper
 //! rotation, so winding and normals keep their meaning. Indices are `u32`; POSITION
-//! carries min/max; NORMAL is unit length; COLOR_0 (optional) is linear RGB; each
-//! [`Attribute`](crate::mesh::Attribute) becomes a float SCALAR attribute `_NAME`.
+//! carries min/max; NORMAL is unit length; COLOR_0 (optional) is linear RGB; TEXCOORD_0
+//! is planar over [`ExportOptions::uv_frame`]; each [`Attribute`](crate::mesh::Attribute)
+//! becomes a float SCALAR attribute `_NAME`.
+//!
+//! The primitive has one PBR metallic-roughness material, `terrain`: dielectric
+//! (metallic 0), rough (0.9), its base colour white when COLOR_0 carries the albedo
+//! (glTF multiplies the two) and mid grey otherwise. The node's translation is the
+//! [`Origin`](super::Origin) offset (Y-up), so the mesh sits where the tree put it; its
+//! `extras` repeat it in karstic's Z-up frame with the UV rectangle.
 
 use std::collections::BTreeMap;
 use std::io::{self, Write};
@@ -13,7 +20,7 @@ use gltf_json as json;
 use json::validation::Checked::Valid;
 use json::validation::USize64;
 
-use super::{ExportError, ExportOptions, to_y_up, vertex_colors};
+use super::{ExportError, ExportOptions, Prepared, to_y_up};
 use crate::io::write_atomic;
 use crate::mesh::Mesh;
 
@@ -83,7 +90,8 @@ fn document(mesh: &Mesh, opts: &ExportOptions, uri: Option<String>) -> Document 
     let n = mesh.positions.len();
     let mut scene_nodes = Vec::new();
     if !mesh.triangles.is_empty() {
-        let positions: Vec<[f32; 3]> = mesh.positions.iter().map(|&p| to_y_up(p)).collect();
+        let prepared = Prepared::new(mesh, opts);
+        let positions: Vec<[f32; 3]> = prepared.positions.iter().map(|&p| to_y_up(p)).collect();
         let normals: Vec<[f32; 3]> = mesh.normals.iter().map(|&p| to_y_up(p)).collect();
         let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
         for p in &positions {
@@ -118,12 +126,22 @@ fn document(mesh: &Mesh, opts: &ExportOptions, uri: Option<String>) -> Document 
             None,
         );
         attributes.insert(Valid(json::mesh::Semantic::Normals), nrm);
-        if opts.color {
-            let colors = vertex_colors(mesh);
+        let uv = push_accessor(
+            &mut root,
+            &mut bin,
+            bytemuck::cast_slice(&prepared.uvs),
+            n,
+            ComponentType::F32,
+            Type::Vec2,
+            Target::ArrayBuffer,
+            None,
+        );
+        attributes.insert(Valid(json::mesh::Semantic::TexCoords(0)), uv);
+        if let Some(colors) = &prepared.colors {
             let col = push_accessor(
                 &mut root,
                 &mut bin,
-                bytemuck::cast_slice(&colors),
+                bytemuck::cast_slice(colors),
                 n,
                 ComponentType::F32,
                 Type::Vec3,
@@ -155,6 +173,7 @@ fn document(mesh: &Mesh, opts: &ExportOptions, uri: Option<String>) -> Document 
             Target::ElementArrayBuffer,
             None,
         );
+        let material = root.push(material(prepared.colors.is_some()));
         let m = root.push(json::Mesh {
             extensions: None,
             extras: Default::default(),
@@ -164,15 +183,18 @@ fn document(mesh: &Mesh, opts: &ExportOptions, uri: Option<String>) -> Document 
                 extensions: None,
                 extras: Default::default(),
                 indices: Some(indices),
-                material: None,
+                material: Some(material),
                 mode: Valid(json::mesh::Mode::Triangles),
                 targets: None,
             }],
             weights: None,
         });
+        let offset = prepared.offset.to_array();
         scene_nodes.push(root.push(json::Node {
             mesh: Some(m),
             name: Some("terrain".into()),
+            translation: (offset != [0.0; 3]).then(|| to_y_up(offset)),
+            extras: node_extras(opts, &prepared),
             ..Default::default()
         }));
         root.push(json::Buffer {
@@ -193,6 +215,39 @@ fn document(mesh: &Mesh, opts: &ExportOptions, uri: Option<String>) -> Document 
         root.scene = Some(scene);
     }
     Document { root, bin }
+}
+
+/// The terrain's PBR material: dielectric and rough; white base colour when COLOR_0
+/// holds the albedo (glTF multiplies them), mid grey otherwise.
+fn material(vertex_colors: bool) -> json::Material {
+    let base = if vertex_colors { 1.0 } else { 0.5 };
+    json::Material {
+        name: Some("terrain".into()),
+        pbr_metallic_roughness: json::material::PbrMetallicRoughness {
+            base_color_factor: json::material::PbrBaseColorFactor([base, base, base, 1.0]),
+            metallic_factor: json::material::StrengthFactor(0.0),
+            roughness_factor: json::material::StrengthFactor(ROUGHNESS),
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
+/// Roughness of the terrain material: bare rock and soil are nearly diffuse.
+pub const ROUGHNESS: f32 = 0.9;
+
+/// The node's `extras`: the origin, its offset in karstic's frame (Z up, metres; add it
+/// to the positions to get the tree's coordinates) and the UV rectangle.
+fn node_extras(opts: &ExportOptions, p: &Prepared) -> json::extras::Extras {
+    let f = &p.uv_frame;
+    let extras = serde_json::json!({
+        "karstic": {
+            "origin": opts.origin.name(),
+            "offset_z_up": p.offset.to_array(),
+            "uv_frame": [f.min.x, f.min.y, f.max.x, f.max.y],
+        }
+    });
+    serde_json::value::to_raw_value(&extras).ok()
 }
 
 fn json_error(e: json::Error) -> io::Error {

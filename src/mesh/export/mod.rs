@@ -8,10 +8,12 @@ pub mod ply;
 
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::Mesh;
+use crate::field::{Aabb, Rect};
 use crate::io::IoError;
+use crate::render::Materials;
 
 /// Errors while exporting.
 #[derive(Debug, thiserror::Error)]
@@ -56,11 +58,137 @@ impl Format {
     }
 }
 
+/// Where the written positions' origin lies (`--origin`). Positions are written relative
+/// to [`Origin::offset`]; glTF keeps the offset as the node's translation (and in the
+/// node's `extras`), OBJ and PLY in a header comment, so tiles written with different
+/// origins still line up once the offset is added back.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Origin {
+    /// The tree's frame as it is: the DEM's local frame (its south-west sample at
+    /// `(0, 0)`), so the pivot can lie kilometres from the geometry.
+    #[default]
+    Dem,
+    /// The centre of the mesh's bounding box.
+    Center,
+    /// The minimum corner of the mesh's bounding box.
+    Min,
+}
+
+impl Origin {
+    /// Every origin with its name, as `--origin` spells it.
+    pub const ALL: [(&'static str, Origin); 3] = [
+        ("dem", Origin::Dem),
+        ("center", Origin::Center),
+        ("min", Origin::Min),
+    ];
+
+    /// The name `--origin` gives this origin.
+    pub fn name(self) -> &'static str {
+        Origin::ALL
+            .iter()
+            .find(|(_, o)| *o == self)
+            .map_or("dem", |(n, _)| n)
+    }
+
+    /// The point (karstic frame, Z up) subtracted from the positions of a mesh with
+    /// bounds `b` (zero for an empty mesh).
+    pub fn offset(self, b: &Aabb) -> Vec3 {
+        match self {
+            _ if b.is_empty() => Vec3::ZERO,
+            Origin::Dem => Vec3::ZERO,
+            Origin::Center => b.center(),
+            Origin::Min => b.min,
+        }
+    }
+}
+
+impl std::str::FromStr for Origin {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Origin, String> {
+        Origin::ALL
+            .iter()
+            .find(|(n, _)| n.eq_ignore_ascii_case(s))
+            .map(|&(_, o)| o)
+            .ok_or_else(|| format!("unknown origin {s:?} (expected center, min or dem)"))
+    }
+}
+
 /// What to write besides positions, normals and triangles.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct ExportOptions {
-    /// Per-vertex colours tinted by slope and altitude (glTF COLOR_0, PLY red/green/blue).
-    pub color: bool,
+    /// The material model that colours the vertices (glTF COLOR_0, OBJ and PLY vertex
+    /// colours), the same albedo as the preview's; `None`: no colours.
+    pub materials: Option<Materials>,
+    /// Where the written positions' origin lies.
+    pub origin: Origin,
+    /// The rectangle (tree frame, metres) the texture coordinates span: `u` west → east,
+    /// `v` north → south (glTF's image convention: the masks' first row is the north);
+    /// `None`: the mesh's own footprint.
+    pub uv_frame: Option<Rect>,
+}
+
+/// A mesh as the exporters write it: positions moved to the origin, Z up, with the
+/// per-vertex data the options ask for.
+pub(crate) struct Prepared {
+    /// Positions relative to `offset` (Z up).
+    pub positions: Vec<[f32; 3]>,
+    /// Linear-RGB colours, when asked for.
+    pub colors: Option<Vec<[f32; 3]>>,
+    /// Texture coordinates, glTF convention (`v` down).
+    pub uvs: Vec<[f32; 2]>,
+    /// The offset subtracted from the positions (karstic frame).
+    pub offset: Vec3,
+    /// The UV rectangle.
+    pub uv_frame: Rect,
+}
+
+impl Prepared {
+    /// Prepares `mesh` for writing with `opts`.
+    pub(crate) fn new(mesh: &Mesh, opts: &ExportOptions) -> Prepared {
+        let bounds = mesh.bounds();
+        let offset = opts.origin.offset(&bounds);
+        let uv_frame = opts.uv_frame.unwrap_or_else(|| bounds.footprint());
+        Prepared {
+            positions: mesh
+                .positions
+                .iter()
+                .map(|&p| (Vec3::from(p) - offset).to_array())
+                .collect(),
+            colors: opts.materials.as_ref().map(|m| vertex_colors(mesh, m)),
+            uvs: mesh
+                .positions
+                .iter()
+                .map(|p| planar_uv(&uv_frame, Vec2::new(p[0], p[1])))
+                .collect(),
+            offset,
+            uv_frame,
+        }
+    }
+
+    /// The mean vertex colour (mid grey without colours): the flat colour of the OBJ's
+    /// material for viewers that ignore vertex colours.
+    pub(crate) fn mean_color(&self) -> [f32; 3] {
+        match &self.colors {
+            Some(c) if !c.is_empty() => {
+                let sum = c.iter().fold(Vec3::ZERO, |s, &c| s + Vec3::from(c));
+                (sum / c.len() as f32).to_array()
+            }
+            _ => [0.5; 3],
+        }
+    }
+}
+
+/// Texture coordinates of the point `xy` over `frame`: `u` grows east, `v` grows south,
+/// `(0, 0)` at the north-west corner (glTF's convention, where an image's first row is
+/// `v = 0`). A degenerate frame maps to 0 along that axis.
+pub fn planar_uv(frame: &Rect, xy: Vec2) -> [f32; 2] {
+    let size = frame.max - frame.min;
+    let ratio = |d: f32, s: f32| if s > 0.0 { d / s } else { 0.0 };
+    [
+        ratio(xy.x - frame.min.x, size.x),
+        ratio(frame.max.y - xy.y, size.y),
+    ]
 }
 
 /// Writes `mesh` to `path` in the format its extension names.
@@ -68,16 +196,19 @@ pub fn write(mesh: &Mesh, path: &Path, opts: &ExportOptions) -> Result<(), Expor
     match Format::from_path(path)? {
         Format::Glb => gltf::write_glb(mesh, path, opts),
         Format::Gltf => gltf::write_gltf(mesh, path, opts),
-        Format::Obj => obj::write_obj(mesh, path),
+        Format::Obj => obj::write_obj(mesh, path, opts),
         Format::Ply => ply::write_ply(mesh, path, opts),
     }
 }
 
-/// Every file [`write`] writes for `path`: the file itself and, for `.gltf`, its `.bin`.
+/// Every file [`write`] writes for `path`: the file itself and, for `.gltf`, its `.bin`,
+/// for `.obj`, its `.mtl`.
 pub fn written_files(path: &Path) -> Result<Vec<PathBuf>, ExportError> {
     let mut files = vec![path.to_path_buf()];
-    if Format::from_path(path)? == Format::Gltf {
-        files.push(gltf::bin_path(path));
+    match Format::from_path(path)? {
+        Format::Gltf => files.push(gltf::bin_path(path)),
+        Format::Obj => files.push(obj::mtl_path(path)),
+        Format::Glb | Format::Ply => {}
     }
     Ok(files)
 }
@@ -88,29 +219,12 @@ pub fn to_y_up(p: [f32; 3]) -> [f32; 3] {
     [p[0], p[2], -p[1]]
 }
 
-/// Linear-RGB vertex colours: grass low, bare earth higher, snow on top, rock on steep
-/// slopes and overhangs (from the normal's tilt).
-pub fn vertex_colors(mesh: &Mesh) -> Vec<[f32; 3]> {
-    let b = mesh.bounds();
-    let (z0, dz) = (b.min.z, (b.max.z - b.min.z).max(f32::MIN_POSITIVE));
-    let grass = Vec3::new(0.13, 0.25, 0.07);
-    let earth = Vec3::new(0.30, 0.24, 0.16);
-    let snow = Vec3::new(0.85, 0.86, 0.90);
-    let rock = Vec3::new(0.26, 0.25, 0.24);
-    let smooth = |a: f32, b: f32, x: f32| {
-        let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
-        t * t * (3.0 - 2.0 * t)
-    };
+/// Linear-RGB vertex colours: the albedo of `materials` at each vertex, the colour the
+/// preview shades the same surface with.
+pub fn vertex_colors(mesh: &Mesh, materials: &Materials) -> Vec<[f32; 3]> {
     mesh.positions
         .iter()
         .zip(&mesh.normals)
-        .map(|(p, n)| {
-            let h = (p[2] - z0) / dz;
-            let ground = grass
-                .lerp(earth, smooth(0.3, 0.7, h))
-                .lerp(snow, smooth(0.8, 0.95, h));
-            let steep = 1.0 - n[2].clamp(0.0, 1.0);
-            ground.lerp(rock, smooth(0.25, 0.55, steep)).into()
-        })
+        .map(|(&p, &n)| materials.albedo(p.into(), n.into()).to_array())
         .collect()
 }

@@ -1,16 +1,18 @@
-//! Stanford PLY export, binary little-endian, in karstic's Z-up frame: positions,
-//! normals, optional `red green blue` bytes, custom attributes as lower-case float
+//! Stanford PLY export, binary little-endian, in karstic's Z-up frame: positions
+//! (relative to the [`Origin`](super::Origin) offset, named in a header comment),
+//! normals, optional `red green blue` bytes (the materials' albedo in sRGB), texture
+//! coordinates `s t` (OBJ's convention, `t` up), custom attributes as lower-case float
 //! properties, and triangles as `uchar`-counted `uint` lists.
 
 use std::path::Path;
 
-use super::{ExportError, ExportOptions, vertex_colors};
+use super::{ExportError, ExportOptions, Prepared};
 use crate::io::write_atomic;
 use crate::mesh::Mesh;
 
 /// Writes `mesh` as a binary PLY file.
 pub fn write_ply(mesh: &Mesh, path: &Path, opts: &ExportOptions) -> Result<(), ExportError> {
-    let colors = opts.color.then(|| vertex_colors(mesh));
+    let p = Prepared::new(mesh, opts);
     write_atomic(path, |w| {
         writeln!(w, "ply\nformat binary_little_endian 1.0")?;
         writeln!(
@@ -18,16 +20,23 @@ pub fn write_ply(mesh: &Mesh, path: &Path, opts: &ExportOptions) -> Result<(), E
             "comment karstic {} (Z up, metres)",
             env!("CARGO_PKG_VERSION")
         )?;
+        let [x, y, z] = p.offset.to_array();
+        writeln!(
+            w,
+            "comment origin {}: add ({x} {y} {z}) to the positions for the tree's frame",
+            opts.origin.name()
+        )?;
         writeln!(w, "element vertex {}", mesh.positions.len())?;
         for p in ["x", "y", "z", "nx", "ny", "nz"] {
             writeln!(w, "property float {p}")?;
         }
-        if colors.is_some() {
+        if p.colors.is_some() {
             writeln!(
                 w,
                 "property uchar red\nproperty uchar green\nproperty uchar blue"
             )?;
         }
+        writeln!(w, "property float s\nproperty float t")?;
         for a in &mesh.attributes {
             writeln!(w, "property float {}", a.name.to_ascii_lowercase())?;
         }
@@ -36,12 +45,16 @@ pub fn write_ply(mesh: &Mesh, path: &Path, opts: &ExportOptions) -> Result<(), E
         let mut rec = Vec::with_capacity(64);
         for i in 0..mesh.positions.len() {
             rec.clear();
-            for v in mesh.positions[i].iter().chain(&mesh.normals[i]) {
+            for v in p.positions[i].iter().chain(&mesh.normals[i]) {
                 rec.extend_from_slice(&v.to_le_bytes());
             }
-            if let Some(c) = &colors {
+            if let Some(c) = &p.colors {
                 // Linear colour to 8-bit sRGB.
                 rec.extend(c[i].map(|x| (x.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0).round() as u8));
+            }
+            let [s, t] = p.uvs[i];
+            for v in [s, 1.0 - t] {
+                rec.extend_from_slice(&v.to_le_bytes());
             }
             for a in &mesh.attributes {
                 rec.extend_from_slice(&a.values[i].to_le_bytes());

@@ -1,0 +1,207 @@
+//! The pictures the main job makes: a preview that reads as terrain (no white band, not
+//! one flat colour), a close-up of each feature that shows it (into the tunnel's mouth,
+//! through the arch), a contact sheet; `karstic render` takes the tree's job camera.
+
+use std::path::Path;
+
+use karstic::field::Field;
+use karstic::job::{self, JobOptions};
+use karstic::render::{Camera, Materials, Method, TraceParams, cpu, views};
+
+use crate::render_cli::karstic;
+
+const SCENE: &str = "trees/jacksboro_caves.ron";
+
+fn rgb(path: &Path) -> image::RgbImage {
+    image::open(path).unwrap().to_rgb8()
+}
+
+#[test]
+fn main_preview_reads_as_terrain_and_each_feature_gets_a_view() {
+    let dir = tempfile::tempdir().unwrap();
+    let opts = JobOptions {
+        out_dir: dir.path().to_path_buf(),
+        full: false,
+        no_render: false,
+        no_views: false,
+        quiet: true,
+        budget: karstic::io::DEFAULT_MEMORY_BUDGET,
+        origin: karstic::mesh::export::Origin::Dem,
+        masks: false,
+    };
+    let r = job::run(Path::new(SCENE), &opts).unwrap();
+    // Named after the file.
+    let preview = r.image_path.clone().unwrap();
+    assert_eq!(preview.file_name().unwrap(), "jacksboro_caves.png");
+    let img = rgb(&preview);
+    let n = (img.width() * img.height()) as f64;
+    let white = img
+        .pixels()
+        .filter(|p| p.0.iter().all(|&c| c > 235))
+        .count() as f64;
+    assert!(white <= 0.02 * n, "{:.1}% near white", 100.0 * white / n);
+    let green = img
+        .pixels()
+        .filter(|p| p[1] as i32 > p[0] as i32 + 8 && p[1] as i32 > p[2] as i32 + 8)
+        .count() as f64;
+    assert!(green <= 0.6 * n, "{:.0}% green", 100.0 * green / n);
+    let mut bins = std::collections::HashMap::new();
+    for p in img.pixels() {
+        *bins.entry(p.0.map(|c| c / 32)).or_insert(0usize) += 1;
+    }
+    let top = *bins.values().max().unwrap() as f64;
+    assert!(top <= 0.35 * n, "one colour covers {:.0}%", 100.0 * top / n);
+
+    // A view of each feature a camera can see, the sealed chamber excepted, and a sheet.
+    let names: Vec<&str> = r.views.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["grotto", "cave", "arch", "sheet"]);
+    assert!(
+        r.notices.iter().any(|n| n.contains("\"chamber\"")),
+        "{:?}",
+        r.notices
+    );
+    for (_, p) in &r.views {
+        assert!(rgb(p).width() > 0);
+    }
+
+    // The views' cameras, found again as the job finds them.
+    let tree = &r.tree;
+    let file = karstic::scene::load(Path::new(SCENE)).unwrap();
+    let ground = file.compile().unwrap().ground;
+    let materials = Materials::for_scene(&r.region, ground);
+    let view = |name: &str| {
+        let feature = tree
+            .info(tree.find(name).unwrap())
+            .support
+            .intersection(r.region);
+        let cam = views::feature_view(tree, &feature, &materials, 40.0, (160, 90))
+            .unwrap()
+            .unwrap();
+        let params = TraceParams::for_scene(Method::Segment, 2.0 * tree.support().radius())
+            .with_pixel_angle(cam.pixel_angle());
+        let depth = cpu::depth(tree, &cam, &params).0;
+        (cam, depth, feature)
+    };
+
+    // Into the tunnel's mouth: the centre lies deeper than the terrain around the mouth.
+    let (cam, depth, _) = view("cave");
+    let (w, h) = (cam.width as i32, cam.height as i32);
+    let at = |i: i32, j: i32| depth[(i + j * w) as usize];
+    let median = |mut v: Vec<f32>| {
+        v.sort_by(f32::total_cmp);
+        v[v.len() / 2]
+    };
+    let centre = median(
+        (-4..=4)
+            .flat_map(|dj| (-4..=4).map(move |di| (w / 2 + di, h / 2 + dj)))
+            .map(|(i, j)| at(i, j))
+            .collect(),
+    );
+    let ring = median(
+        (0..w)
+            .flat_map(|i| [(i, h / 8), (i, h - 1 - h / 8)])
+            .chain((0..h).flat_map(|j| [(w / 8, j), (w - 1 - w / 8, j)]))
+            .map(|(i, j)| at(i, j))
+            .filter(|t| t.is_finite())
+            .collect(),
+    );
+    assert!(
+        centre > 1.2 * ring,
+        "tunnel centre at {centre} m, around it {ring} m"
+    );
+
+    // Through the arch: in some row, a pixel between two pixels of the arch sees sky or
+    // ground farther than the arch.
+    let (cam, depth, feature) = view("arch");
+    let w = cam.width;
+    let on_arch = |k: usize| {
+        let t = depth[k];
+        let p = cam.pixel_ray(k as u32 % w, k as u32 / w).at(t);
+        t.is_finite()
+            && feature.contains(p)
+            && materials.off_ground(p).abs() > materials.feature_depth.1
+    };
+    let through = (0..cam.height as usize).any(|j| {
+        let row: Vec<usize> = (0..w as usize).map(|i| i + j * w as usize).collect();
+        let arch: Vec<usize> = row.iter().copied().filter(|&k| on_arch(k)).collect();
+        let (Some(&first), Some(&last)) = (arch.first(), arch.last()) else {
+            return false;
+        };
+        let far = arch.iter().map(|&k| depth[k]).fold(0.0f32, f32::max);
+        (first..last).any(|k| !on_arch(k) && depth[k] > far + 10.0)
+    });
+    assert!(through, "the arch view sees nothing behind the span");
+}
+
+#[test]
+fn render_takes_the_job_camera_and_frames_the_surface_without_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = |name: &str| dir.path().join(name);
+    let run = |args: &[&str]| {
+        let (ok, err) = karstic(args);
+        assert!(ok, "{err}");
+    };
+    let a = out("job.png");
+    run(&[
+        "render",
+        SCENE,
+        "-o",
+        a.to_str().unwrap(),
+        "--size",
+        "96",
+        "54",
+        "--quiet",
+    ]);
+    let b = out("explicit.png");
+    run(&[
+        "render",
+        SCENE,
+        "-o",
+        b.to_str().unwrap(),
+        "--size",
+        "96",
+        "54",
+        "--quiet",
+        "--camera",
+        "4900",
+        "4380",
+        "780",
+        "4480",
+        "4990",
+        "690",
+    ]);
+    assert_eq!(
+        rgb(&a).as_raw(),
+        rgb(&b).as_raw(),
+        "the job's camera is the default"
+    );
+
+    // Without a job, the surface is centred and spans two thirds of the image or more
+    // (the floating island sat in the top-left third when its support box was framed).
+    let tree = karstic::scene::load(Path::new("trees/floating_island.ron"))
+        .unwrap()
+        .compile()
+        .unwrap()
+        .tree;
+    let cam: Camera = views::frame_surface(&tree, 40.0, 96, 54).unwrap();
+    let params = TraceParams::for_scene(Method::Segment, 2.0 * tree.support().radius())
+        .with_pixel_angle(cam.pixel_angle());
+    let depth = cpu::depth(&tree, &cam, &params).0;
+    let hit = |i: u32, j: u32| depth[(i + j * 96) as usize].is_finite();
+    let cols: Vec<u32> = (0..96).filter(|&i| (0..54).any(|j| hit(i, j))).collect();
+    let rows: Vec<u32> = (0..54).filter(|&j| (0..96).any(|i| hit(i, j))).collect();
+    let span = |v: &[u32]| v.last().unwrap() - v.first().unwrap() + 1;
+    assert!(
+        span(&cols) >= 64 || span(&rows) >= 36,
+        "{} × {} of 96 × 54",
+        span(&cols),
+        span(&rows)
+    );
+    let mid = |v: &[u32], n: u32| (v.first().unwrap() + v.last().unwrap()) as i32 - n as i32 + 1;
+    assert!(
+        mid(&cols, 96).abs() <= 10 && mid(&rows, 54).abs() <= 8,
+        "centred: {} {}",
+        mid(&cols, 96),
+        mid(&rows, 54)
+    );
+}
