@@ -3,6 +3,7 @@
 // Shared helpers.
 mod common;
 mod curves_util;
+mod doc_util;
 mod gltf_validator;
 mod mesh_fields;
 
@@ -19,6 +20,8 @@ mod dem_fuzz;
 mod dem_implicit;
 mod dem_mesh;
 mod dem_readers;
+mod doc_commands;
+mod doc_pictures;
 mod docs;
 mod main_job;
 mod masks;

@@ -1,0 +1,284 @@
+//! The pictures of README.md and docs/*.md are made by the tool and stay small: every
+//! picture link resolves to a file in `docs/img/`, every file there is linked and made by
+//! [`COMMANDS`], and each (and all together) stays within the byte budget.
+//!
+//! Regenerate them all with
+//!
+//! ```sh,no-run
+//! KARSTIC_BLESS=1 cargo test --locked --test tests doc_pictures
+//! ```
+//!
+//! which runs [`COMMANDS`] with the binary under test in a sandbox (`doc_util::Sandbox`),
+//! draws `karstic sample` sections rock / air and `karstic build` meshes' triangles, halves
+//! renders and drawings to at most [`MAX_WIDTH`] pixels (each output pixel averages 2 × 2
+//! traced ones), and writes indexed PNGs of at most 256 colours (`doc_util::write_indexed`), replacing every picture in `docs/img/`.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+use image::imageops::FilterType;
+use karstic::curves::spec::CurveSource;
+use karstic::scene::spec::Nary;
+use karstic::scene::value::Positive;
+use karstic::scene::{NodeSpec, Scene};
+
+use crate::doc_util::{
+    Sandbox, mesh_picture, pages, picture_links, root, section_picture, shown, write_indexed,
+};
+
+/// Where the pictures live, from the repository root.
+const IMG: &str = "docs/img";
+
+/// Largest picture, in bytes.
+const MAX_PICTURE: u64 = 64 * 1024;
+
+/// All pictures together, in bytes.
+const MAX_TOTAL: u64 = 640 * 1024;
+
+/// Widest picture, in pixels: renders are made at twice this and halved.
+const MAX_WIDTH: u32 = 480;
+
+/// The commands that make the pictures, run in a sandbox after [`prepare`] wrote the
+/// variants of the main job's tree they read. Renders are 960 × 540 (the job's preview
+/// size and `render`'s default).
+const COMMANDS: &str = "\
+karstic run trees/jacksboro_caves.ron -o out --quiet
+karstic run trees/jacksboro_bare.ron -o bare --quiet
+karstic sample trees/jacksboro_caves.ron --box 3470 4880 790 3470.5 5070 980 --res 2 761 761 -o cave_section.npy
+karstic sample trees/jacksboro_caves.ron --box 3360 4860 868 3840 5080 868.5 --res 961 441 2 -o cave_plan.npy
+karstic render trees/curves/overhang.ron -o curves_overhang.png --quiet
+karstic render trees/curves/arch.ron -o curves_arch.png --quiet
+karstic render trees/jacksboro_caves.ron -o meld_arch_after.png --camera 4700 5330 700 4620 4950 625 --fov 50 --quiet
+karstic render trees/arch_unaware.ron -o meld_arch_before.png --camera 4700 5330 700 4620 4950 625 --fov 50 --quiet
+karstic render trees/ridge_tunnel.ron -o meld_portal.png --camera 4190 6150 878 4130 6205 858 --fov 55 --quiet
+karstic render trees/rock_spire.ron -o rock_spire.png --quiet
+karstic render trees/warped_rocks.ron -o warped_rocks.png --quiet
+karstic render trees/arch.ron -o arch.png --quiet
+karstic render trees/floating_island.ron -o floating_island.png --quiet
+karstic render trees/blobs.ron -o blobs.png --cost blobs_cost.png --quiet
+karstic build trees/arch.ron -o arch_mesh.obj --res 40 --quiet
+";
+
+/// What [`COMMANDS`] write that becomes a picture, and the picture's name in `docs/img/`.
+/// An output ending in `*.png` takes every PNG of its folder with that prefix under its
+/// own name: the main job's preview, and the views `karstic run` writes beside it.
+const PICTURES: &[(&str, &str)] = &[
+    ("out/jacksboro_caves*.png", ""),
+    ("bare/jacksboro_bare.png", "jacksboro_bare.png"),
+    ("cave_section.npy", "cave_section.png"),
+    ("cave_plan.npy", "cave_plan.png"),
+    ("curves_overhang.png", "curves_overhang.png"),
+    ("curves_arch.png", "curves_arch.png"),
+    ("meld_arch_after.png", "meld_arch_after.png"),
+    ("meld_arch_before.png", "meld_arch_before.png"),
+    ("meld_portal.png", "meld_portal.png"),
+    ("rock_spire.png", "rock_spire.png"),
+    ("warped_rocks.png", "warped_rocks.png"),
+    ("arch.png", "arch.png"),
+    ("floating_island.png", "floating_island.png"),
+    ("blobs.png", "blobs.png"),
+    ("blobs_cost.png", "blobs_cost.png"),
+    ("arch_mesh.obj", "arch_mesh.png"),
+];
+
+/// Whether [`PICTURES`] makes a picture named `name`.
+fn made(name: &str) -> bool {
+    PICTURES
+        .iter()
+        .any(|&(output, file)| match output.strip_suffix("*.png") {
+            Some(prefix) => {
+                let prefix = prefix.rsplit('/').next().unwrap_or(prefix);
+                name.starts_with(prefix) && name.ends_with(".png")
+            }
+            None => file == name,
+        })
+}
+
+/// Half-length across the span of the ground curve under the arch of `arch_unaware.ron`,
+/// in metres: the thesis's way to give a lone arch a ground (Becher 2016, Figure 7.6).
+const UNAWARE_GROUND: f32 = 80.0;
+
+/// Writes the variants of the main job's tree that [`COMMANDS`] render into the sandbox's
+/// `trees/`: `jacksboro_bare.ron`, its terrain alone under the same `job` section (the DEM
+/// before amplification, seen as the main job sees it), and `arch_unaware.ron`, its arch
+/// volume built without the terrain (`on_terrain: false`) but with a ground curve under
+/// the apex, united with the terrain — what a Feature Volume did to a terrain before
+/// `Replace`.
+fn prepare(trees: &Path) {
+    let main = karstic::scene::load(trees.join("jacksboro_caves.ron"))
+        .expect("the main job's tree")
+        .scene;
+    let named = main.named();
+    let terrain = main
+        .terrain
+        .as_deref()
+        .expect("the main job names its terrain");
+    let dem = named[terrain].clone();
+    let mut arch = named["arch"].clone();
+    let NodeSpec::FeatureVolume(volume) = &mut arch else {
+        panic!("the main job's `arch` is a FeatureVolume")
+    };
+    volume.on_terrain = false;
+    let CurveSource::Inline(features) = &mut volume.curves else {
+        panic!("the main job's arch is written inline")
+    };
+    for a in &mut features.arches {
+        a.ground = Some(Positive::new(UNAWARE_GROUND));
+    }
+    let write = |file: &str, scene: Scene| {
+        let path = trees.join(file);
+        std::fs::write(&path, scene.to_ron()).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    };
+    write(
+        "jacksboro_bare.ron",
+        Scene {
+            name: Some("jacksboro_bare".into()),
+            root: dem.clone(),
+            ..main.clone()
+        },
+    );
+    write(
+        "arch_unaware.ron",
+        Scene {
+            name: Some("arch_unaware".into()),
+            job: None,
+            root: NodeSpec::Union(Nary {
+                name: None,
+                children: vec![dem, arch],
+            }),
+            ..main
+        },
+    );
+}
+
+/// Makes every picture into `docs/img/` (emptied first).
+fn regenerate() {
+    let sandbox = Sandbox::new();
+    prepare(&sandbox.repo().join("trees"));
+    let ran = sandbox.run(&format!("set -e\n{COMMANDS}"));
+    assert!(ran.ok, "the picture commands failed:\n{}", ran.output);
+    let img = root().join(IMG);
+    if img.is_dir() {
+        for entry in std::fs::read_dir(&img).expect("docs/img") {
+            let path = entry.expect("docs/img entry").path();
+            std::fs::remove_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        }
+    }
+    std::fs::create_dir_all(&img).expect("docs/img");
+    for &(output, file) in PICTURES {
+        let from = sandbox.repo().join(output);
+        let outputs: Vec<(std::path::PathBuf, String)> = match output.strip_suffix("*.png") {
+            Some(prefix) => {
+                let (dir, stem) = prefix.rsplit_once('/').unwrap_or((".", prefix));
+                let dir = sandbox.repo().join(dir);
+                let mut found: Vec<_> = std::fs::read_dir(&dir)
+                    .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+                    .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+                    .filter(|n| n.starts_with(stem) && n.ends_with(".png"))
+                    .map(|n| (dir.join(&n), n))
+                    .collect();
+                found.sort();
+                assert!(!found.is_empty(), "no {output} written");
+                found
+            }
+            None => vec![(from, file.to_string())],
+        };
+        for (from, name) in outputs {
+            let full = match from.extension().and_then(|e| e.to_str()) {
+                Some("npy") => section_picture(&from),
+                Some("obj") => mesh_picture(&from, 2 * MAX_WIDTH, 2 * MAX_WIDTH * 9 / 16),
+                _ => image::open(&from)
+                    .unwrap_or_else(|e| panic!("{}: {e}", from.display()))
+                    .to_rgb8(),
+            };
+            let factor = full.width().div_ceil(MAX_WIDTH).max(1);
+            let (w, h) = (full.width() / factor, full.height() / factor);
+            let picture = image::imageops::resize(&full, w, h, FilterType::Triangle);
+            write_indexed(&picture, &img.join(name));
+        }
+    }
+}
+
+#[test]
+fn doc_pictures_are_linked_made_by_the_tool_and_small() {
+    if std::env::var_os("KARSTIC_BLESS").is_some() {
+        regenerate();
+    }
+    let img = root().join(IMG);
+    let mut problems = Vec::new();
+    let mut linked = BTreeSet::new();
+    for (page, text) in pages() {
+        let dir = page.parent().expect("a page's folder");
+        for (line, alt, target) in picture_links(&text) {
+            let at = format!("{}:{line}: ![{alt}]({target})", shown(&page));
+            let path = dir.join(&target);
+            let file = path.canonicalize().ok();
+            match file
+                .as_deref()
+                .and_then(|f| f.strip_prefix(img.canonicalize().ok()?).ok())
+            {
+                Some(name) if path.is_file() => {
+                    linked.insert(name.to_string_lossy().into_owned());
+                }
+                _ => problems.push(format!("{at}: not a file in {IMG}/")),
+            }
+            if alt.trim().is_empty() {
+                problems.push(format!("{at}: say what the picture shows in its alt text"));
+            }
+        }
+    }
+    let mut total = 0;
+    let mut files = BTreeSet::new();
+    for entry in std::fs::read_dir(&img).expect("docs/img") {
+        let path = entry.expect("docs/img entry").path();
+        let name = path
+            .file_name()
+            .expect("a name")
+            .to_string_lossy()
+            .into_owned();
+        let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        total += bytes.len() as u64;
+        if !bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
+            problems.push(format!("{IMG}/{name}: not a PNG"));
+        }
+        if bytes.len() as u64 > MAX_PICTURE {
+            problems.push(format!(
+                "{IMG}/{name}: {} bytes > {MAX_PICTURE}",
+                bytes.len()
+            ));
+        }
+        if !made(&name) {
+            problems.push(format!(
+                "{IMG}/{name}: not made by the picture commands (PICTURES)"
+            ));
+        }
+        if !linked.contains(&name) {
+            problems.push(format!("{IMG}/{name}: linked from no page"));
+        }
+        files.insert(name);
+    }
+    for &(_, file) in PICTURES {
+        if !file.is_empty() && !files.contains(file) {
+            problems.push(format!("{IMG}/{file} is missing: regenerate the pictures"));
+        }
+    }
+    if total > MAX_TOTAL {
+        problems.push(format!("{IMG}/: {total} bytes in all > {MAX_TOTAL}"));
+    }
+    assert!(
+        problems.is_empty(),
+        "{}\n(regenerate with `KARSTIC_BLESS=1 cargo test --locked --test tests doc_pictures`)",
+        problems.join("\n")
+    );
+    // The README shows what the tool makes.
+    assert!(
+        [
+            "jacksboro_caves.png",
+            "jacksboro_bare.png",
+            "cave_section.png"
+        ]
+        .iter()
+        .all(|f| linked.contains(*f)),
+        "{linked:?}"
+    );
+}
