@@ -57,6 +57,7 @@ karstic render trees/arch.ron -o arch.png --quiet
 karstic render trees/floating_island.ron -o floating_island.png --quiet
 karstic render trees/blobs.ron -o blobs.png --cost blobs_cost.png --quiet
 karstic build trees/arch.ron -o arch_mesh.obj --res 40 --quiet
+karstic masks trees/jacksboro_caves.ron -o masks --cell 5 --box 3300 4840 480 4860 5330 1100 --quiet
 ";
 
 /// What [`COMMANDS`] write that becomes a picture, and the picture's name in `docs/img/`.
@@ -79,6 +80,8 @@ const PICTURES: &[(&str, &str)] = &[
     ("blobs.png", "blobs.png"),
     ("blobs_cost.png", "blobs_cost.png"),
     ("arch_mesh.obj", "arch_mesh.png"),
+    ("masks/jacksboro_caves_cave.png", "masks_cave.png"),
+    ("masks/jacksboro_caves_flow.png", "masks_flow.png"),
 ];
 
 /// Whether [`PICTURES`] makes a picture named `name`.
