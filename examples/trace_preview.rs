@@ -48,7 +48,7 @@ fn main() -> anyhow::Result<()> {
     let subject = Renderable::from_tree(tree, gpu);
     let (frame, device) = subject.render_with_fallback(&camera, &settings, &ProgressBar::hidden());
     if let Device::CpuInstead(why) = &device {
-        eprintln!("--gpu: {}; rendered on the CPU instead", why.error());
+        eprintln!("--gpu: {why}; rendered on the CPU instead");
     }
     if let Some(dir) = out.parent() {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;

@@ -13,15 +13,15 @@ use crate::voxel::SField;
 pub enum VolumeFile {
     /// A bare `FeatureVolume(..)`.
     Bare {
-        /// The volume.
-        spec: FeatureVolumeSpec,
+        /// The volume (boxed, like the tree file: both are large).
+        spec: Box<FeatureVolumeSpec>,
         /// The file.
         path: PathBuf,
         /// Its folder: curve files are relative to it.
         base_dir: PathBuf,
     },
-    /// A tree file.
-    Tree(SceneFile),
+    /// A tree file (boxed: far larger than a bare volume).
+    Tree(Box<SceneFile>),
 }
 
 /// True when the first token of the RON text (after comments) is `FeatureVolume`.
@@ -50,16 +50,16 @@ impl VolumeFile {
                 source: Box::new(e),
             })?;
             return Ok(VolumeFile::Bare {
-                spec,
+                spec: Box::new(spec),
                 path: path.to_path_buf(),
                 base_dir,
             });
         }
-        Ok(VolumeFile::Tree(SceneFile {
+        Ok(VolumeFile::Tree(Box::new(SceneFile {
             scene: parse_scene(&text, path)?,
             path: path.to_path_buf(),
             base_dir,
-        }))
+        })))
     }
 
     /// The file.
@@ -105,7 +105,7 @@ impl VolumeFile {
             message,
         };
         let file = match (self, node) {
-            (VolumeFile::Bare { spec, .. }, None) => return Ok(spec),
+            (VolumeFile::Bare { spec, .. }, None) => return Ok(&**spec),
             (VolumeFile::Bare { .. }, Some(_)) => {
                 return Err(missing(
                     "a bare FeatureVolume file has one volume: --node applies to tree files".into(),
