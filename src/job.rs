@@ -13,7 +13,6 @@ use crate::io::progress;
 use crate::mesh::export::{self, ExportOptions, Origin};
 use crate::mesh::{GridSpec, Mesh, MeshOptions, MeshStats, polygonize};
 use crate::render::image::write_contact_sheet;
-use crate::render::material::SnowLine;
 use crate::render::{Camera, Frame, Materials, Method, RenderSettings, cpu, views};
 use crate::scene::{self, SceneFile};
 
@@ -95,13 +94,8 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         (false, Some(r)) => r,
         _ => support,
     };
-    // One material model for the mesh's colours, the masks and the pictures, at the
-    // scale of the region.
-    let mut materials = Materials::for_scene(&region, ground.clone());
-    materials.snow_line = job
-        .as_ref()
-        .and_then(|j| j.snow_line)
-        .map(|z| SnowLine::at(z.0, &region));
+    // One material model for the mesh's colours, the masks and the pictures.
+    let materials = Materials::for_tree(&file.scene, &tree, ground.clone());
     let fine = job
         .as_ref()
         .map_or(support.size().max_element() / 256.0, |j| j.cell.0);

@@ -20,10 +20,8 @@ fn main_job_masks() -> (Masks, std::sync::Arc<karstic::dem::HeightfieldField>) {
     let region = Aabb::new(job.min.0, job.max.0);
     let raster = Raster::new(region.footprint(), 5.0, karstic::io::DEFAULT_MEMORY_BUDGET).unwrap();
     let ground = compiled.ground.clone().unwrap();
-    let materials = Materials::for_scene(
-        &karstic::field::Field::support(&compiled.tree),
-        compiled.ground,
-    );
+    // At the region's scale, as the job makes its masks, mesh colours and pictures.
+    let materials = Materials::for_scene(&region, compiled.ground);
     (Masks::compute(&compiled.tree, &materials, &raster), ground)
 }
 

@@ -208,3 +208,49 @@ fn tree_files_load_with_their_tape_or_the_reason_they_have_none() {
     );
     assert_eq!(image::open(&png).unwrap().to_rgba8().dimensions(), (40, 30));
 }
+
+/// `--gpu` names the adapter it rendered on; a software adapter (lavapipe here) gives way
+/// to the CPU with a one-line notice unless `--software-gpu` asks for it; Mesa's
+/// `XDG_RUNTIME_DIR` complaint never shows.
+#[test]
+fn software_adapters_give_way_to_the_cpu_quietly() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("arch.png");
+    let arch = trees().join("arch.ron");
+    let run = |extra: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_karstic"))
+            .args([
+                "render",
+                arch.to_str().unwrap(),
+                "-o",
+                png.to_str().unwrap(),
+            ])
+            .args(["--size", "32", "18", "--gpu"])
+            .args(extra)
+            .env_remove("XDG_RUNTIME_DIR")
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let err = run(&[]);
+    assert!(!err.contains("XDG_RUNTIME_DIR"), "{err}");
+    match karstic::render::gpu::GpuContext::new() {
+        Ok(ctx) if ctx.software => {
+            assert!(
+                err.contains("software") && err.contains("on the CPU"),
+                "{err}"
+            );
+            let err = run(&["--software-gpu"]);
+            assert!(
+                err.contains(&format!("on the GPU ({})", ctx.adapter)),
+                "{err}"
+            );
+        }
+        Ok(ctx) => assert!(
+            err.contains(&format!("on the GPU ({})", ctx.adapter)),
+            "{err}"
+        ),
+        Err(_) => assert!(err.contains("on the CPU instead"), "{err}"),
+    }
+}

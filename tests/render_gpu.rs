@@ -407,3 +407,34 @@ fn gpu_noise_matches_the_cpu_noise() {
         assert!(spread > 0.3, "the noise is not trivial ({spread})");
     }
 }
+
+/// The main job's tree on the GPU with its materials: the terrain travels with the tape
+/// (`Tape::with_ground`), so rock on the features, soil, grass and the dry-grass patches,
+/// the occlusion and the sun's disk come out as on the CPU.
+#[test]
+fn gpu_materials_match_the_cpu_on_the_main_job() {
+    let Some(ctx) = gpu() else { return };
+    let file = karstic::scene::load(std::path::Path::new("trees/jacksboro_caves.ron")).unwrap();
+    let compiled = file.compile().unwrap();
+    let tape = Tape::from_tree(&compiled.tree).unwrap();
+    let materials =
+        karstic::render::Materials::for_tree(&file.scene, &compiled.tree, compiled.ground);
+    let region = karstic::render::material::scene_box(&file.scene, &compiled.tree);
+    // Close to the arch: feature rock, ground and sky in one frame.
+    let cam = Camera::look_at(
+        Vec3::new(4900.0, 4380.0, 780.0),
+        Vec3::new(4620.0, 4950.0, 640.0),
+        30.0,
+        64,
+        36,
+    )
+    .unwrap();
+    let settings = RenderSettings {
+        materials,
+        ..RenderSettings::for_scene(&region, &cam, Method::Segment)
+    };
+    let cpu = render(&tape, &cam, &settings, &ProgressBar::hidden());
+    let gpu = ctx.render(&tape, &cam, &settings).unwrap();
+    assert!(cpu.hits() > 1000, "{} hits", cpu.hits());
+    assert_frames_match("main job with materials", &cpu, &gpu);
+}

@@ -79,14 +79,14 @@ pub(super) fn run(args: BuildArgs) -> anyhow::Result<()> {
         };
         (mesh, stats, opts)
     } else {
-        let compiled = super::load_compiled(&args.tree, args.budget.max_memory, &outputs)?;
+        let (file, compiled) = super::load_compiled(&args.tree, args.budget.max_memory, &outputs)?;
         let (mesh, stats) = build_from_field(&compiled.tree, &args)?;
         let support = compiled.tree.support();
         let bbox = args.bbox.as_deref().map(super::corners);
         let opts = ExportOptions {
             materials: args
                 .tint
-                .then(|| Materials::for_scene(&support, compiled.ground.clone())),
+                .then(|| Materials::for_tree(&file.scene, &compiled.tree, compiled.ground.clone())),
             origin: args.origin,
             uv_frame: Some(texture_frame(
                 bbox.as_ref(),

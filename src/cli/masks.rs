@@ -46,7 +46,7 @@ pub(super) fn run(args: MasksArgs) -> anyhow::Result<()> {
             .map_or("scene".into(), |s| s.to_string_lossy().into_owned())
     });
     let outputs = Masks::files(&args.output, &stem);
-    let compiled = super::load_compiled(&args.tree, args.budget.max_memory, &outputs)?;
+    let (file, compiled) = super::load_compiled(&args.tree, args.budget.max_memory, &outputs)?;
     let tree = &compiled.tree;
     let support = tree.support();
     anyhow::ensure!(
@@ -63,7 +63,7 @@ pub(super) fn run(args: MasksArgs) -> anyhow::Result<()> {
     });
     let raster = Raster::new(frame, cell, args.budget.max_memory)?;
     let started = Instant::now();
-    let materials = Materials::for_scene(&support, compiled.ground.clone());
+    let materials = Materials::for_tree(&file.scene, tree, compiled.ground.clone());
     let masks = Masks::compute(tree, &materials, &raster);
     std::fs::create_dir_all(&args.output).map_err(|e| {
         anyhow::anyhow!(

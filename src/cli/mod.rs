@@ -73,22 +73,23 @@ fn load_tree(
     budget: u64,
     outputs: &[impl AsRef<Path>],
 ) -> anyhow::Result<karstic::field::Tree> {
-    Ok(load_compiled(path, budget, outputs)?.tree)
+    Ok(load_compiled(path, budget, outputs)?.1.tree)
 }
 
-/// [`load_tree`], keeping what the compiler knows besides the tree (its terrain).
+/// [`load_tree`], keeping the file and what the compiler knows besides the tree (its
+/// terrain).
 fn load_compiled(
     path: &Path,
     budget: u64,
     outputs: &[impl AsRef<Path>],
-) -> anyhow::Result<karstic::scene::Compiled> {
+) -> anyhow::Result<(karstic::scene::SceneFile, karstic::scene::Compiled)> {
     let file = karstic::scene::load(path)?;
     karstic::io::check_outputs(&file.inputs(), outputs)?;
     let compiled = file.compile_with(budget)?;
     for n in &compiled.notices {
         eprintln!("notice: {n}");
     }
-    Ok(compiled)
+    Ok((file, compiled))
 }
 
 /// Runs a parsed command line.

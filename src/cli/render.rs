@@ -7,10 +7,9 @@ use anyhow::Context;
 use glam::Vec3;
 
 use super::Budget;
-use karstic::field::Aabb;
 use karstic::io::progress;
-use karstic::render::material::SnowLine;
-use karstic::render::views::{frame_surface, surface_box};
+use karstic::render::material::{Materials, scene_box};
+use karstic::render::views::frame_surface;
 use karstic::render::{Camera, Device, Frame, Method, RenderSettings, Renderable, cpu};
 
 /// Arguments of `karstic render`.
@@ -70,14 +69,12 @@ pub(super) fn run(args: RenderArgs) -> anyhow::Result<()> {
         eprintln!("notice: {n}");
     }
     let job = file.scene.job.as_ref();
+    // The job's region (else the support) sets the scale of the shading: haze, occlusion,
+    // materials. The job's camera is the default view.
+    let scene = scene_box(&file.scene, &compiled.tree);
+    let materials = Materials::for_tree(&file.scene, &compiled.tree, compiled.ground);
     let mut subject = Renderable::from_tree(compiled.tree, args.gpu);
     subject.allow_software = args.software_gpu;
-    // The job's region sets the scale of the shading (haze, occlusion, materials); its
-    // camera is the default view.
-    let scene = job
-        .and_then(|j| j.region)
-        .map(|r| Aabb::new(r.min.0, r.max.0))
-        .unwrap_or_else(|| surface_box(subject.field.as_ref()));
     let look = args
         .camera
         .as_deref()
@@ -89,11 +86,10 @@ pub(super) fn run(args: RenderArgs) -> anyhow::Result<()> {
         None => frame_surface(subject.field.as_ref(), fov, w, h),
     }
     .with_context(|| format!("{}: placing the camera", args.tree.display()))?;
-    let mut settings =
-        RenderSettings::for_scene(&scene, &camera, args.method).with_ground(compiled.ground);
-    settings.materials.snow_line = job
-        .and_then(|j| j.snow_line)
-        .map(|z| SnowLine::at(z.0, &scene));
+    let mut settings = RenderSettings {
+        materials,
+        ..RenderSettings::for_scene(&scene, &camera, args.method)
+    };
     settings.shading.shadows = !args.no_shadows;
     let start = Instant::now();
     let tiles = w.div_ceil(cpu::TILE) * h.div_ceil(cpu::TILE);

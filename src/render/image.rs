@@ -175,7 +175,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let solid = |v: u8, w: u32, h: u32| {
             let n = (w * h) as usize;
-            Frame::new(w, h, vec![v; 4 * n], vec![0.0; n], vec![0; n])
+            Frame::new(w, h, [v, v, v, 255].repeat(n), vec![0.0; n], vec![0; n])
         };
         let (a, b, c, d) = (
             solid(200, 960, 540),

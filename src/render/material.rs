@@ -17,8 +17,9 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 
 use crate::dem::HeightfieldField;
-use crate::field::Aabb;
 use crate::field::noise::simplex;
+use crate::field::{Aabb, Field, Tree};
+use crate::scene::Scene;
 
 /// Seed of the noise that moves material boundaries.
 pub const VARIATION_SEED: u32 = 0x05ee_dc01;
@@ -116,6 +117,20 @@ impl Materials {
         }
     }
 
+    /// The materials of a tree file's scene: at the scale of [`scene_box`], over the
+    /// compiled scene's terrain, with the job's snow line. The preview, the feature
+    /// views, the mesh colours and the texture masks all take theirs from here.
+    pub fn for_tree(scene: &Scene, tree: &Tree, ground: Option<Arc<HeightfieldField>>) -> Self {
+        let b = scene_box(scene, tree);
+        let mut m = Materials::for_scene(&b, ground);
+        m.snow_line = scene
+            .job
+            .as_ref()
+            .and_then(|j| j.snow_line)
+            .map(|z| SnowLine::at(z.0, &b));
+        m
+    }
+
     /// Vertical offset of `p` from the ground (0 without a terrain or off its cells).
     pub fn off_ground(&self, p: Vec3) -> f32 {
         let h = self
@@ -169,6 +184,16 @@ impl Materials {
     pub fn albedo(&self, p: Vec3, n: Vec3) -> Vec3 {
         self.albedo_of(&self.cover(p, n))
     }
+}
+
+/// The box that sets the scale of a scene's shading and materials: its job's region, or
+/// the tree's support.
+pub fn scene_box(scene: &Scene, tree: &Tree) -> Aabb {
+    scene
+        .job
+        .as_ref()
+        .and_then(|j| j.region)
+        .map_or_else(|| tree.support(), |r| Aabb::new(r.min.0, r.max.0))
 }
 
 /// Hermite step from 0 at `a` to 1 at `b` (`a > b` steps down).
