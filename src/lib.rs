@@ -10,6 +10,7 @@
 pub mod curves;
 pub mod dem;
 pub mod field;
+pub mod heightmap;
 pub mod io;
 pub mod job;
 pub mod mesh;

@@ -4,9 +4,11 @@ mod build;
 mod curves;
 mod dem;
 mod eval;
+mod heightmap;
 mod render;
 mod run;
 mod sample;
+mod tin;
 mod tree;
 
 use std::path::Path;
@@ -44,6 +46,10 @@ enum Command {
     Render(render::RenderArgs),
     /// Feature Curves: run the voxel pipeline on a `FeatureVolume` file.
     Curves(curves::CurvesArgs),
+    /// Write the top surface of a tree's 3D terrain as a georeferenced DEM (.tif, .png, .asc).
+    Heightmap(heightmap::HeightmapArgs),
+    /// Triangulate a DEM or a tree's heightmap within a vertical error (greedy insertion).
+    Tin(tin::TinArgs),
 }
 
 /// The `--max-memory` flag of every command that reads or builds grids and images.
@@ -81,13 +87,22 @@ fn load_tree(
     budget: u64,
     outputs: &[impl AsRef<Path>],
 ) -> anyhow::Result<karstic::field::Tree> {
+    Ok(load_compiled(path, budget, outputs)?.tree)
+}
+
+/// [`load_tree`], keeping the whole compiled scene (its terrain, outline, notices).
+fn load_compiled(
+    path: &Path,
+    budget: u64,
+    outputs: &[impl AsRef<Path>],
+) -> anyhow::Result<karstic::scene::Compiled> {
     let file = karstic::scene::load(path)?;
     karstic::io::check_outputs(&file.inputs(), outputs)?;
     let compiled = file.compile_with(budget)?;
     for n in &compiled.notices {
         eprintln!("notice: {n}");
     }
-    Ok(compiled.tree)
+    Ok(compiled)
 }
 
 /// Runs a parsed command line.
@@ -101,6 +116,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Sample(a) => sample::run(a),
         Command::Render(a) => render::run(a),
         Command::Curves(a) => curves::run(a),
+        Command::Heightmap(a) => heightmap::run(a),
+        Command::Tin(a) => tin::run(a),
     }
 }
 

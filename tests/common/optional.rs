@@ -1,5 +1,6 @@
 //! Checks that need a tool a machine may lack: the GPU comparisons need an adapter, the
-//! glTF export tests need Node and the Khronos validator. Locally a missing tool prints a
+//! glTF export tests need Node and the Khronos validator, the heightmap export tests
+//! need GDAL's `gdalinfo`. Locally a missing tool prints a
 //! notice and the check is skipped; where the tool's `KARSTIC_REQUIRE_*` variable is set
 //! (to anything but empty or `0`; `.ci/run` sets both) its absence fails the test.
 
@@ -8,6 +9,9 @@ pub const REQUIRE_GPU: &str = "KARSTIC_REQUIRE_GPU";
 
 /// Makes a missing Node or Khronos glTF validator a test failure.
 pub const REQUIRE_GLTF_VALIDATOR: &str = "KARSTIC_REQUIRE_GLTF_VALIDATOR";
+
+/// Makes a missing `gdalinfo` (GDAL's command-line tools) a test failure.
+pub const REQUIRE_GDAL: &str = "KARSTIC_REQUIRE_GDAL";
 
 /// Whether the environment variable `var` requires its tool: set, not empty, not `0`.
 fn required(var: &str) -> bool {
