@@ -1,7 +1,7 @@
 //! `karstic heightmap TREE -o top.tif`: the top surface of a tree as a georeferenced DEM.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use clap::Args;
 use karstic::dem::{self, Dem};
@@ -45,14 +45,26 @@ pub(super) struct HeightmapArgs {
     budget: Budget,
 }
 
+/// A tree's heightmap and the time its stages took.
+pub(super) struct TreeHeightmap {
+    /// The heightmap.
+    pub dem: Dem,
+    /// Loading and compiling the tree (DEMs, voxel pipelines).
+    pub compile: Duration,
+    /// Finding the columns' tops.
+    pub columns: Duration,
+}
+
 /// Loads `tree` (refusing `outputs` among its inputs) and computes its heightmap.
 pub(super) fn tree_heightmap(
     tree: &Path,
     grid: &GridArgs,
     budget: u64,
     outputs: &[PathBuf],
-) -> anyhow::Result<Dem> {
+) -> anyhow::Result<TreeHeightmap> {
+    let started = Instant::now();
     let compiled = super::load_compiled(tree, budget, outputs)?;
+    let compile = started.elapsed();
     let t = &compiled.tree;
     let region = grid
         .region
@@ -75,14 +87,21 @@ pub(super) fn tree_heightmap(
         "--tolerance must be > 0 metres, got {}",
         opts.tolerance
     );
-    Ok(heightmap(t, &layout, &opts, budget)?)
+    let started = Instant::now();
+    let dem = heightmap(t, &layout, &opts, budget)?;
+    Ok(TreeHeightmap {
+        dem,
+        compile,
+        columns: started.elapsed(),
+    })
 }
 
 /// Runs `karstic heightmap`.
 pub(super) fn run(args: HeightmapArgs) -> anyhow::Result<()> {
     let outputs = dem::files_written(&args.output)?;
     let started = Instant::now();
-    let dem = tree_heightmap(&args.tree, &args.grid, args.budget.max_memory, &outputs)?;
+    let made = tree_heightmap(&args.tree, &args.grid, args.budget.max_memory, &outputs)?;
+    let dem = made.dem;
     for n in &dem.notices {
         eprintln!("notice: {n}");
     }
@@ -92,11 +111,14 @@ pub(super) fn run(args: HeightmapArgs) -> anyhow::Result<()> {
         let [dx, dy] = dem.georef.cell_size_m();
         let (lo, hi) = hf.z_range().unwrap_or((f32::NAN, f32::NAN));
         eprintln!(
-            "wrote {}: {}×{} samples of {dx} × {dy} m, {}, z {lo:.2} … {hi:.2} m in {:.2} s",
+            "wrote {}: {}×{} samples of {dx} × {dy} m, {}, z {lo:.2} … {hi:.2} m; \
+             compile {:.3} s, columns {:.3} s, total {:.3} s",
             args.output.display(),
             hf.nx(),
             hf.ny(),
             dem.georef.crs.describe(),
+            made.compile.as_secs_f64(),
+            made.columns.as_secs_f64(),
             started.elapsed().as_secs_f64()
         );
     }

@@ -47,7 +47,7 @@ pub(super) fn run(args: TinArgs) -> anyhow::Result<()> {
     let budget = args.budget.max_memory;
     let started = Instant::now();
     let dem = if is_tree(&args.source) {
-        tree_heightmap(&args.source, &args.grid, budget, &outputs)?
+        tree_heightmap(&args.source, &args.grid, budget, &outputs)?.dem
     } else {
         let opts = ReadOptions {
             memory_budget: budget,

@@ -64,7 +64,10 @@ impl HeightmapGrid {
                     hf.extent(),
                 )
             }
-            None => (support.min, [0.0; 2], None, support),
+            None => {
+                let r = region.unwrap_or(support);
+                (r.min, [0.0; 2], None, r)
+            }
         };
         let step = match (cell, native) {
             (Some(c), _) => [c, c],

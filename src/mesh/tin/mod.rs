@@ -116,10 +116,23 @@ pub fn greedy(hf: &Heightfield, max_error: f64, budget: u64) -> Result<Tin, TinE
         nx,
         max_error,
         worst: Vec::new(),
+        faces: Vec::new(),
         queue: BinaryHeap::new(),
     };
     g.run(ny)?;
     Ok(g.into_tin(hf))
+}
+
+/// The grid indices of a vertex position (integers, exactly).
+fn grid(p: Point2<f64>) -> [i64; 2] {
+    [p.x as i64, p.y as i64]
+}
+
+/// A queue entry: the face's error (as f32 bits, which order like the numbers for
+/// errors ≥ 0) above its index. An entry whose key differs from its face's current one is
+/// stale; an f32 tie between an old and a new error only reorders equal errors.
+fn key(error: f64, face: usize) -> u64 {
+    (u64::from((error as f32).to_bits()) << 32) | face as u64
 }
 
 /// The state of a greedy insertion.
@@ -131,9 +144,10 @@ struct Greedy<'h> {
     max_error: f64,
     /// Each face's worst grid point, by face index.
     worst: Vec<Worst>,
-    /// `(error bits, face)` of the faces worse than the bound; errors are ≥ 0, so their
-    /// bits order like the numbers.
-    queue: BinaryHeap<(u64, InnerFace)>,
+    /// Each face's handle, by face index.
+    faces: Vec<InnerFace>,
+    /// The faces worse than the bound, by error: [`key`]s.
+    queue: BinaryHeap<u64>,
 }
 
 impl Greedy<'_> {
@@ -145,46 +159,49 @@ impl Greedy<'_> {
         for (i, j) in [(0, 0), (nx - 1, 0), (nx - 1, ny - 1), (0, ny - 1)] {
             last = Some(self.insert(i + nx * j, last)?);
         }
-        let faces: Vec<_> = self.dt.fixed_inner_faces().collect();
-        faces.into_iter().for_each(|f| self.scan(f));
+        let first: Vec<_> = self
+            .dt
+            .inner_faces()
+            .map(|f| (f.fix(), f.positions().map(grid)))
+            .collect();
+        first.into_iter().for_each(|(f, c)| self.scan(f, c));
         let mut star = Vec::new();
-        while let Some((bits, face)) = self.queue.pop() {
+        while let Some(top) = self.queue.pop() {
+            let face = self.faces[top as u32 as usize];
             let w = self.worst[face.index()];
-            if w.error.to_bits() != bits {
+            if key(w.error, face.index()) != top || w.error <= self.max_error {
                 continue; // the face changed since it was queued
             }
             let hint = self.dt.face(face).vertices()[0].fix();
             let v = self.insert(w.at, Some(hint))?;
             star.clear();
-            star.extend(
-                self.dt
-                    .vertex(v)
-                    .out_edges()
-                    .filter_map(|e| e.face().as_inner().map(|f| f.fix())),
-            );
-            for &f in &star {
-                self.scan(f);
+            // The star's faces with their corners, read off the edges out of `v`.
+            star.extend(self.dt.vertex(v).out_edges().filter_map(|e| {
+                let f = e.face().as_inner()?.fix();
+                let corners = [e.from(), e.to(), e.next().to()].map(|u| grid(u.position()));
+                Some((f, corners))
+            }));
+            for (f, c) in star.drain(..) {
+                self.scan(f, c);
             }
         }
         Ok(())
     }
 
-    /// Finds the worst grid point of `face` and queues the face if it is over the bound.
-    fn scan(&mut self, face: InnerFace) {
-        let corners = self
-            .dt
-            .face(face)
-            .positions()
-            .map(|p| [p.x as i64, p.y as i64]);
+    /// Finds the worst grid point of `face` (grid corners `corners`) and queues the face
+    /// if it is over the bound.
+    fn scan(&mut self, face: InnerFace, corners: [[i64; 2]; 3]) {
         let z = corners.map(|[i, j]| f64::from(self.h[i as usize + self.nx * j as usize]));
         let w = worst_point(corners, z, self.h, self.nx);
         let k = face.index();
         if self.worst.len() <= k {
             self.worst.resize(k + 1, Worst::default());
+            self.faces.resize(k + 1, face);
         }
         self.worst[k] = w;
+        self.faces[k] = face;
         if w.error > self.max_error {
-            self.queue.push((w.error.to_bits(), face));
+            self.queue.push(key(w.error, k));
         }
     }
 

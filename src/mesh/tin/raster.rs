@@ -1,6 +1,6 @@
 //! The grid points of one TIN triangle and the worst of them: a scan of the triangle's
-//! rows with exact integer edge tests (vertices sit on grid points), each row's span
-//! compared with the triangle's plane.
+//! rows, each row's span (from the edges' `x` at that row; vertices sit on grid points, so
+//! a small slack makes the rounding exact) compared with the triangle's plane.
 
 /// The grid point of a triangle farthest (vertically) from the triangle's plane.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -11,36 +11,26 @@ pub struct Worst {
     pub at: usize,
 }
 
-/// Row range of `x` where `a·x + k ≥ 0`, intersected with `lo..=hi` (integers).
-#[inline]
-fn half_plane(a: i64, k: i64, lo: i64, hi: i64) -> (i64, i64) {
-    if a > 0 {
-        // x ≥ −k / a, rounded up
-        (lo.max(-(k.div_euclid(a))), hi)
-    } else if a < 0 {
-        // x ≤ k / (−a), rounded down
-        (lo, hi.min(k.div_euclid(-a)))
-    } else if k >= 0 {
-        (lo, hi)
-    } else {
-        (1, 0)
-    }
-}
+/// Slack when rounding an edge's `x` at a row: the true `x` is a fraction with a
+/// denominator below 2³², so it is an integer or at least 2⁻³² away from one, far more
+/// than the rounding error of computing it.
+const SLACK: f64 = 1e-10;
 
-/// The worst grid point of the triangle with grid corners `t` (any orientation, not
-/// degenerate) over the samples `h` (row-major, `nx` per row), its corners excluded.
+/// The grid point of the triangle with grid corners `t` (any orientation) over the
+/// samples `h` (row-major, `nx` per row) farthest from the plane through `z`, its
+/// corners excluded.
 pub fn worst_point(t: [[i64; 2]; 3], z: [f64; 3], h: &[f32], nx: usize) -> Worst {
     let [a, mut b, mut c] = t;
     let [za, mut zb, mut zc] = z;
     let cross = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    if cross == 0 {
+        return Worst::default();
+    }
     if cross < 0 {
         std::mem::swap(&mut b, &mut c);
         std::mem::swap(&mut zb, &mut zc);
     }
     let det = cross.abs() as f64;
-    if det == 0.0 {
-        return Worst::default();
-    }
     // The plane z = za + gx·(x − ax) + gy·(y − ay).
     let (ux, uy, vx, vy) = (
         (b[0] - a[0]) as f64,
@@ -52,47 +42,103 @@ pub fn worst_point(t: [[i64; 2]; 3], z: [f64; 3], h: &[f32], nx: usize) -> Worst
     let gx = (dzb * vy - dzc * uy) / det;
     let gy = (dzc * ux - dzb * vx) / det;
 
-    // Edge p → q of a counter-clockwise triangle: r is inside when
-    // (qx − px)(ry − py) − (qy − py)(rx − px) ≥ 0, i.e. A·rx + K(ry) ≥ 0.
-    let edges = [(a, b), (b, c), (c, a)];
+    // Counter-clockwise, an edge p → q going up (qy > py) bounds the triangle on its
+    // right, one going down on its left; horizontal edges bound no row's span.
+    let mut left = [(0.0, 0.0, 0.0); 2];
+    let mut right = [(0.0, 0.0, 0.0); 2];
+    let (mut nl, mut nr) = (0, 0);
+    for (p, q) in [(a, b), (b, c), (c, a)] {
+        if q[1] == p[1] {
+            continue;
+        }
+        // x on the edge at row y: px + (y − py)·slope.
+        let e = (
+            p[0] as f64,
+            p[1] as f64,
+            (q[0] - p[0]) as f64 / (q[1] - p[1]) as f64,
+        );
+        if q[1] > p[1] {
+            right[nr] = e;
+            nr += 1;
+        } else {
+            left[nl] = e;
+            nl += 1;
+        }
+    }
     let y0 = a[1].min(b[1]).min(c[1]);
     let y1 = a[1].max(b[1]).max(c[1]);
-    let xlo = a[0].min(b[0]).min(c[0]);
-    let xhi = a[0].max(b[0]).max(c[0]);
+    let at = |e: (f64, f64, f64), y: f64| e.0 + (y - e.1) * e.2;
+    // ceil and floor of grid coordinates (|v| < 2⁶³), inlined: the library calls cost
+    // more than the short rows they bound.
+    let ceil = |v: f64| {
+        let t = v as i64;
+        t + i64::from((t as f64) < v)
+    };
+    let floor = |v: f64| {
+        let t = v as i64;
+        t - i64::from((t as f64) > v)
+    };
     let mut worst = Worst::default();
     for y in y0..=y1 {
-        let (mut lo, mut hi) = (xlo, xhi);
-        for (p, q) in edges {
-            let ea = -(q[1] - p[1]);
-            let k = (q[0] - p[0]) * (y - p[1]) + (q[1] - p[1]) * p[0];
-            (lo, hi) = half_plane(ea, k, lo, hi);
+        let fy = y as f64;
+        let mut lo = i64::MIN;
+        for &e in &left[..nl] {
+            lo = lo.max(ceil(at(e, fy) - SLACK));
+        }
+        let mut hi = i64::MAX;
+        for &e in &right[..nr] {
+            hi = hi.min(floor(at(e, fy) + SLACK));
         }
         if lo > hi {
             continue;
         }
+        let (lo, hi) = (lo as usize, hi as usize);
         let row = y as usize * nx;
-        let base = za + gx * (lo - a[0]) as f64 + gy * (y - a[1]) as f64;
-        let span = &h[row + lo as usize..=row + hi as usize];
-        let corner_row = y == a[1] || y == b[1] || y == c[1];
-        let mut best = (worst.error, usize::MAX);
-        for (k, &s) in span.iter().enumerate() {
-            let e = (base + gx * k as f64 - f64::from(s)).abs();
-            if e > best.0 {
-                let x = lo + k as i64;
-                if corner_row && [a, b, c].contains(&[x, y]) {
-                    continue;
-                }
-                best = (e, k);
-            }
+        let base = za + gx * (lo as f64 - a[0] as f64) + gy * (fy - a[1] as f64);
+        let span = &h[row + lo..=row + hi];
+        // First the row's largest error in f32 (four lanes, vectorised), then — only
+        // where that can beat the worst so far — exact errors in f64 and where they are.
+        if row_max_f32(base, gx, span) <= worst.error {
+            continue;
         }
-        if best.1 != usize::MAX {
-            worst = Worst {
-                error: best.0,
-                at: row + lo as usize + best.1,
-            };
+        let err = |k: usize, s: f32| (base + gx * k as f64 - f64::from(s)).abs();
+        let corner_row = y == a[1] || y == b[1] || y == c[1];
+        for (k, &s) in span.iter().enumerate() {
+            let e = err(k, s);
+            if e > worst.error && !(corner_row && [a, b, c].contains(&[(lo + k) as i64, y])) {
+                worst = Worst {
+                    error: e,
+                    at: row + lo + k,
+                };
+            }
         }
     }
     worst
+}
+
+/// An upper bound of `max_k |base + gx·k − span[k]|`, computed in f32: the f32 maximum
+/// plus a bound of its rounding error.
+fn row_max_f32(base: f64, gx: f64, span: &[f32]) -> f64 {
+    let (b, g) = (base as f32, gx as f32);
+    let mut m = [0.0f32; 4];
+    let chunks = span.chunks_exact(4);
+    let rest = chunks.remainder();
+    for (c, q) in chunks.enumerate() {
+        for l in 0..4 {
+            let e = (b + g * (4 * c + l) as f32 - q[l]).abs();
+            m[l] = if e > m[l] { e } else { m[l] };
+        }
+    }
+    let at = span.len() - rest.len();
+    for (l, &s) in rest.iter().enumerate() {
+        let e = (b + g * (at + l) as f32 - s).abs();
+        m[l] = if e > m[l] { e } else { m[l] };
+    }
+    let most = f64::from(m[0].max(m[1]).max(m[2]).max(m[3]));
+    // Each of the plane's roundings (its base and slope to f32, the product, the sum) and
+    // the difference's is at most ε times the magnitudes involved.
+    let scale = base.abs() + gx.abs() * span.len() as f64 + most;
+    most + 8.0 * f64::from(f32::EPSILON) * scale
 }
 
 #[cfg(test)]
