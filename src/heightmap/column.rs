@@ -90,7 +90,7 @@ impl<'t> Columns<'t> {
             return Some(band.hi);
         }
         let hit = self.tracer.trace(&ray, (0.0, band.width()), &self.params);
-        hit.hit().then(|| band.hi - hit.t)
+        hit.hit().then_some(band.hi - hit.t)
     }
 }
 

@@ -79,7 +79,7 @@ impl HeightmapGrid {
             }
         };
         let rect = region.unwrap_or(extent);
-        if !(rect.min.x < rect.max.x && rect.min.y < rect.max.y) || !rect.min.is_finite() {
+        if !(rect.min.x < rect.max.x && rect.min.y < rect.max.y && rect.min.is_finite()) {
             return invalid(format!("the heightmap region {rect:?} is empty"));
         }
         // Lattice indices inside the rectangle (a millionth of a cell of slack).
