@@ -144,8 +144,9 @@ struct Greedy<'h> {
     max_error: f64,
     /// Each face's worst grid point, by face index.
     worst: Vec<Worst>,
-    /// Each face's handle, by face index.
-    faces: Vec<InnerFace>,
+    /// Each face's handle and one of its corners (where insertions into it start
+    /// walking), by face index.
+    faces: Vec<(InnerFace, FixedVertexHandle)>,
     /// The faces worse than the bound, by error: [`key`]s.
     queue: BinaryHeap<u64>,
 }
@@ -162,17 +163,16 @@ impl Greedy<'_> {
         let first: Vec<_> = self
             .dt
             .inner_faces()
-            .map(|f| (f.fix(), f.positions().map(grid)))
+            .map(|f| (f.fix(), f.positions().map(grid), f.vertices()[0].fix()))
             .collect();
-        first.into_iter().for_each(|(f, c)| self.scan(f, c));
+        first.into_iter().for_each(|(f, c, v)| self.scan(f, c, v));
         let mut star = Vec::new();
         while let Some(top) = self.queue.pop() {
-            let face = self.faces[top as u32 as usize];
+            let (face, hint) = self.faces[top as u32 as usize];
             let w = self.worst[face.index()];
             if key(w.error, face.index()) != top || w.error <= self.max_error {
                 continue; // the face changed since it was queued
             }
-            let hint = self.dt.face(face).vertices()[0].fix();
             let v = self.insert(w.at, Some(hint))?;
             star.clear();
             // The star's faces with their corners, read off the edges out of `v`.
@@ -182,24 +182,24 @@ impl Greedy<'_> {
                 Some((f, corners))
             }));
             for (f, c) in star.drain(..) {
-                self.scan(f, c);
+                self.scan(f, c, v);
             }
         }
         Ok(())
     }
 
-    /// Finds the worst grid point of `face` (grid corners `corners`) and queues the face
-    /// if it is over the bound.
-    fn scan(&mut self, face: InnerFace, corners: [[i64; 2]; 3]) {
+    /// Finds the worst grid point of `face` (grid corners `corners`, one of them the
+    /// vertex `corner`) and queues the face if it is over the bound.
+    fn scan(&mut self, face: InnerFace, corners: [[i64; 2]; 3], corner: FixedVertexHandle) {
         let z = corners.map(|[i, j]| f64::from(self.h[i as usize + self.nx * j as usize]));
         let w = worst_point(corners, z, self.h, self.nx);
         let k = face.index();
         if self.worst.len() <= k {
             self.worst.resize(k + 1, Worst::default());
-            self.faces.resize(k + 1, face);
+            self.faces.resize(k + 1, (face, corner));
         }
         self.worst[k] = w;
-        self.faces[k] = face;
+        self.faces[k] = (face, corner);
         if w.error > self.max_error {
             self.queue.push(key(w.error, k));
         }
