@@ -79,18 +79,18 @@ def main():
         # The samples exactly as written (three decimals), float32 as karstic reads them.
         z = np.loadtxt(asc, skiprows=6, dtype=np.float32)
 
+        env = dict(os.environ, RAYON_NUM_THREADS="1")
+        out = os.path.join(tmp, "tin.glb")
         delatin, delatin_cpu = [], []
+        ours, totals, cpu_totals, report = [], [], [], ""
+        # The two alternate, run by run, so a change of load on the shared machine
+        # falls on both.
         for _ in range(args.runs):
             t, c = time.perf_counter(), time.process_time()
             d = Delatin(z, max_error=MAX_ERROR)
             delatin.append(time.perf_counter() - t)
             delatin_cpu.append(time.process_time() - c)
-        d_tris, d_err = len(d.triangles), d.error
 
-        env = dict(os.environ, RAYON_NUM_THREADS="1")
-        out = os.path.join(tmp, "tin.glb")
-        ours, totals, cpu_totals, report = [], [], [], ""
-        for _ in range(args.runs):
             before = resource.getrusage(resource.RUSAGE_CHILDREN)
             t = time.perf_counter()
             run = subprocess.run(
@@ -104,6 +104,7 @@ def main():
                 sys.exit(f"karstic tin failed:\n{run.stderr}")
             report = run.stderr.strip()
             ours.append(float(re.search(r"triangulation ([0-9.]+) s", report).group(1)))
+        d_tris, d_err = len(d.triangles), d.error
         k_tris = int(re.search(r"(\d+) triangles", report).group(1))
         k_err = float(re.search(r"max error ([0-9.]+) m", report).group(1))
 
