@@ -26,6 +26,13 @@ pub(super) struct GridArgs {
     tolerance: Option<f32>,
 }
 
+impl GridArgs {
+    /// Whether any of the flags was given.
+    pub(super) fn any(&self) -> bool {
+        self.cell.is_some() || self.region.is_some() || self.tolerance.is_some()
+    }
+}
+
 /// Top surface of the final 3D terrain, one elevation per column.
 #[derive(Args, Debug)]
 pub(super) struct HeightmapArgs {

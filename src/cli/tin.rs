@@ -25,7 +25,7 @@ pub(super) struct TinArgs {
     /// Largest vertical distance allowed between the TIN and a grid point, metres.
     #[arg(long, value_name = "METRES")]
     max_error: f64,
-    /// Where a tree's heightmap samples lie (ignored for DEM sources).
+    /// Where a tree's heightmap samples lie (trees only).
     #[command(flatten)]
     grid: GridArgs,
     /// No summary.
@@ -49,6 +49,12 @@ pub(super) fn run(args: TinArgs) -> anyhow::Result<()> {
     let dem = if is_tree(&args.source) {
         tree_heightmap(&args.source, &args.grid, budget, &outputs)?.dem
     } else {
+        anyhow::ensure!(
+            !args.grid.any(),
+            "{}: --cell, --region and --tolerance place a tree's heightmap; a DEM is \
+             triangulated on its own grid",
+            args.source.display()
+        );
         let opts = ReadOptions {
             memory_budget: budget,
             ..ReadOptions::default()

@@ -34,9 +34,12 @@ pub enum TinError {
         "the heightfield has {0} nodata samples: a TIN needs every grid point (fill the voids first)"
     )]
     NoData(usize),
-    /// The grid is too large for the triangulation's indices or the memory budget.
+    /// The triangulation would exceed the memory budget.
     #[error(transparent)]
     Budget(#[from] crate::io::IoError),
+    /// The grid has more points than the triangulation can number.
+    #[error("a {0}×{1} grid has more points than a TIN can index (2³¹)")]
+    TooLarge(usize, usize),
     /// The triangulation refused a point (cannot happen with grid points).
     #[error("triangulation: {0}")]
     Triangulation(String),
@@ -104,12 +107,10 @@ pub fn greedy(hf: &Heightfield, max_error: f64, budget: u64) -> Result<Tin, TinE
         points.saturating_mul(BYTES_PER_VERTEX),
         budget,
     )?;
-    // spade numbers faces with u32: at most twice the points.
-    crate::io::check_budget(
-        format!("the {nx}×{ny} grid's face indices (at most 2³¹ points)"),
-        points,
-        1 << 31,
-    )?;
+    // spade and the queue number faces with u32: at most twice the points.
+    if points > 1 << 31 {
+        return Err(TinError::TooLarge(nx, ny));
+    }
     let mut g = Greedy {
         dt: Delaunay::new(),
         h: hf.samples(),
