@@ -203,4 +203,20 @@ fn cli_writes_a_valid_gltf_tin_of_a_dem_and_of_a_tree() {
     ]);
     assert!(err.contains("triangles"), "{err}");
     gltf_validator::assert_valid(&tree);
+    // Heightmap flags place a tree's samples; a DEM keeps its own grid.
+    let o = Command::new(env!("CARGO_BIN_EXE_karstic"))
+        .args([
+            "tin",
+            "trees/data/jacksboro_crop.asc",
+            "-o",
+            o,
+            "--max-error",
+            "1",
+        ])
+        .args(["--cell", "30"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--cell"), "{err}");
 }

@@ -60,6 +60,8 @@ pub(super) struct TreeHeightmap {
     pub compile: Duration,
     /// Finding the columns' tops.
     pub columns: Duration,
+    /// Tree-frame position of the heightmap's sample `(0, 0)`.
+    pub origin: glam::Vec2,
 }
 
 /// Loads `tree` (refusing `outputs` among its inputs) and computes its heightmap.
@@ -100,6 +102,7 @@ pub(super) fn tree_heightmap(
         dem,
         compile,
         columns: started.elapsed(),
+        origin: layout.origin,
     })
 }
 

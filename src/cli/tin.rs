@@ -7,6 +7,7 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Args;
 use karstic::dem::{self, ReadOptions};
+use karstic::heightmap::trim_nodata_border;
 use karstic::mesh::export::{self, ExportOptions};
 use karstic::mesh::tin;
 
@@ -16,8 +17,9 @@ use super::heightmap::{GridArgs, tree_heightmap};
 /// Triangulated irregular network within a vertical error of every grid point.
 #[derive(Args, Debug)]
 pub(super) struct TinArgs {
-    /// A DEM (.tif, .png + sidecar, .asc, .hgt) or a tree file (.ron, whose heightmap is
-    /// triangulated).
+    /// A DEM (.tif, .png + sidecar, .asc, .hgt; the TIN is in its local frame, south-west
+    /// sample at the origin) or a tree file (.ron: its heightmap is triangulated, less
+    /// the nodata border where the terrain ends, in the tree's frame).
     source: PathBuf,
     /// Output mesh: .glb, .gltf (+ .bin), .obj or .ply.
     #[arg(short, long)]
@@ -47,7 +49,16 @@ pub(super) fn run(args: TinArgs) -> anyhow::Result<()> {
     let budget = args.budget.max_memory;
     let started = Instant::now();
     let dem = if is_tree(&args.source) {
-        tree_heightmap(&args.source, &args.grid, budget, &outputs)?.dem
+        // In the tree's frame, like the meshes of `karstic build`; the ring where the
+        // implicit terrain ends has no top: triangulate inside it.
+        let made = tree_heightmap(&args.source, &args.grid, budget, &outputs)?;
+        let mut dem = made.dem;
+        dem.heightfield = dem.heightfield.with_origin(made.origin);
+        let dem = trim_nodata_border(dem);
+        for n in &dem.notices {
+            eprintln!("notice: {n}");
+        }
+        dem
     } else {
         anyhow::ensure!(
             !args.grid.any(),

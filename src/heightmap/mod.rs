@@ -173,3 +173,113 @@ pub fn heightmap(
         notices,
     })
 }
+
+/// `dem` without the rows and columns of its border that hold nodata, peeled from the
+/// outside in (the ring where the implicit terrain ends, around a heightmap of a DEM
+/// scene), its grid's origin and its georeference moved to match; `dem` itself when
+/// nothing is peeled or fewer than 2×2 samples would stay.
+pub fn trim_nodata_border(dem: Dem) -> Dem {
+    let hf = &dem.heightfield;
+    let (nx, ny) = (hf.nx(), hf.ny());
+    // Nodata fraction of row j over columns i0..i1, and of column i over rows j0..j1.
+    let row = |j: usize, i0: usize, i1: usize| {
+        (i0..i1).filter(|&i| hf.at(i, j).is_nan()).count() as f64 / (i1 - i0) as f64
+    };
+    let col = |i: usize, j0: usize, j1: usize| {
+        (j0..j1).filter(|&j| hf.at(i, j).is_nan()).count() as f64 / (j1 - j0) as f64
+    };
+    let (mut i0, mut i1, mut j0, mut j1) = (0, nx, 0, ny);
+    // Peel the border line with the most nodata first, so that a ring of nodata goes as
+    // whole lines and does not eat the rows it crosses.
+    while i1 - i0 >= 2 && j1 - j0 >= 2 {
+        let sides = [
+            row(j0, i0, i1),
+            row(j1 - 1, i0, i1),
+            col(i0, j0, j1),
+            col(i1 - 1, j0, j1),
+        ];
+        let (side, &most) = sides
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(&a.0)))
+            .expect("four sides");
+        if most == 0.0 {
+            break;
+        }
+        match side {
+            0 => j0 += 1,
+            1 => j1 -= 1,
+            2 => i0 += 1,
+            _ => i1 -= 1,
+        }
+    }
+    if (i0, i1, j0, j1) == (0, nx, 0, ny) || i1 - i0 < 2 || j1 - j0 < 2 {
+        return dem;
+    }
+    let z = (j0..j1)
+        .flat_map(|j| (i0..i1).map(move |i| hf.at(i, j)))
+        .collect();
+    let origin = hf.origin() + Vec2::new(i0 as f32, j0 as f32) * hf.cell();
+    let Ok(heightfield) = Heightfield::new(i1 - i0, j1 - j0, origin, hf.cell(), z) else {
+        return dem;
+    };
+    let g = &dem.georef;
+    let georef = Georef {
+        origin: [
+            g.origin[0] + i0 as f64 * g.step[0],
+            g.origin[1] + j0 as f64 * g.step[1],
+        ],
+        ..g.clone()
+    };
+    let mut notices = dem.notices.clone();
+    notices.push(format!(
+        "trimmed the nodata border: {nx}×{ny} → {}×{} samples",
+        i1 - i0,
+        j1 - j0
+    ));
+    Dem {
+        heightfield,
+        georef,
+        notices,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trimming_peels_the_nodata_rings_and_moves_the_georeference() {
+        let (nx, ny) = (9, 7);
+        // Two rings of nodata on the west and south, one on the east and north.
+        let z = (0..nx * ny)
+            .map(|k| {
+                let (i, j) = (k % nx, k / nx);
+                if i < 2 || j < 2 || i == nx - 1 || j == ny - 1 {
+                    f32::NAN
+                } else {
+                    k as f32
+                }
+            })
+            .collect();
+        let hf = Heightfield::new(nx, ny, Vec2::new(100.0, 200.0), Vec2::splat(10.0), z).unwrap();
+        let dem = Dem {
+            heightfield: hf,
+            georef: Georef {
+                origin: [5000.0, 7000.0],
+                ..Georef::local(10.0, 10.0)
+            },
+            notices: Vec::new(),
+        };
+        let t = trim_nodata_border(dem.clone());
+        let h = &t.heightfield;
+        assert_eq!((h.nx(), h.ny()), (6, 4));
+        assert_eq!(h.nodata_count(), 0);
+        assert_eq!(h.origin(), Vec2::new(120.0, 220.0));
+        assert_eq!(h.at(0, 0), dem.heightfield.at(2, 2));
+        assert_eq!(t.georef.origin, [5020.0, 7020.0]);
+        // Nothing to peel: unchanged.
+        let again = trim_nodata_border(t.clone());
+        assert_eq!(again.heightfield, t.heightfield);
+    }
+}
