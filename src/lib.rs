@@ -11,6 +11,7 @@ pub mod analysis;
 pub mod curves;
 pub mod dem;
 pub mod field;
+pub mod heightmap;
 pub mod io;
 pub mod job;
 pub mod mesh;

@@ -58,6 +58,9 @@ karstic render trees/floating_island.ron -o floating_island.png --quiet
 karstic render trees/blobs.ron -o blobs.png --cost blobs_cost.png --quiet
 karstic build trees/arch.ron -o arch_mesh.obj --res 40 --quiet
 karstic masks trees/jacksboro_caves.ron -o masks --cell 5 --box 3300 4840 480 4860 5330 1100 --quiet
+karstic render trees/jacksboro_caves.ron -o heightmap_tree.png --quiet
+karstic heightmap trees/jacksboro_caves.ron -o top.tif --cell 2.5 --region 4300 4700 4900 5200
+karstic render trees/heightmap_top.ron -o heightmap_top.png --camera 4900 4380 780 4480 4990 690 --fov 40 --quiet
 ";
 
 /// What [`COMMANDS`] write that becomes a picture, and the picture's name in `docs/img/`.
@@ -82,6 +85,8 @@ const PICTURES: &[(&str, &str)] = &[
     ("arch_mesh.obj", "arch_mesh.png"),
     ("masks/jacksboro_caves_cave.png", "masks_cave.png"),
     ("masks/jacksboro_caves_flow.png", "masks_flow.png"),
+    ("heightmap_tree.png", "heightmap_tree.png"),
+    ("heightmap_top.png", "heightmap_top.png"),
 ];
 
 /// Whether [`PICTURES`] makes a picture named `name`.
@@ -106,7 +111,7 @@ const UNAWARE_GROUND: f32 = 80.0;
 /// before amplification, seen as the main job sees it), and `arch_unaware.ron`, its arch
 /// volume built without the terrain (`on_terrain: false`) but with a ground curve under
 /// the apex, united with the terrain — what a Feature Volume did to a terrain before
-/// `Replace`.
+/// `Replace`; and `heightmap_top.ron`, the main job's heightmap as a scene.
 fn prepare(trees: &Path) {
     let main = karstic::scene::load(trees.join("jacksboro_caves.ron"))
         .expect("the main job's tree")
@@ -132,6 +137,10 @@ fn prepare(trees: &Path) {
         let path = trees.join(file);
         std::fs::write(&path, scene.to_ron()).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     };
+    // The main job's heightmap around the arch (`top.tif`, written by COMMANDS at the
+    // sandbox's root) as the only node of a scene.
+    let top = "(version: 1, root: Heightfield(source: \"../top.tif\", falloff: 5.0, placement: (4300, 4700)))";
+    std::fs::write(trees.join("heightmap_top.ron"), top).expect("heightmap_top.ron");
     write(
         "jacksboro_bare.ron",
         Scene {

@@ -1,14 +1,31 @@
 //! The tools of the optional checks, named in the log: `.ci/run` runs this module first
 //! with `--nocapture`, so its output says which GPU adapter the GPU comparisons use, which
-//! Khronos glTF validator and which trimesh the export tests use. Where a `KARSTIC_REQUIRE_*`
+//! Khronos glTF validator and which trimesh the export tests use, and which GDAL the
+//! heightmap export tests read their files back with. Where a `KARSTIC_REQUIRE_*`
 //! variable is set (tests/common/optional.rs) a missing tool fails here first.
 
-use crate::common::{gpu, trimesh_version};
+use crate::common::{REQUIRE_GDAL, gpu, trimesh_version, unavailable};
 use crate::gltf_validator::{khronos_validate, version};
 
 use glam::Vec3;
 use karstic::mesh::Mesh;
 use karstic::mesh::export::{self, ExportOptions};
+
+#[test]
+fn gdalinfo_runs() {
+    match std::process::Command::new("gdalinfo")
+        .arg("--version")
+        .output()
+    {
+        Ok(o) if o.status.success() => {
+            println!(
+                "optional checks: {}",
+                String::from_utf8_lossy(&o.stdout).trim()
+            );
+        }
+        other => unavailable(REQUIRE_GDAL, &format!("gdalinfo cannot run ({other:?})")),
+    }
+}
 
 #[test]
 fn gpu_adapter_opens() {

@@ -4,10 +4,12 @@ mod build;
 mod curves;
 mod dem;
 mod eval;
+mod heightmap;
 mod masks;
 mod render;
 mod run;
 mod sample;
+mod tin;
 mod tree;
 
 use std::path::Path;
@@ -47,6 +49,10 @@ enum Command {
     Masks(masks::MasksArgs),
     /// Feature Curves: run the voxel pipeline on a `FeatureVolume` file.
     Curves(curves::CurvesArgs),
+    /// Write the top surface of a tree's 3D terrain as a georeferenced DEM (.tif, .png, .asc).
+    Heightmap(heightmap::HeightmapArgs),
+    /// Triangulate a DEM or a tree's heightmap within a vertical error (greedy insertion).
+    Tin(tin::TinArgs),
 }
 
 /// The `--max-memory` flag of every command that reads or builds grids and images.
@@ -104,6 +110,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Render(a) => render::run(a),
         Command::Masks(a) => masks::run(a),
         Command::Curves(a) => curves::run(a),
+        Command::Heightmap(a) => heightmap::run(a),
+        Command::Tin(a) => tin::run(a),
     }
 }
 

@@ -21,6 +21,7 @@ pub mod polygonize;
 pub mod sample;
 pub mod stats;
 pub mod tables;
+pub mod tin;
 
 pub use dense::{DenseGrid, mc_dense};
 pub use grid::GridSpec;

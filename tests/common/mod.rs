@@ -23,7 +23,7 @@ pub use blobs::Blobs;
 pub use frames::{assert_frames_match, depth_agreement};
 pub use gpu::{assert_probes_match, gpu};
 pub use lipschitz::check_segment_lipschitz;
-pub use optional::{REQUIRE_GLTF_VALIDATOR, REQUIRE_GPU, unavailable};
+pub use optional::{REQUIRE_GDAL, REQUIRE_GLTF_VALIDATOR, REQUIRE_GPU, unavailable};
 pub use rng::Rng;
 pub use sphere::SigmaSphere;
 pub use terrain::Terrain;

@@ -1,8 +1,8 @@
 //! Checks that need a tool a machine may lack: the GPU comparisons need an adapter, the
 //! glTF export tests need Node and the Khronos validator, the import checks Python and
-//! trimesh. Locally a missing tool prints a notice and the check is skipped; where the
-//! tool's `KARSTIC_REQUIRE_*` variable is set (to anything but empty or `0`; `.ci/run`
-//! sets them all) its absence fails the test.
+//! trimesh, the heightmap export tests GDAL's `gdalinfo`. Locally a missing tool prints a
+//! notice and the check is skipped; where the tool's `KARSTIC_REQUIRE_*` variable is set
+//! (to anything but empty or `0`; `.ci/run` sets them all) its absence fails the test.
 
 /// Makes a missing GPU adapter a test failure.
 pub const REQUIRE_GPU: &str = "KARSTIC_REQUIRE_GPU";
@@ -12,6 +12,9 @@ pub const REQUIRE_GLTF_VALIDATOR: &str = "KARSTIC_REQUIRE_GLTF_VALIDATOR";
 
 /// Makes a missing Python or trimesh (the import checks of the exports) a test failure.
 pub const REQUIRE_TRIMESH: &str = "KARSTIC_REQUIRE_TRIMESH";
+
+/// Makes a missing `gdalinfo` (GDAL's command-line tools) a test failure.
+pub const REQUIRE_GDAL: &str = "KARSTIC_REQUIRE_GDAL";
 
 /// Whether the environment variable `var` requires its tool: set, not empty, not `0`.
 fn required(var: &str) -> bool {
