@@ -134,6 +134,11 @@ pub fn feature_view(
     let centre = feature.center();
     let reach = feature.radius().max(1.0);
     let probe_h = (PROBE_WIDTH * height / width).max(8);
+    // The probes see the feature's box from at most `reach` away: the tree pruned to the
+    // ball of the eyes (exact there) is far cheaper to trace than the whole terrain.
+    let near = Aabb::new(centre - reach, centre + reach).dilate(1e-3 * reach);
+    let pruned = field.prune(&near);
+    let field = pruned.as_deref().unwrap_or(field);
     let mut best: Option<(usize, Camera, Vec<Vec3>)> = None;
     for e in ELEVATIONS {
         for a in 0..AZIMUTHS {
