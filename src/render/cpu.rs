@@ -203,7 +203,9 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
                 };
             }
             let lit = match shadow {
-                Some((r, span)) if shadows.occluded(&r, span, &s.trace) => 0.0,
+                Some((r, span)) if shadows.occluded(&r, span, &shadow_params(&s.trace, tr.t)) => {
+                    0.0
+                }
                 _ => 1.0,
             };
             let p = ray.at(tr.t);
@@ -215,6 +217,16 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
             }
         })
         .collect()
+}
+
+/// The tracing parameters of a shadow ray from a hit at distance `t_hit`: its tolerance
+/// starts at the pixel's footprint there, not at `ε` — finer shadow detail than the pixel
+/// cannot show, and grazing shadow rays no longer crawl along the slope they leave.
+fn shadow_params(primary: &TraceParams, t_hit: f32) -> TraceParams {
+    TraceParams {
+        epsilon: primary.epsilon + primary.cone * t_hit,
+        ..*primary
+    }
 }
 
 /// The share of the sky seen from the surface point `p` with outward normal `n` and
