@@ -117,9 +117,7 @@ fn main_preview_reads_as_terrain_and_each_feature_gets_a_view() {
     let on_arch = |k: usize| {
         let t = depth[k];
         let p = cam.pixel_ray(k as u32 % w, k as u32 / w).at(t);
-        t.is_finite()
-            && feature.contains(p)
-            && materials.off_ground(p).abs() > materials.feature_depth.1
+        t.is_finite() && feature.contains(p) && materials.feature(p) >= 1.0
     };
     let through = (0..cam.height as usize).any(|j| {
         let row: Vec<usize> = (0..w as usize).map(|i| i + j * w as usize).collect();

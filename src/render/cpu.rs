@@ -13,9 +13,7 @@ use super::shade::{AO_SAMPLES, Shading, ambient_occlusion, to_srgb8};
 use super::trace::{Method, Trace, TraceParams, Tracer, outward};
 use glam::Vec3;
 
-use crate::dem::HeightfieldField;
 use crate::field::{Aabb, Field, ISO, Tree};
-use std::sync::Arc;
 
 /// Side of the square tiles handed to rayon, pixels.
 pub const TILE: u32 = 16;
@@ -41,13 +39,6 @@ impl RenderSettings {
             shading: Shading::for_scene(support),
             materials: Materials::for_scene(support, None),
         }
-    }
-
-    /// The same settings with the scene's terrain, which tells features from ground
-    /// ([`Materials::ground`]).
-    pub fn with_ground(mut self, ground: Option<Arc<HeightfieldField>>) -> Self {
-        self.materials.ground = ground;
-        self
     }
 }
 

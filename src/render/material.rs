@@ -39,10 +39,6 @@ pub struct Cover {
     pub dry: f32,
     /// Snow over soil and grass above the snow line (0 without one).
     pub snow: f32,
-    /// The surface belongs to a feature: away from the ground, above or below it.
-    pub feature: f32,
-    /// The surface lies under the ground or faces down: a cave or an overhang.
-    pub under: f32,
 }
 
 /// Altitude snow, when a tree asks for it.
@@ -140,34 +136,32 @@ impl Materials {
         if h.is_finite() { p.z - h } else { 0.0 }
     }
 
+    /// How much `p` belongs to a feature, in `[0, 1]`: 1 farther than
+    /// `feature_depth.1` above or below the ground, 0 nearer than `feature_depth.0`.
+    pub fn feature(&self, p: Vec3) -> f32 {
+        let (d0, d1) = self.feature_depth;
+        smoothstep(d0, d1, self.off_ground(p).abs())
+    }
+
     /// The cover at `p` with outward unit normal `n`.
     pub fn cover(&self, p: Vec3, n: Vec3) -> Cover {
-        let off = self.off_ground(p);
-        let (d0, d1) = self.feature_depth;
-        let feature = smoothstep(d0, d1, off.abs());
         let wander = simplex(VARIATION_SEED, p / self.variation_wavelength);
         let nz = n.z + self.variation * wander;
-        let steep = 1.0 - smoothstep(self.rock_slope.0, self.rock_slope.1, nz);
+        let flat = smoothstep(self.rock_slope.0, self.rock_slope.1, nz);
         let soil = 1.0 - smoothstep(self.soil_slope.0, self.soil_slope.1, nz);
         let snow = self.snow_line.map_or(0.0, |s| {
-            smoothstep(
-                s.altitude - s.blend,
-                s.altitude + s.blend,
-                p.z + s.blend * wander,
-            ) * smoothstep(self.rock_slope.0, self.rock_slope.1, nz)
+            let (lo, hi) = (s.altitude - s.blend, s.altitude + s.blend);
+            smoothstep(lo, hi, p.z + s.blend * wander) * flat
         });
-        let under = smoothstep(d0, d1, -off).max(smoothstep(-0.1, -0.4, n.z));
         let patches = simplex(
             VARIATION_SEED ^ 1,
             p / (DRY_SCALE * self.variation_wavelength),
         );
         Cover {
-            rock: steep.max(feature),
+            rock: (1.0 - flat).max(self.feature(p)),
             soil,
             dry: smoothstep(-0.2, 0.5, patches),
             snow,
-            feature,
-            under,
         }
     }
 

@@ -134,11 +134,6 @@ pub fn feature_view(
     let centre = feature.center();
     let reach = feature.radius().max(1.0);
     let probe_h = (PROBE_WIDTH * height / width).max(8);
-    // The probes see the feature's box from at most `reach` away: the tree pruned to the
-    // ball of the eyes (exact there) is far cheaper to trace than the whole terrain.
-    let near = Aabb::new(centre - reach, centre + reach).dilate(1e-3 * reach);
-    let pruned = field.prune(&near);
-    let field = pruned.as_deref().unwrap_or(field);
     let mut best: Option<(usize, Camera, Vec<Vec3>)> = None;
     for e in ELEVATIONS {
         for a in 0..AZIMUTHS {
@@ -198,8 +193,6 @@ fn feature_points(field: &dyn Field, camera: &Camera, feature: &Aabb, m: &Materi
     let box_ = feature.dilate(0.02 * feature.radius());
     hit_points(field, camera)
         .into_iter()
-        .filter(|p| {
-            box_.contains(*p) && (m.ground.is_none() || m.off_ground(*p).abs() > m.feature_depth.1)
-        })
+        .filter(|p| box_.contains(*p) && (m.ground.is_none() || m.feature(*p) >= 1.0))
         .collect()
 }
