@@ -239,9 +239,15 @@ fn grid_cell(o: u32, x: f32, y: f32) -> Cell {
 }
 
 fn bilinear(o: u32, x: f32, y: f32) -> f32 {
+    return bilinear_at(o, u32(params[o + HEIGHT_OFFSET]), x, y);
+}
+
+// Bilinear value at (x, y) of the samples at `off` in `heights` on the grid of the
+// heightfield at `o` (its elevations, or its detail's roughness).
+fn bilinear_at(o: u32, off: u32, x: f32, y: f32) -> f32 {
     let c = grid_cell(o, x, y);
     let w = u32(c.w);
-    let k = c.off + u32(c.i) + w * u32(c.j);
+    let k = off + u32(c.i) + w * u32(c.j);
     let z00 = heights[k];
     let z10 = heights[k + 1u];
     let z01 = heights[k + w];
@@ -321,13 +327,35 @@ fn slope_under(o: u32, c: vec3<f32>, r: f32) -> f32 {
     return max(max(a, b), max(d, e));
 }
 
+// The detail A·m(x, y)·t(p) of the heightfield at `o` (height.rs eval).
+fn height_detail(o: u32, p: vec3<f32>) -> f32 {
+    let m = bilinear_at(o, u32(params[o + HEIGHT_DETAIL_ROUGH]), p.x, p.y);
+    return params[o + HEIGHT_DETAIL_AMPLITUDE] * m * fbm(o + HEIGHT_DETAIL_FBM, p);
+}
+
 fn heightfield(flags: u32, o: u32, p: vec3<f32>, c: vec3<f32>, r: f32) -> vec2<f32> {
     let fall = params[o + HEIGHT_FALLOFF];
     let slope = slope_under(o, c, r);
-    let value = sigma(elevation(flags, o, p.x, p.y) - p.z, fall);
+    var hp = elevation(flags, o, p.x, p.y);
     let hc = elevation(flags, o, c.x, c.y);
-    let l = sigma_slope(hc - slope * r - c.z - r, hc + slope * r - c.z + r, fall) * sqrt(1.0 + slope * slope);
-    return vec2<f32>(value, l);
+    var lo = hc - slope * r - c.z - r;
+    var hi = hc + slope * r - c.z + r;
+    var l = sqrt(1.0 + slope * slope);
+    if USE_HEIGHT_DETAIL && (flags & FLAG_DETAIL) != 0u {
+        let a = params[o + HEIGHT_DETAIL_AMPLITUDE];
+        let ld = params[o + HEIGHT_DETAIL_SLOPE];
+        let dp = height_detail(o, p);
+        var dc = dp;
+        if any(p != c) {
+            dc = height_detail(o, c);
+        }
+        hp += dp;
+        lo += max(dc - ld * r, -a);
+        hi += min(dc + ld * r, a);
+        l += ld;
+    }
+    let value = sigma(hp - p.z, fall);
+    return vec2<f32>(value, sigma_slope(lo, hi, fall) * l);
 }
 
 // M⁻¹p of the warp at `o`: WARP_MATRIX holds 3 rows of 4.

@@ -57,6 +57,7 @@ const SHAPE_ELLIPSOID: u32 = 5u; // Axis-aligned ellipsoid (`ellipsoid`).
 const FLAG_SHAPE_MASK: u32 = 255u; // The bits of `PRIM` and `NPRIM` flags holding the `shape`.
 const FLAG_SIGMA: u32 = 256u; // `PRIM`: σ profile instead of Wyvill.
 const FLAG_BICUBIC: u32 = 1u; // `HEIGHT`: Catmull-Rom bicubic interpolation instead of bilinear.
+const FLAG_DETAIL: u32 = 2u; // `HEIGHT`: detail amplification `h + A·m·t(p)` (`height::DETAIL_AMPLITUDE`).
 
 // `CONST` parameters.
 const CONST_VALUE: u32 = 0u; // The value.
@@ -107,7 +108,11 @@ const HEIGHT_CELL: u32 = 4u; // Sample spacing.
 const HEIGHT_NX: u32 = 5u; // Samples along x.
 const HEIGHT_NY: u32 = 6u; // Samples along y.
 const HEIGHT_OFFSET: u32 = 7u; // Offset of the samples in `heights`.
-const HEIGHT_PYRAMID: u32 = 8u; // Offsets in `heights` of the pyramid's levels `0 … n − 1` (`n` floats).
+const HEIGHT_DETAIL_AMPLITUDE: u32 = 8u; // With `flag::DETAIL`: the detail's amplitude `A` (Frasson et al. §5).
+const HEIGHT_DETAIL_SLOPE: u32 = 9u; // A bound of the detail's slope `|∇d| ≤ A·(L_m + L_t)`.
+const HEIGHT_DETAIL_ROUGH: u32 = 10u; // Offset in `heights` of the roughness `m` (one per sample, bilinear).
+const HEIGHT_DETAIL_FBM: u32 = 11u; // The detail's fBm `t` (`fbm`, `fbm::LEN` floats).
+const HEIGHT_PYRAMID: u32 = 18u; // Offsets in `heights` of the pyramid's levels `0 … n − 1` (`n` floats).
 
 // An encoded fBm (`super::noise::encode_fbm`), inside `NPRIM`, `TWARP` and `SFIELD` parameters.
 const FBM_INDEX: u32 = 0u; // Its index in `super::super::Tape::noises`.
@@ -188,6 +193,7 @@ const SF_LEVEL_LEN: u32 = 11u; // Floats in all.
 override USE_NPRIM: bool = true;
 override USE_HEIGHT: bool = true;
 override USE_BICUBIC: bool = true;
+override USE_HEIGHT_DETAIL: bool = true;
 override USE_SFIELD: bool = true;
 override USE_SF_CUBIC: bool = true;
 override USE_SF_NOISE: bool = true;

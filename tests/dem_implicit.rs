@@ -7,13 +7,20 @@ use crate::common::Rng;
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
-use karstic::dem::{Heightfield, HeightfieldField, HeightfieldSpec, ImplicitParams, Interpolation};
+use karstic::dem::{
+    DetailParams, Heightfield, HeightfieldField, HeightfieldSpec, ImplicitParams, Interpolation,
+};
 use karstic::field::falloff::sigma;
-use karstic::field::{Aabb, Field, ISO, Interval, Rect, ZBands};
+use karstic::field::{Aabb, Fbm, Field, ISO, Interval, Rect, ZBands};
 
 fn utm_leaf(r: f32, interp: Interpolation) -> HeightfieldField {
+    utm_leaf_with(r, interp, "")
+}
+
+/// The UTM DEM with `more` fields appended to its spec.
+fn utm_leaf_with(r: f32, interp: Interpolation, more: &str) -> HeightfieldField {
     let ron = format!(
-        "(source: \"../shared/data/dem/jacksboro_utm16n_90m.tif\", falloff: {r}, interpolation: {interp:?}, placement: Some((-1000.0, 500.0)))"
+        "(source: \"../shared/data/dem/jacksboro_utm16n_90m.tif\", falloff: {r}, interpolation: {interp:?}, placement: Some((-1000.0, 500.0)){more})"
     );
     let spec: HeightfieldSpec = ron::from_str(&ron).unwrap();
     spec.load(Path::new(env!("CARGO_MANIFEST_DIR"))).unwrap()
@@ -21,6 +28,11 @@ fn utm_leaf(r: f32, interp: Interpolation) -> HeightfieldField {
 
 /// A 40 × 30 grid of rolling hills with a nodata hole, cut by a triangle.
 fn synthetic(interp: Interpolation) -> HeightfieldField {
+    synthetic_with(interp, None)
+}
+
+/// [`synthetic`] with detail amplification.
+fn synthetic_with(interp: Interpolation, detail: Option<DetailParams>) -> HeightfieldField {
     let (nx, ny) = (40, 30);
     let z = (0..nx * ny)
         .map(|k| {
@@ -44,6 +56,7 @@ fn synthetic(interp: Interpolation) -> HeightfieldField {
             Vec2::new(120.0, 280.0),
         ]),
         interpolation: interp,
+        detail,
         ..ImplicitParams::with_falloff(25.0)
     };
     HeightfieldField::new(&hf, &params).unwrap()
@@ -55,7 +68,33 @@ fn leaves() -> Vec<(&'static str, HeightfieldField)> {
         ("utm bicubic", utm_leaf(60.0, Interpolation::Bicubic)),
         ("synthetic bilinear", synthetic(Interpolation::Bilinear)),
         ("synthetic bicubic", synthetic(Interpolation::Bicubic)),
+        (
+            "utm detail",
+            utm_leaf_with(
+                60.0,
+                Interpolation::Bicubic,
+                ", detail: Some((noise: (amplitude: 5, wavelength: 40, octaves: 4), steep: 0.6))",
+            ),
+        ),
+        (
+            "synthetic detail",
+            synthetic_with(
+                Interpolation::Bilinear,
+                Some(DetailParams {
+                    noise: Fbm::with(3, 60.0, 3),
+                    amplitude: 2.0,
+                    flat: 0.3,
+                    steep: 0.5,
+                    altitude: 0.5,
+                }),
+            ),
+        ),
     ]
+}
+
+/// The detail's largest displacement (0 without detail).
+fn reach(f: &HeightfieldField) -> f32 {
+    f.detail().map_or(0.0, |d| d.reach_total())
 }
 
 /// A random box around the support: sizes from a fraction of a cell to a large part.
@@ -234,12 +273,17 @@ fn elevation_answers_only_where_the_field_is_the_heightfield() {
                 );
                 let z = rng.range(e.z.lo, e.z.hi);
                 let v = f.value(xy.extend(z));
-                assert_eq!(
-                    v,
-                    sigma(h - z, f.params().falloff),
-                    "{name}: f is not σ(h − z) at {xy}, {z}"
-                );
-                assert_eq!(v > ISO, z < h, "{name}");
+                if f.detail().is_none() {
+                    assert_eq!(
+                        v,
+                        sigma(h - z, f.params().falloff),
+                        "{name}: f is not σ(h − z) at {xy}, {z}"
+                    );
+                }
+                // with detail, h is found by iteration: a hair of tolerance at the surface
+                if (z - h).abs() > 1e-3 * (1.0 + h.abs()) * reach(&f).min(1.0) {
+                    assert_eq!(v > ISO, z < h, "{name}: at {xy}, {z}, surface {h}");
+                }
             }
         }
         assert!(some > 100 && none > 100, "{name}: {some} Some, {none} None");
@@ -349,8 +393,8 @@ fn dem_cache_shares_decoded_files() {
     let a = HeightfieldSpec::new("../shared/data/dem/jacksboro_int16.tif", 100.0);
     let mut b = a.clone();
     b.vertical_scale = karstic::scene::Finite(-1.0);
-    let fa = a.load_with(base, &mut cache).unwrap();
-    let fb = b.load_with(base, &mut cache).unwrap();
+    let fa = a.load_with(base, &mut cache, 0).unwrap();
+    let fb = b.load_with(base, &mut cache, 0).unwrap();
     assert_eq!(
         cache.notices().len(),
         1,
@@ -407,7 +451,10 @@ fn small_boxes_near_the_terrain_have_sound_and_sharp_bounds() {
                     );
                 }
             }
-            if lift > 8.0 && f.elevation(&b.footprint()).is_some() {
+            // (with detail, steep ground is no graph of an elevation: its boxes count too)
+            let inside = f.elevation(&b.footprint()).is_some()
+                || (f.detail().is_some() && f.value(c.truncate().extend(h - 1.0)) > ISO);
+            if lift > 8.0 + reach(&f) && inside {
                 above += 1;
                 known += (iv.hi < ISO) as usize;
             }
@@ -419,6 +466,49 @@ fn small_boxes_near_the_terrain_have_sound_and_sharp_bounds() {
         assert!(
             known * 10 >= above * 9,
             "{name}: only {known} of {above} boxes above the ground are known to be air"
+        );
+    }
+}
+
+/// With detail, `height` is the top of the detailed terrain: solid just below it, empty
+/// just above it and all the way up past the detail's reach.
+#[test]
+fn detailed_height_is_the_top_of_the_surface() {
+    for (name, f) in leaves().into_iter().filter(|(_, f)| f.detail().is_some()) {
+        let mut rng = Rng(7);
+        let s = f.support();
+        let (r, a) = (f.params().falloff, reach(&f));
+        let mut checked = 0;
+        let mut moved = 0.0f32;
+        while checked < 2000 {
+            let xy = rng.in_box(&s).truncate();
+            if f.elevation(&Rect::new(xy, xy)).is_none()
+                && f.value(xy.extend(f.base_height(xy) - a - 1.0)) <= ISO
+            {
+                continue; // outside the eroded domain
+            }
+            let h = f.height(xy);
+            if h.is_nan() {
+                continue;
+            }
+            checked += 1;
+            moved = moved.max((h - f.base_height(xy)).abs());
+            let eps = 0.02;
+            assert!(
+                f.value(xy.extend(h - eps)) > ISO,
+                "{name}: not solid under {h} at {xy}"
+            );
+            for k in 1..40 {
+                let z = h + eps + (a + r) * k as f32 / 40.0;
+                assert!(
+                    f.value(xy.extend(z)) < ISO,
+                    "{name}: solid at {z} over the top {h} at {xy}"
+                );
+            }
+        }
+        assert!(
+            moved > 0.3 * a,
+            "{name}: the detail moved the surface by only {moved} m"
         );
     }
 }

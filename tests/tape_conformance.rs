@@ -141,6 +141,9 @@ conformance! {
         scene(&format!("Heightfield({DEM})"));
     heightfield_bicubic: [Op(op::HEIGHT), Flag(flag::BICUBIC), Feature("USE_BICUBIC")] =>
         scene(&format!("Heightfield({DEM}, interpolation: Bicubic)"));
+    heightfield_with_detail: [Op(op::HEIGHT), Flag(flag::DETAIL), Feature("USE_HEIGHT_DETAIL")] =>
+        scene(&format!("Heightfield({DEM}, interpolation: Bicubic, detail: (noise: (amplitude: 5, \
+         wavelength: 40, octaves: 4, seed_offset: 2), steep: 0.6))"));
     heightfield_placed_and_scaled: [Op(op::HEIGHT)] => scene(&format!(
         "Heightfield({DEM}, placement: (-300, 500), vertical_scale: 1.5, vertical_offset: -200, \
          base_depth: 80)"));

@@ -20,9 +20,14 @@
 //! The solid is the terrain inside `{e ≥ R}`, closed by side walls where `f_P = T`
 //! (`d = d* = R·√(1 − 2^(−1/3)) ≈ 0.454 R`, i.e. `e ≈ 0.546 R`) and a floor at
 //! `Δz.lo − d*`.
+//!
+//! With [`ImplicitParams::detail`], `h` becomes `h(x, y) + d(p)`, the 3D detail of Frasson
+//! et al. §5 ([`super::detail`]): the bounds widen by the detail's reach and slope, and
+//! [`HeightfieldField::height`] answers the detailed surface.
 
 use glam::{Vec2, Vec3};
 
+use super::detail::{Detail, DetailParams};
 use super::domain::Domain;
 use super::grid::{Heightfield, Interpolation};
 use super::pyramid::MinMaxPyramid;
@@ -53,6 +58,8 @@ pub struct ImplicitParams {
     pub domain: Option<Vec<Vec2>>,
     /// Interpolation between samples.
     pub interpolation: Interpolation,
+    /// Detail amplification (Frasson et al. §5), if any.
+    pub detail: Option<DetailParams>,
 }
 
 impl ImplicitParams {
@@ -66,6 +73,7 @@ impl ImplicitParams {
             placement: Vec2::ZERO,
             domain: None,
             interpolation: Interpolation::Bilinear,
+            detail: None,
         }
     }
 }
@@ -84,6 +92,7 @@ pub struct HeightfieldField {
     heights: MinMaxPyramid,
     slopes: MinMaxPyramid,
     lip_h: f32,
+    detail: Option<Detail>,
     support: Aabb,
     params: ImplicitParams,
     georef: Option<Georef>,
@@ -128,8 +137,14 @@ impl HeightfieldField {
         }
         let slopes = MinMaxPyramid::new(cx, cy, placed.cell_slopes(interp));
         let lip_h = slopes.total()[1].max(0.0);
+        let detail = p
+            .detail
+            .as_ref()
+            .map(|d| Detail::new(&placed, d))
+            .transpose()?;
+        let reach = detail.as_ref().map_or(0.0, Detail::reach_total);
         let r = p.falloff;
-        let dz = Interval::new(zmin - p.base_depth, zmax + r);
+        let dz = Interval::new(zmin - reach - p.base_depth, zmax + reach + r);
         let support = domain.bounds().extrude(Interval::new(dz.lo - r, dz.hi));
         Ok(HeightfieldField {
             hf: placed,
@@ -140,6 +155,7 @@ impl HeightfieldField {
             heights,
             slopes,
             lip_h,
+            detail,
             support,
             params: p.clone(),
             georef: None,
@@ -194,10 +210,46 @@ impl HeightfieldField {
         self.lip_h
     }
 
-    /// `h(xy)` in the tree frame (NaN outside the cells with a surface).
+    /// The detail amplification, if any.
+    pub fn detail(&self) -> Option<&Detail> {
+        self.detail.as_ref()
+    }
+
+    /// The DEM's elevation `h(xy)` in the tree frame, without detail (NaN outside the
+    /// cells with a surface).
     #[inline]
-    pub fn height(&self, xy: Vec2) -> f32 {
+    pub fn base_height(&self, xy: Vec2) -> f32 {
         self.hf.sample(xy, self.interp)
+    }
+
+    /// The elevation of the terrain surface over `xy` (NaN outside the cells with a
+    /// surface): `h(xy)`, or with detail the highest `z` where `h(xy) + d(xy, z) = z`.
+    ///
+    /// Found by stepping down from `h + A·m`, where `h + d − z ≤ 0`, by
+    /// `(z − h − d)/(1 + |∂d/∂z|)`: a step never passes a root, so it converges to the
+    /// highest one, linearly at worst (48 steps at most).
+    pub fn height(&self, xy: Vec2) -> f32 {
+        let h = self.base_height(xy);
+        let Some(d) = &self.detail else {
+            return h;
+        };
+        let reach = d.reach_at(xy);
+        if h.is_nan() || reach == 0.0 {
+            return h;
+        }
+        let rate = 1.0 + d.slope_z(reach);
+        let g = |z: f32| h + d.value(xy.extend(z)) - z;
+        let tol = 1e-5 * (h.abs() + reach);
+        let mut z = h + reach;
+        let mut gz = g(z);
+        for _ in 0..48 {
+            if gz >= -tol {
+                break;
+            }
+            z += gz / rate;
+            gz = g(z);
+        }
+        z
     }
 
     /// Vertical distance from `z` to `Δz` (0 inside).
@@ -239,12 +291,38 @@ impl HeightfieldField {
             return cells;
         }
         let c = (fp.min + fp.max) * 0.5;
-        let hc = self.height(c);
+        let hc = self.base_height(c);
         if hc.is_nan() {
             return cells;
         }
         let reach = slope * (fp.max - c).length() * (1.0 + 1e-5) + self.eps(hc.abs());
         Interval::new((hc - reach).max(cells.lo), (hc + reach).min(cells.hi))
+    }
+
+    /// `(range of d over b, A·max m)` for the detail over the cells `i0..=i1 × j0..=j1`
+    /// under `b` (zeros without detail): `|d| ≤ A·max m`, with `sharpen` narrowed around
+    /// the box's centre by the detail's slope (one more noise evaluation).
+    #[inline]
+    fn detail_range(
+        &self,
+        b: &Aabb,
+        (i0, i1, j0, j1): (usize, usize, usize, usize),
+        sharpen: bool,
+    ) -> (Interval, f32) {
+        let Some(d) = &self.detail else {
+            return (Interval::ZERO, 0.0);
+        };
+        let reach = d.reach(i0, i1, j0, j1);
+        if !sharpen {
+            return (Interval::new(-reach, reach), reach);
+        }
+        let c = b.center();
+        let (dc, rad) = (d.value(c), d.slope(reach) * b.radius() * (1.0 + 1e-5));
+        let eps = self.eps(reach);
+        (
+            Interval::new((dc - rad).max(-reach) - eps, (dc + rad).min(reach) + eps),
+            reach,
+        )
     }
 
     /// Range of the distance to `P` over `b`, from the clearance range `e`.
@@ -257,6 +335,23 @@ impl HeightfieldField {
         };
         let dz_hi = self.dist_z(z.lo).max(self.dist_z(z.hi));
         Interval::new(dxy.lo.hypot(dz_lo), dxy.hi.hypot(dz_hi))
+    }
+
+    /// The detail `d(p)` over the elevation `h`, or 0 where it cannot matter: without
+    /// detail, or where σ is saturated whatever it is (`|h − z| ≥ R + A·m`).
+    #[inline]
+    fn detail_at(&self, h: f32, p: Vec3) -> f32 {
+        match &self.detail {
+            Some(d) => {
+                let reach = d.reach_at(p.truncate());
+                if reach > 0.0 && (h - p.z).abs() < self.r + reach {
+                    reach * d.params().noise.value(p)
+                } else {
+                    0.0
+                }
+            }
+            None => 0.0,
+        }
     }
 
     /// A float tolerance for bands around elevations of magnitude `m`.
@@ -274,10 +369,11 @@ impl Field for HeightfieldField {
         if e <= 0.0 {
             return 0.0;
         }
-        let h = self.height(xy);
+        let h = self.base_height(xy);
         if h.is_nan() {
             return 0.0;
         }
+        let h = h + self.detail_at(h, p);
         sigma(h - p.z, self.r).min(self.prism((self.r - e).max(0.0), p.z))
     }
 
@@ -291,6 +387,12 @@ impl Field for HeightfieldField {
         if h.is_nan() {
             return (0.0, Vec3::ZERO);
         }
+        // h + d and ∇(h + d − z)
+        let (dd, gdd) = self
+            .detail
+            .as_ref()
+            .map_or((0.0, Vec3::ZERO), |d| d.value_grad(p));
+        let (h, gh) = (h + dd, gh.extend(-1.0) + gdd);
         let (ft, dft) = sigma_d(h - p.z, self.r);
         let dxy = (self.r - e).max(0.0);
         let (dz, gdz) = if p.z < self.dz.lo {
@@ -308,11 +410,7 @@ impl Field for HeightfieldField {
             let gd = (dxy * (-ge)).extend(dz * gdz) / d;
             (2.0 * ISO * g, gd * (2.0 * ISO * dg / self.r))
         };
-        if ft <= fp {
-            (ft, gh.extend(-1.0) * dft)
-        } else {
-            (fp, gfp)
-        }
+        if ft <= fp { (ft, gh * dft) } else { (fp, gfp) }
     }
 
     fn support(&self) -> Aabb {
@@ -330,8 +428,12 @@ impl Field for HeightfieldField {
             return Interval::ZERO;
         }
         let h = self.h_range_near(&fp, h, self.slopes.query(i0, i1, j0, j1)[1], e.lo);
+        let (dd, _) = self.detail_range(b, (i0, i1, j0, j1), true);
         let z = b.z();
-        let ft = sigma_interval(Interval::new(h.lo - z.hi, h.hi - z.lo), self.r);
+        let ft = sigma_interval(
+            Interval::new(h.lo + dd.lo - z.hi, h.hi + dd.hi - z.lo),
+            self.r,
+        );
         let d = self.dist_range(e, z);
         let fp = wyvill_interval(d.scale(1.0 / self.r)).scale(2.0 * ISO);
         let f = ft.min(fp);
@@ -343,7 +445,11 @@ impl Field for HeightfieldField {
     }
 
     fn lipschitz(&self) -> f32 {
-        let lt = sigma_max_slope(self.r) * (1.0 + self.lip_h * self.lip_h).sqrt();
+        let ld = self
+            .detail
+            .as_ref()
+            .map_or(0.0, |d| d.slope(d.reach_total()));
+        let lt = sigma_max_slope(self.r) * ((1.0 + self.lip_h * self.lip_h).sqrt() + ld);
         let lp = 2.0 * ISO * WYVILL_MAX_SLOPE / self.r * self.domain.lipschitz();
         lt.max(lp)
     }
@@ -363,7 +469,12 @@ impl Field for HeightfieldField {
         let lt = if h.is_empty() {
             0.0
         } else {
-            sigma_slope(Interval::new(h.lo - z.hi, h.hi - z.lo), self.r) * (1.0 + s * s).sqrt()
+            // |∇(h + d − z)| ≤ √(1 + s²) + |∇d|
+            // (the centre's detail would sharpen σ's slope only where it is small anyway)
+            let (dd, reach) = self.detail_range(b, (i0, i1, j0, j1), false);
+            let ld = self.detail.as_ref().map_or(0.0, |d| d.slope(reach));
+            let v = Interval::new(h.lo + dd.lo - z.hi, h.hi + dd.hi - z.lo);
+            sigma_slope(v, self.r) * ((1.0 + s * s).sqrt() + ld)
         };
         let d = self.dist_range(e, z);
         let lp = 2.0 * ISO * wyvill_slope(d.scale(1.0 / self.r)) / self.r * self.domain.lipschitz();
@@ -381,8 +492,13 @@ impl Field for HeightfieldField {
         if h.is_empty() {
             return;
         }
+        let reach = match (&self.detail, self.hf.cells_overlapping(fp)) {
+            (Some(d), Some((i0, i1, j0, j1))) => d.reach(i0, i1, j0, j1),
+            _ => 0.0,
+        };
+        let h = Interval::new(h.lo - reach, h.hi + reach);
         let eps = self.eps(h.lo.abs().max(h.hi.abs()));
-        // the terrain itself, z = h
+        // the terrain itself, z = h + d
         out.push(Interval::new(h.lo - eps, h.hi + eps).intersect(z));
         // the prism's walls and floor, f_P = T below the terrain
         let lower = self.dz.lo - (d_star * d_star - dxy.lo * dxy.lo).max(0.0).sqrt();
@@ -403,7 +519,11 @@ impl Field for HeightfieldField {
                 let p = origin + Vec3::new(i as f32, j as f32, 0.0) * step;
                 let xy = p.truncate();
                 let e = self.domain.clearance(xy);
-                let h = if e > 0.0 { self.height(xy) } else { f32::NAN };
+                let h = if e > 0.0 {
+                    self.base_height(xy)
+                } else {
+                    f32::NAN
+                };
                 let base = i + nx * j;
                 if h.is_nan() {
                     for k in 0..nz {
@@ -414,13 +534,23 @@ impl Field for HeightfieldField {
                 let dxy = (self.r - e).max(0.0);
                 for k in 0..nz {
                     let z = (origin + Vec3::new(i as f32, j as f32, k as f32) * step).z;
-                    out[base + plane * k] = sigma(h - z, self.r).min(self.prism(dxy, z));
+                    let hd = h + self.detail_at(h, xy.extend(z));
+                    out[base + plane * k] = sigma(hd - z, self.r).min(self.prism(dxy, z));
                 }
             }
         }
     }
 
+    /// Inside the eroded domain; with detail, only where `|∂d/∂z| ≤ ½` over `fp`, so that
+    /// `h + d − z` falls strictly with `z` and the surface is the graph of
+    /// [`HeightfieldField::height`] (elsewhere the noise may fold it into small overhangs).
     fn elevation(&self, fp: &Rect) -> Option<Elevation<'_>> {
+        if let Some(d) = &self.detail {
+            let (i0, i1, j0, j1) = self.hf.cells_overlapping(fp)?;
+            if d.slope_z(d.reach(i0, i1, j0, j1)) > 0.5 {
+                return None;
+            }
+        }
         (self.domain.clearance_range(fp).lo >= self.r).then_some(Elevation {
             source: self,
             z: self.dz,

@@ -10,6 +10,7 @@
 //!   georeference (CRS coordinates of that sample, in f64) lives beside it in [`Georef`], so
 //!   UTM eastings never pass through f32.
 //! * [`MinMaxPyramid`] ([`pyramid`]): conservative min/max over any footprint in O(1).
+//! * [`Detail`] ([`detail`]): detail amplification of the elevation (Frasson et al. §5).
 //! * [`HeightfieldField`] ([`implicit`]): the implicit terrain primitive of
 //!   Paris et al. 2019 §5.1, and [`HeightfieldSpec`] ([`spec`]) its node in tree files.
 //!
@@ -17,6 +18,7 @@
 //! returned in [`Dem::notices`] for the caller to show.
 
 pub mod asc;
+pub mod detail;
 mod domain;
 mod error;
 mod georef;
@@ -32,6 +34,7 @@ pub mod spec;
 
 use std::path::Path;
 
+pub use detail::{Detail, DetailParams};
 pub use error::DemError;
 pub use georef::{Crs, Georef, RasterType};
 pub use grid::{Heightfield, Interpolation};

@@ -12,6 +12,8 @@
 //!     domain: None,             // or Some([(x, y), ...]) polygon in the tree frame
 //!     interpolation: Bilinear,  // or Bicubic
 //!     cell_size: Some(30.0),    // resample to 30 m cells first
+//!     // rock-scale relief (Frasson et al. §5): 3D fBm, rougher on steep and high ground
+//!     detail: (noise: (amplitude: 4.0, wavelength: 48.0, octaves: 4), flat: 0.2),
 //! ))
 //! ```
 
@@ -21,10 +23,12 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
+use super::detail::DetailParams;
 use super::implicit::{HeightfieldField, ImplicitParams};
 use super::{Dem, DemError, Interpolation, ReadOptions};
+use crate::field::{Fbm, NoiseSpec};
 use crate::io::DEFAULT_MEMORY_BUDGET;
-use crate::scene::{Finite, NonNegative, P2, Positive};
+use crate::scene::{Finite, NonNegative, P2, Positive, Unit};
 
 fn one() -> Finite {
     Finite(1.0)
@@ -78,6 +82,54 @@ pub struct HeightfieldSpec {
     /// PNG sources without a sidecar: the elevations of raw 0 and of the largest raw value.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub z_range: Option<(Finite, Finite)>,
+    /// Detail amplification (Frasson et al. §5): rock-scale 3D relief on the DEM.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub detail: Option<DetailSpec>,
+}
+
+fn default_flat() -> Unit {
+    Unit(0.25)
+}
+
+fn default_steep() -> Positive {
+    Positive(1.0)
+}
+
+fn default_altitude() -> Unit {
+    Unit(0.5)
+}
+
+/// The `detail:` of a heightfield leaf: `d(p) = A·m(x, y)·t(p)` added to the elevation
+/// ([`super::detail`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DetailSpec {
+    /// The fBm `t` and its amplitude `A` (metres): wavelength of the first octave,
+    /// octaves, seed offset (added to the scene's seed).
+    pub noise: NoiseSpec,
+    /// Roughness of flat ground relative to steep ground (default 0.25).
+    #[serde(default = "default_flat")]
+    pub flat: Unit,
+    /// Slope (rise over run) from which ground is fully rough (default 1, i.e. 45°).
+    #[serde(default = "default_steep")]
+    pub steep: Positive,
+    /// Weight of altitude in the roughness (default 0.5: the lowest ground is half as
+    /// rough as the highest).
+    #[serde(default = "default_altitude")]
+    pub altitude: Unit,
+}
+
+impl DetailSpec {
+    /// The detail's parameters, its noise seeded from the scene's `seed`.
+    pub fn params(&self, seed: u32) -> DetailParams {
+        DetailParams {
+            noise: Fbm::new(&self.noise, seed),
+            amplitude: self.noise.amplitude.get(),
+            flat: self.flat.get(),
+            steep: self.steep.get(),
+            altitude: self.altitude.get(),
+        }
+    }
 }
 
 impl HeightfieldSpec {
@@ -95,11 +147,13 @@ impl HeightfieldSpec {
             interpolation: Interpolation::Bilinear,
             cell_size: None,
             z_range: None,
+            detail: None,
         }
     }
 
-    /// The implicitization parameters this spec asks for.
-    pub fn params(&self) -> ImplicitParams {
+    /// The implicitization parameters this spec asks for, noise seeded from the scene's
+    /// `seed`.
+    pub fn params(&self, seed: u32) -> ImplicitParams {
         let r = self.falloff.get();
         ImplicitParams {
             falloff: r,
@@ -112,23 +166,27 @@ impl HeightfieldSpec {
                 .as_ref()
                 .map(|d| d.iter().map(|p| p.0).collect()),
             interpolation: self.interpolation,
+            detail: self.detail.map(|d| d.params(seed)),
         }
     }
 
-    /// Loads the DEM (`source` resolved against `base_dir`) and implicitizes it.
+    /// Loads the DEM (`source` resolved against `base_dir`) and implicitizes it (scene
+    /// seed 0).
     pub fn load(&self, base_dir: &Path) -> Result<HeightfieldField, DemError> {
-        self.load_with(base_dir, &mut DemCache::new(DEFAULT_MEMORY_BUDGET))
+        self.load_with(base_dir, &mut DemCache::new(DEFAULT_MEMORY_BUDGET), 0)
     }
 
-    /// [`HeightfieldSpec::load`] sharing decoded DEMs through `cache` (one per compile).
+    /// [`HeightfieldSpec::load`] sharing decoded DEMs through `cache` (one per compile),
+    /// with the scene's noise `seed`.
     pub fn load_with(
         &self,
         base_dir: &Path,
         cache: &mut DemCache,
+        seed: u32,
     ) -> Result<HeightfieldField, DemError> {
         let dem = cache.get(&base_dir.join(&self.source), self)?;
         let field =
-            HeightfieldField::new(&dem.heightfield, &self.params()).map_err(|e| match e {
+            HeightfieldField::new(&dem.heightfield, &self.params(seed)).map_err(|e| match e {
                 DemError::Invalid { what } => DemError::Invalid {
                     what: format!(
                         "heightfield {}: {what}",

@@ -97,6 +97,12 @@ impl Materials {
     /// start 1.5 m off the ground).
     pub fn for_scene(support: &Aabb, ground: Option<Arc<HeightfieldField>>) -> Self {
         let r = support.radius().max(1e-3);
+        // The ground's detail (Frasson et al. §5) is terrain, not a feature: features
+        // start beyond twice its reach.
+        let reach = ground
+            .as_ref()
+            .and_then(|g| g.detail())
+            .map_or(0.0, |d| d.reach_total());
         Materials {
             rock: Vec3::new(0.23, 0.2, 0.17),
             soil: Vec3::new(0.2, 0.15, 0.09),
@@ -106,7 +112,7 @@ impl Materials {
             rock_slope: (0.62, 0.8),
             soil_slope: (0.82, 0.95),
             snow_line: None,
-            feature_depth: (0.004 * r, 0.01 * r),
+            feature_depth: ((0.004 * r).max(2.0 * reach), (0.01 * r).max(4.0 * reach)),
             variation: 0.08,
             variation_wavelength: 0.07 * r,
             ground,
@@ -127,12 +133,13 @@ impl Materials {
         m
     }
 
-    /// Vertical offset of `p` from the ground (0 without a terrain or off its cells).
+    /// Vertical offset of `p` from the ground — the DEM's elevation, without its detail
+    /// (the GPU reads the same) — 0 without a terrain or off its cells.
     pub fn off_ground(&self, p: Vec3) -> f32 {
         let h = self
             .ground
             .as_ref()
-            .map_or(f32::NAN, |g| g.height(Vec2::new(p.x, p.y)));
+            .map_or(f32::NAN, |g| g.base_height(Vec2::new(p.x, p.y)));
         if h.is_finite() { p.z - h } else { 0.0 }
     }
 

@@ -79,7 +79,7 @@ impl Compiler<'_> {
             }
         };
         let hf = spec
-            .load_with(self.base_dir, &mut self.dems)
+            .load_with(self.base_dir, &mut self.dems, self.scene.seed)
             .map_err(|e| self.asset_error(asking, e))?;
         let hf = Arc::new(hf);
         self.terrain = Some(hf.clone());
@@ -177,7 +177,7 @@ impl Compiler<'_> {
             }
             NodeSpec::Heightfield(h) => {
                 let leaf = h
-                    .load_with(self.base_dir, &mut self.dems)
+                    .load_with(self.base_dir, &mut self.dems, self.scene.seed)
                     .map_err(|e| self.asset_error(n, e))?;
                 self.builder.leaf(Arc::new(leaf), name)
             }

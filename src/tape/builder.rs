@@ -168,7 +168,7 @@ impl TapeBuilder {
     /// Pushes `σ(h(x, y) − z, falloff)` for a heightfield (clamped at its edges).
     /// Solid below the surface and unbounded: intersect it with a prism (Paris et al. 2019 §5.1).
     pub fn heightfield(&mut self, grid: &HeightGrid<'_>, falloff: f32) -> Result<(), TapeError> {
-        let (flags, q) = height::encode(grid, falloff, &mut self.heights)?;
+        let (flags, q) = height::encode(grid, falloff, &mut self.heights, &mut self.noises)?;
         self.emit(op::HEIGHT, flags, &q);
         self.push(Entry {
             support: EVERYWHERE_BOX,

@@ -8,10 +8,11 @@ use super::format::{flag, op, sfield, shape};
 
 /// The pipeline-overridable constants of the WGSL evaluator that switch parts of it on,
 /// by bit of [`Tape::features`].
-pub const FEATURES: [&str; 9] = [
+pub const FEATURES: [&str; 10] = [
     "USE_NPRIM",
     "USE_HEIGHT",
     "USE_BICUBIC",
+    "USE_HEIGHT_DETAIL",
     "USE_SFIELD",
     "USE_SF_CUBIC",
     "USE_SF_NOISE",
@@ -45,10 +46,12 @@ impl Tape {
                             0
                         }
                 }
-                op::HEIGHT if ins.flags & flag::BICUBIC != 0 => {
-                    on("USE_HEIGHT") | on("USE_BICUBIC")
+                op::HEIGHT => {
+                    let on_if = |f: u32, name: &str| if ins.flags & f != 0 { on(name) } else { 0 };
+                    on("USE_HEIGHT")
+                        | on_if(flag::BICUBIC, "USE_BICUBIC")
+                        | on_if(flag::DETAIL, "USE_HEIGHT_DETAIL")
                 }
-                op::HEIGHT => on("USE_HEIGHT"),
                 op::SFIELD => {
                     on("USE_SFIELD")
                         | if at(sfield::TRICUBIC) != 0.0 {

@@ -150,6 +150,8 @@ layout! {
         SIGMA = 1 << 8;
         /// `HEIGHT`: Catmull-Rom bicubic interpolation instead of bilinear.
         BICUBIC = 1;
+        /// `HEIGHT`: detail amplification `h + A·m·t(p)` ([`height::DETAIL_AMPLITUDE`]).
+        DETAIL = 2;
     }
 
     /// `CONST` parameters.
@@ -251,8 +253,16 @@ layout! {
         NY = 6;
         /// Offset of the samples in `heights`.
         OFFSET = 7;
+        /// With [`flag::DETAIL`]: the detail's amplitude `A` (Frasson et al. §5).
+        DETAIL_AMPLITUDE = 8;
+        /// A bound of the detail's slope `|∇d| ≤ A·(L_m + L_t)`.
+        DETAIL_SLOPE = 9;
+        /// Offset in `heights` of the roughness `m` (one per sample, bilinear).
+        DETAIL_ROUGH = 10;
+        /// The detail's fBm `t` ([`fbm`], `fbm::LEN` floats).
+        DETAIL_FBM = 11;
         /// Offsets in `heights` of the pyramid's levels `0 … n − 1` (`n` floats).
-        PYRAMID = 8;
+        PYRAMID = 11 + fbm::LEN;
     }
 
     /// An encoded fBm ([`super::noise::encode_fbm`]), inside `NPRIM`, `TWARP` and

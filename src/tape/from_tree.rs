@@ -51,7 +51,17 @@ impl Tape {
     pub fn with_ground(mut self, ground: &HeightfieldField) -> Result<Tape, TapeError> {
         let grid = height_grid(ground)
             .map_err(|why| TapeError::Invalid(format!("the terrain of the materials: {why}")))?;
-        let (flags, q) = super::height::encode(&grid, ground.params().falloff, &mut self.heights)?;
+        // The materials read the DEM's elevation, without detail (as the CPU's do).
+        let grid = HeightGrid {
+            detail: None,
+            ..grid
+        };
+        let (flags, q) = super::height::encode(
+            &grid,
+            ground.params().falloff,
+            &mut self.heights,
+            &mut self.noises,
+        )?;
         self.ground = Some((flags, self.params.len() as u32));
         self.params.extend_from_slice(&q);
         Ok(self)
@@ -78,6 +88,7 @@ fn height_grid(h: &HeightfieldField) -> Result<HeightGrid<'_>, &'static str> {
         ny: grid.ny(),
         z: grid.samples(),
         interpolation: h.params().interpolation,
+        detail: h.detail(),
     })
 }
 

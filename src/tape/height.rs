@@ -6,14 +6,21 @@
 //! pyramid of per-cell bounds of `|∇h|` (`slope_under`). The bound over a ball is σ's
 //! slope over the range of `h − z` on the ball, times `√(1 + s²)` with `s` the slope
 //! under the ball (Génevaux et al. 2015 §7.3.1).
+//!
+//! With [`flag::DETAIL`] the elevation is `h(x, y) + A·m(x, y)·t(p)`, the detail of
+//! Frasson et al. §5 ([`crate::dem::detail`]): the roughness `m` follows the samples in
+//! `heights` (bilinear, same grid), the fBm `t` is encoded in the parameters. Over a ball
+//! the detail lies within `d(c) ± |∇d|·r`, clipped to `±A`, and adds its slope bound to
+//! `√(1 + s²)`.
 
 use glam::{Vec2, Vec3};
 
 use super::TapeError;
-use super::format::{flag, height, limit};
-use crate::dem::{Heightfield, Interpolation, MinMaxPyramid};
-use crate::field::Interval;
+use super::format::{fbm, flag, height, limit};
+use super::noise::encode_fbm;
+use crate::dem::{Detail, Heightfield, Interpolation, MinMaxPyramid};
 use crate::field::falloff::{sigma, sigma_slope};
+use crate::field::{Fbm, Interval};
 
 /// A regular grid of elevations for [`super::TapeBuilder::heightfield`].
 #[derive(Clone, Copy, Debug)]
@@ -31,14 +38,18 @@ pub struct HeightGrid<'a> {
     /// Between the samples: bilinear or Catmull-Rom bicubic, as
     /// [`crate::dem::Heightfield::sample`] interpolates.
     pub interpolation: Interpolation,
+    /// Detail amplification over the same grid, if any.
+    pub detail: Option<&'a Detail>,
 }
 
-/// Appends the samples of `grid` and its slope pyramid to `heights`; returns the `HEIGHT`
-/// flags and parameters with σ's width `falloff`.
+/// Appends the samples of `grid` and its slope pyramid to `heights` (and a detail's
+/// roughness, its fBm to `noises`); returns the `HEIGHT` flags and parameters with σ's
+/// width `falloff`.
 pub(super) fn encode(
     grid: &HeightGrid<'_>,
     falloff: f32,
     heights: &mut Vec<f32>,
+    noises: &mut Vec<Fbm>,
 ) -> Result<(u32, Vec<f32>), TapeError> {
     let HeightGrid {
         origin,
@@ -47,6 +58,7 @@ pub(super) fn encode(
         ny,
         z,
         interpolation,
+        detail,
     } = *grid;
     if nx < 2
         || ny < 2
@@ -81,25 +93,41 @@ pub(super) fn encode(
         q[height::PYRAMID + k] = heights.len() as f32;
         heights.extend(level.iter().map(|s| s[1]));
     }
+    let mut flags = 0;
+    if let Some(d) = detail {
+        let m = d.roughness();
+        if m.nx() != nx || m.ny() != ny {
+            return Err(TapeError::Invalid(
+                "heightfield: the detail's roughness is not on the samples' grid".into(),
+            ));
+        }
+        flags |= flag::DETAIL;
+        q[height::DETAIL_AMPLITUDE] = d.amplitude();
+        q[height::DETAIL_SLOPE] = d.slope(d.amplitude());
+        q[height::DETAIL_ROUGH] = heights.len() as f32;
+        heights.extend_from_slice(m.samples());
+        let f = encode_fbm(noises.len(), &d.params().noise);
+        q[height::DETAIL_FBM..height::DETAIL_FBM + fbm::LEN].copy_from_slice(&f);
+        noises.push(d.params().noise);
+    }
     if heights.len() >= limit::MAX_OFFSET {
         return Err(TapeError::Invalid(format!(
             "heightfield: {} samples and slopes in all exceed the 2^24 a tape indexes",
             heights.len()
         )));
     }
-    let flags = match interpolation {
-        Interpolation::Bilinear => 0,
-        Interpolation::Bicubic => flag::BICUBIC,
-    };
+    if interpolation == Interpolation::Bicubic {
+        flags |= flag::BICUBIC;
+    }
     Ok((flags, q))
 }
 
 /// `(value at p, Lipschitz bound over B(c, r))` of the `HEIGHT` with flags `flags` and
-/// parameters `q` over `heights`; `BOUND`: compute the bound (else the second component
-/// is 0).
+/// parameters `q` over `heights` (a detail's fBm in `noises`); `BOUND`: compute the bound
+/// (else the second component is 0).
 #[inline]
 pub(super) fn eval<const BOUND: bool>(
-    heights: &[f32],
+    (heights, noises): (&[f32], &[Fbm]),
     flags: u32,
     q: &[f32],
     p: Vec3,
@@ -111,18 +139,32 @@ pub(super) fn eval<const BOUND: bool>(
         if flags & flag::BICUBIC != 0 {
             bicubic(heights, q, x, y)
         } else {
-            bilinear(heights, q, x, y)
+            bilinear(heights, q, q[height::OFFSET], x, y)
         }
     };
+    let detail = |p: Vec3| {
+        let m = bilinear(heights, q, q[height::DETAIL_ROUGH], p.x, p.y);
+        let t = noises[q[height::DETAIL_FBM + fbm::INDEX] as usize].value(p);
+        q[height::DETAIL_AMPLITUDE] * m * t
+    };
+    let has_detail = flags & flag::DETAIL != 0;
+    let dp = if has_detail { detail(p) } else { 0.0 };
     let hp = h(p.x, p.y);
-    let value = sigma(hp - p.z, fall);
+    let value = sigma(hp + dp - p.z, fall);
     if !BOUND {
         return (value, 0.0);
     }
     let hc = if p == c { hp } else { h(c.x, c.y) };
     let slope = slope_under(heights, q, c, r);
-    let v = Interval::new(hc - slope * r - c.z - r, hc + slope * r - c.z + r);
-    (value, sigma_slope(v, fall) * (1.0 + slope * slope).sqrt())
+    let mut v = Interval::new(hc - slope * r - c.z - r, hc + slope * r - c.z + r);
+    let mut l = (1.0 + slope * slope).sqrt();
+    if has_detail {
+        let (a, ld) = (q[height::DETAIL_AMPLITUDE], q[height::DETAIL_SLOPE]);
+        let dc = if p == c { dp } else { detail(c) };
+        v = Interval::new(v.lo + (dc - ld * r).max(-a), v.hi + (dc + ld * r).min(a));
+        l += ld;
+    }
+    (value, sigma_slope(v, fall) * l)
 }
 
 /// The grid of `q`: origin x and y, cell, `nx`, `ny` (as the parameters hold them).
@@ -157,10 +199,11 @@ fn slope_under(heights: &[f32], q: &[f32], c: Vec3, r: f32) -> f32 {
     s(i0, j0).max(s(i1, j0)).max(s(i0, j1)).max(s(i1, j1))
 }
 
-/// Bilinear elevation at `(x, y)` clamped to the grid of `q`.
-fn bilinear(heights: &[f32], q: &[f32], x: f32, y: f32) -> f32 {
+/// Bilinear value at `(x, y)` of the samples at `off` in `heights` (the elevations, or a
+/// detail's roughness), clamped to the grid of `q`.
+fn bilinear(heights: &[f32], q: &[f32], off: f32, x: f32, y: f32) -> f32 {
     let (ox, oy, cell, nx, ny) = grid(q);
-    let off = q[height::OFFSET] as usize;
+    let off = off as usize;
     let gx = ((x - ox) / cell).clamp(0.0, nx - 1.0);
     let gy = ((y - oy) / cell).clamp(0.0, ny - 1.0);
     let (i, j) = ((gx.floor()).min(nx - 2.0), (gy.floor()).min(ny - 2.0));

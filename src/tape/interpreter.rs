@@ -80,7 +80,14 @@ impl Tape {
                     sp += 1;
                 }
                 op::HEIGHT => {
-                    stack[sp] = height::eval::<BOUND>(&self.heights, ins.flags, &prm[o..], p, c, r);
+                    stack[sp] = height::eval::<BOUND>(
+                        (&self.heights, &self.noises),
+                        ins.flags,
+                        &prm[o..],
+                        p,
+                        c,
+                        r,
+                    );
                     sp += 1;
                 }
                 op::SFIELD => {

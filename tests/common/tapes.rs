@@ -63,6 +63,7 @@ pub fn dem_with_cave(d: &Dem) -> Tape {
             ny: d.ny,
             z: &d.z,
             interpolation: Interpolation::Bilinear,
+            detail: None,
         },
         falloff,
     )
@@ -104,6 +105,7 @@ pub fn terrain(tr: &Terrain, n: usize) -> Tape {
             ny: n,
             z: &z,
             interpolation: Interpolation::Bilinear,
+            detail: None,
         },
         tr.falloff,
     )
