@@ -98,7 +98,7 @@ impl Materials {
     pub fn for_scene(support: &Aabb, ground: Option<Arc<HeightfieldField>>) -> Self {
         let r = support.radius().max(1e-3);
         // The ground's detail (Frasson et al. §5) is terrain, not a feature: features
-        // start beyond twice its reach.
+        // start beyond its reach.
         let reach = ground
             .as_ref()
             .and_then(|g| g.detail())
@@ -112,7 +112,7 @@ impl Materials {
             rock_slope: (0.62, 0.8),
             soil_slope: (0.82, 0.95),
             snow_line: None,
-            feature_depth: ((0.004 * r).max(2.0 * reach), (0.01 * r).max(4.0 * reach)),
+            feature_depth: ((0.004 * r).max(1.2 * reach), (0.01 * r).max(2.5 * reach)),
             variation: 0.08,
             variation_wavelength: 0.07 * r,
             ground,
