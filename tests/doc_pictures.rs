@@ -61,6 +61,8 @@ karstic masks trees/jacksboro_caves.ron -o masks --cell 5 --box 3300 4840 480 48
 karstic render trees/jacksboro_caves.ron -o heightmap_tree.png --quiet
 karstic heightmap trees/jacksboro_caves.ron -o top.tif --cell 2.5 --region 4300 4700 4900 5200
 karstic render trees/heightmap_top.ron -o heightmap_top.png --camera 4900 4380 780 4480 4990 690 --fov 40 --quiet
+karstic render trees/jacksboro_bare.ron -o detail_on.png --camera 3920 5150 790 3560 5120 880 --fov 50 --quiet
+karstic render trees/jacksboro_smooth.ron -o detail_off.png --camera 3920 5150 790 3560 5120 880 --fov 50 --quiet
 ";
 
 /// What [`COMMANDS`] write that becomes a picture, and the picture's name in `docs/img/`.
@@ -87,6 +89,8 @@ const PICTURES: &[(&str, &str)] = &[
     ("masks/jacksboro_caves_flow.png", "masks_flow.png"),
     ("heightmap_tree.png", "heightmap_tree.png"),
     ("heightmap_top.png", "heightmap_top.png"),
+    ("detail_on.png", "detail_on.png"),
+    ("detail_off.png", "detail_off.png"),
 ];
 
 /// Whether [`PICTURES`] makes a picture named `name`.
@@ -111,7 +115,8 @@ const UNAWARE_GROUND: f32 = 80.0;
 /// before amplification, seen as the main job sees it), and `arch_unaware.ron`, its arch
 /// volume built without the terrain (`on_terrain: false`) but with a ground curve under
 /// the apex, united with the terrain — what a Feature Volume did to a terrain before
-/// `Replace`; and `heightmap_top.ron`, the main job's heightmap as a scene.
+/// `Replace`; `jacksboro_smooth.ron`, the terrain without its detail amplification; and
+/// `heightmap_top.ron`, the main job's heightmap as a scene.
 fn prepare(trees: &Path) {
     let main = karstic::scene::load(trees.join("jacksboro_caves.ron"))
         .expect("the main job's tree")
@@ -146,6 +151,19 @@ fn prepare(trees: &Path) {
         Scene {
             name: Some("jacksboro_bare".into()),
             root: dem.clone(),
+            ..main.clone()
+        },
+    );
+    let NodeSpec::Heightfield(mut smooth) = dem.clone() else {
+        panic!("the main job's terrain is a Heightfield")
+    };
+    assert!(smooth.detail.is_some(), "the main job's terrain has detail");
+    smooth.detail = None;
+    write(
+        "jacksboro_smooth.ron",
+        Scene {
+            name: Some("jacksboro_smooth".into()),
+            root: NodeSpec::Heightfield(smooth),
             ..main.clone()
         },
     );
