@@ -161,10 +161,10 @@ fn neighbours_share_borders_and_a_level_welds_into_the_single_mesh() {
 fn karstic(args: &[&str], env: &[(&str, &str)]) -> (bool, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_karstic"))
         .args(args)
-        .envs(env.iter().copied())
         .env_remove("SLURM_ARRAY_TASK_ID")
         .env_remove("JOB_COMPLETION_INDEX")
         .env_remove("AWS_BATCH_JOB_ARRAY_INDEX")
+        .envs(env.iter().copied())
         .output()
         .unwrap();
     let text =
