@@ -301,5 +301,34 @@ mod tests {
         );
         let local = Georef::local(1.0, 1.0);
         assert!(tree_to_ecef(&local, to_crs, c, 1.0).is_err());
+        let unknown = Georef {
+            crs: Crs::Projected { epsg: Some(2154) },
+            ..Georef::local(1.0, 1.0)
+        };
+        let why = tree_to_ecef(&unknown, to_crs, c, 1.0).unwrap_err();
+        assert!(why.contains("EPSG:2154"), "{why}");
+    }
+
+    #[test]
+    fn geographic_frames_map_through_degrees() {
+        // A 1° tile at 36° N, 84° W, 3″ samples.
+        let g = Georef::geographic(
+            Some(4326),
+            [-84.0, 36.0],
+            [1.0 / 1200.0; 2],
+            36.5,
+            crate::dem::RasterType::PixelIsPoint,
+        );
+        let c = DVec3::new(40_000.0, 50_000.0, 500.0);
+        let m = tree_to_ecef(&g, |p| g.local_to_crs(p), c, 80_000.0).unwrap();
+        let [lon, lat] = g.local_to_crs([c.x, c.y]);
+        let exact = geodetic_to_ecef(lat.to_radians(), lon.to_radians(), c.z);
+        assert!((m.transform_point3(c) - exact).length() < 1e-6);
+        // Its x column points east, its z column up, both unit length within the
+        // equirectangular scale.
+        let east = m.x_axis.truncate();
+        assert!((east.length() - 1.0).abs() < 1e-3, "{east}");
+        let up = m.z_axis.truncate();
+        assert!((up.dot(exact.normalize()) - 1.0).abs() < 1e-4);
     }
 }
