@@ -11,6 +11,7 @@ use std::sync::OnceLock;
 use glam::{DMat4, DVec3};
 use karstic::field::Aabb;
 use karstic::mesh::{Mesh, MeshOptions, polygonize};
+use karstic::tiles::mesh::SKIRT_CELLS;
 use karstic::tiles::{Loaded, Plan, Tile, mesh_core};
 use serde_json::Value;
 
@@ -156,6 +157,86 @@ fn neighbours_share_borders_and_a_level_welds_into_the_single_mesh() {
             "level {level}: the tiles' vertices are not the single mesh's"
         );
     }
+}
+
+/// The top of the mesh's section by the plane `axis = at`, at `u` along the other
+/// horizontal axis: the highest point of the mesh's edges lying in the plane over `u`.
+fn top_on_plane(m: &Mesh, axis: usize, at: f32, cell: f32, u: f32) -> Option<f32> {
+    let other = 1 - axis;
+    let on = |p: [f32; 3]| (p[axis] - at).abs() <= 1e-3 * cell;
+    let mut top: Option<f32> = None;
+    for t in &m.triangles {
+        for k in 0..3 {
+            let (a, b) = (
+                m.positions[t[k] as usize],
+                m.positions[t[(k + 1) % 3] as usize],
+            );
+            if !(on(a) && on(b)) || a[other] == b[other] {
+                continue;
+            }
+            let s = (u - a[other]) / (b[other] - a[other]);
+            if (0.0..=1.0).contains(&s) {
+                let z = a[2] + s * (b[2] - a[2]);
+                top = Some(top.map_or(z, |t: f32| t.max(z)));
+            }
+        }
+    }
+    top
+}
+
+#[test]
+fn skirts_are_deep_enough_to_hide_the_cracks_between_levels() {
+    let (plan, loaded) = planned();
+    let tree = &loaded.compiled.tree;
+    let coarse_cell = plan.level_grid(0).spacing.x;
+    let depth = SKIRT_CELLS * coarse_cell;
+    let of = |level: usize| -> Vec<(Tile, Aabb, Mesh)> {
+        plan.tiles
+            .iter()
+            .filter(|t| t.level == level)
+            .map(|t| {
+                (
+                    *t,
+                    plan.core_box(t),
+                    mesh_core(tree, plan, t, BUDGET).unwrap(),
+                )
+            })
+            .collect()
+    };
+    let (coarse, fine) = (of(0), of(1));
+    let mut compared = 0;
+    let mut worst = 0.0f32;
+    // Where a coarse tile's side is a fine tile's side, the two sections may differ (a
+    // crack a viewer would see through) by less than the coarse tile's skirt.
+    for (_, cb, cm) in &coarse {
+        for (_, fb, fm) in &fine {
+            for axis in 0..2 {
+                let other = 1 - axis;
+                let lo = cb.min[other].max(fb.min[other]);
+                let hi = cb.max[other].min(fb.max[other]);
+                for (at_c, at_f) in [(cb.max[axis], fb.min[axis]), (cb.min[axis], fb.max[axis])] {
+                    if at_c != at_f || hi <= lo {
+                        continue;
+                    }
+                    for n in 1..64 {
+                        let u = lo + (hi - lo) * n as f32 / 64.0;
+                        let zc = top_on_plane(cm, axis, at_c, coarse_cell, u);
+                        let zf = top_on_plane(fm, axis, at_f, coarse_cell, u);
+                        if let (Some(zc), Some(zf)) = (zc, zf) {
+                            worst = worst.max((zc - zf).abs());
+                            compared += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(compared > 100, "only {compared} points compared");
+    assert!(
+        worst < depth,
+        "a crack of {worst} m under skirts of {depth} m"
+    );
+    eprintln!("largest crack between levels: {worst:.2} m ({compared} points; skirts {depth} m)");
 }
 
 fn karstic(args: &[&str], env: &[(&str, &str)]) -> (bool, String) {
