@@ -390,6 +390,27 @@ fn the_tiles_are_valid_gltf_and_the_tileset_is_3d_tiles() {
         assert!(ok, "{out}");
         assert!(out.contains(&format!("tile {index} (")), "{out}");
     }
+    // A new plan in the same folder does not merge the tiles of the old one.
+    let (ok, out) = karstic(
+        &[
+            "tile",
+            "plan",
+            tree.to_str().unwrap(),
+            "--job-region",
+            "--cell",
+            "4.4",
+            "--tile",
+            "64",
+            "--levels",
+            "2",
+            "-o",
+            d,
+        ],
+        &[],
+    );
+    assert!(ok, "{out}");
+    let (ok, out) = karstic(&["tile", "merge", d], &[]);
+    assert!(!ok && out.contains("were run for another plan"), "{out}");
     for stem in ["tiles/1/0_0", "tiles/1/4_0"] {
         for ext in ["glb", "json"] {
             let f = format!("{stem}.{ext}");

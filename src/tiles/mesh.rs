@@ -23,6 +23,8 @@ pub const SKIRT_CELLS: f32 = 2.0;
 /// merge reads these.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TileSummary {
+    /// The plan the tile was run for ([`Plan::id`]).
+    pub plan: String,
     /// The tile.
     pub tile: Tile,
     /// Vertices of the written mesh (skirts included).
@@ -175,6 +177,7 @@ pub fn run_tile(
         (b.min.to_array(), b.max.to_array())
     };
     let summary = TileSummary {
+        plan: plan.id(),
         tile,
         vertices: mesh.positions.len(),
         triangles: mesh.triangles.len(),

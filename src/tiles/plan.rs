@@ -25,6 +25,9 @@ pub const PLAN_FILE: &str = "plan.json";
 /// tile's core, and every sample of the core is evaluated as in a single run.
 pub const HALO: usize = TILE;
 
+/// Largest tree file a plan hashes (tree files are text; their DEMs are read apart).
+const TREE_BYTES: u64 = 256 << 20;
+
 /// Most levels a plan may have (the coarsest cell is `2^(levels − 1)` finest cells).
 pub const MAX_LEVELS: usize = 12;
 
@@ -100,8 +103,8 @@ impl Plan {
         );
         let grid = GridSpec::with_cell(region, cell)
             .with_context(|| format!("the region at {cell} m cells"))?;
-        let bytes =
-            std::fs::read(tree).with_context(|| format!("cannot read {}", tree.display()))?;
+        let bytes = read_regular(tree, TREE_BYTES)
+            .with_context(|| format!("cannot read {}", tree.display()))?;
         let tree = std::path::absolute(tree)
             .with_context(|| format!("{}: no absolute path", tree.display()))?;
         let mut plan = Plan {
@@ -260,6 +263,12 @@ impl Plan {
         Aabb::new(g.point(x[0], y[0], 0), g.point(x[1], y[1], g.cells[2]))
     }
 
+    /// A hash of the plan (FNV-1a of its JSON): the tiles' summaries carry it, so the merge
+    /// never mixes tiles of an earlier plan written to the same folder.
+    pub fn id(&self) -> String {
+        fnv1a(serde_json::to_string(self).unwrap_or_default().as_bytes())
+    }
+
     /// Position of `tile` in [`Plan::tiles`].
     pub fn index_of(&self, tile: &Tile) -> Option<usize> {
         self.tiles.iter().position(|t| t == tile)
@@ -312,7 +321,7 @@ impl Plan {
             );
         }
         plan.check(&path)?;
-        let tree = std::fs::read(&plan.tree).with_context(|| {
+        let tree = read_regular(&plan.tree, TREE_BYTES).with_context(|| {
             format!(
                 "{}: cannot read its tree {}",
                 path.display(),

@@ -43,8 +43,9 @@ pub fn geometric_error(plan: &Plan, level: usize) -> f64 {
 
 /// Reads every tile's summary, refusing a folder where some tile has not run.
 pub fn read_summaries(dir: &Path, plan: &Plan) -> anyhow::Result<Vec<TileSummary>> {
+    let id = plan.id();
     let mut out = Vec::with_capacity(plan.tiles.len());
-    let mut missing = Vec::new();
+    let (mut missing, mut stale) = (Vec::new(), Vec::new());
     for (i, t) in plan.tiles.iter().enumerate() {
         let path = dir.join(t.stem()).with_extension("json");
         match read_regular(&path, 1 << 20) {
@@ -58,28 +59,39 @@ pub fn read_summaries(dir: &Path, plan: &Plan) -> anyhow::Result<Vec<TileSummary
                         s.tile
                     );
                 }
+                if s.plan != id {
+                    stale.push(i);
+                }
                 out.push(s);
             }
             Err(_) => missing.push(i),
         }
     }
-    if !missing.is_empty() {
-        let shown: Vec<String> = missing.iter().take(8).map(|i| i.to_string()).collect();
-        bail!(
-            "{}: {} of {} tiles have not run (indices {}{}); run `karstic tile run {} --index I` for each",
-            dir.display(),
-            missing.len(),
-            plan.tiles.len(),
-            shown.join(", "),
-            if missing.len() > shown.len() {
-                ", …"
-            } else {
-                ""
-            },
-            dir.display()
-        );
+    for (list, what) in [
+        (&missing, "have not run"),
+        (&stale, "were run for another plan"),
+    ] {
+        if !list.is_empty() {
+            bail!(
+                "{}: {} of {} tiles {what} (indices {}); run `karstic tile run {} --index I` for each",
+                dir.display(),
+                list.len(),
+                plan.tiles.len(),
+                shown(list),
+                dir.display()
+            );
+        }
     }
     Ok(out)
+}
+
+/// The first indices of `list`, with an ellipsis when there are more.
+fn shown(list: &[usize]) -> String {
+    let mut s: Vec<String> = list.iter().take(8).map(|i| i.to_string()).collect();
+    if list.len() > s.len() {
+        s.push("…".into());
+    }
+    s.join(", ")
 }
 
 /// Writes `DIR/tileset.json` from the plan and the tiles' summaries.
