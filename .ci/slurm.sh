@@ -36,7 +36,7 @@ munged --foreground --force --key-file="$work/munge/munge.key" \
     --log-file="$work/munge/munged.log" --seed-file="$work/munge/munged.seed" \
     >"$work/munged.out" 2>&1 &
 pids+=($!)
-for _ in $(seq 50); do [ -S "$work/munge/munge.socket" ] && break; sleep 0.1; done
+for _ in $(seq 150); do [ -S "$work/munge/munge.socket" ] && break; sleep 0.1; done
 
 # One node: this machine with its CPUs; processes tracked through /proc, no cgroups.
 node="$(hostname -s)"
@@ -70,7 +70,7 @@ slurmctld -D -i -f "$SLURM_CONF" >"$work/slurmctld.out" 2>&1 &
 pids+=($!)
 slurmd -D -f "$SLURM_CONF" >"$work/slurmd.out" 2>&1 &
 pids+=($!)
-for _ in $(seq 100); do
+for _ in $(seq 300); do
     sinfo -h -o %t 2>/dev/null | grep -qE '^(idle|mix|alloc)' && break
     sleep 0.2
 done
