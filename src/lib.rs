@@ -18,4 +18,5 @@ pub mod mesh;
 pub mod render;
 pub mod scene;
 pub mod tape;
+pub mod tiles;
 pub mod voxel;

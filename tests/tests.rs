@@ -39,6 +39,7 @@ mod render_trace;
 mod render_trees;
 mod tape_conformance;
 mod tape_header;
+mod tiles;
 mod tin;
 mod tree_core;
 mod tree_files;

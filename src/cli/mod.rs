@@ -9,6 +9,7 @@ mod masks;
 mod render;
 mod run;
 mod sample;
+mod tile;
 mod tin;
 mod tree;
 
@@ -53,6 +54,8 @@ enum Command {
     Heightmap(heightmap::HeightmapArgs),
     /// Triangulate a DEM or a tree's heightmap within a vertical error (greedy insertion).
     Tin(tin::TinArgs),
+    /// Large terrains: plan a quadtree of tiles, mesh each (an array job), merge into 3D Tiles.
+    Tile(tile::TileArgs),
 }
 
 /// The `--max-memory` flag of every command that reads or builds grids and images.
@@ -112,6 +115,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Curves(a) => curves::run(a),
         Command::Heightmap(a) => heightmap::run(a),
         Command::Tin(a) => tin::run(a),
+        Command::Tile(a) => tile::run(a),
     }
 }
 

@@ -5,16 +5,23 @@ use glam::Vec3;
 use super::MeshError;
 use crate::field::Aabb;
 
-/// A regular grid of `cells[0] × cells[1] × cells[2]` cells starting at `origin`, with
-/// samples at `origin + (i, j, k)·spacing` for `i ≤ cells[0]`, etc.
+/// A regular grid of `cells[0] × cells[1] × cells[2]` cells, with samples at
+/// `origin + (offset[0] + i, offset[1] + j, k)·spacing` for `i ≤ cells[0]`, etc.
+///
+/// A grid with a non-zero `offset` is a window of a larger grid (see [`GridSpec::window`]):
+/// its samples are computed from the larger grid's integer indices, so two windows place a
+/// sample they share at bit-identical positions (the tiles of `karstic tile`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GridSpec {
-    /// Position of sample `(0, 0, 0)`.
+    /// Position of the sample with global indices `(0, 0, 0)` (sample `(0, 0, 0)` of the
+    /// grid when `offset` is zero).
     pub origin: Vec3,
     /// Cell size along each axis.
     pub spacing: Vec3,
     /// Number of cells along each axis.
     pub cells: [usize; 3],
+    /// Global x and y indices of the grid's sample `(0, 0, ·)`.
+    pub offset: [usize; 2],
 }
 
 /// Errors unless `b` is a finite box with positive size on every axis; an empty box (the
@@ -62,6 +69,28 @@ impl GridSpec {
             origin,
             spacing,
             cells,
+            offset: [0, 0],
+        })
+    }
+
+    /// The window of this grid whose x and y cells are `lo[a] .. lo[a] + cells[a]` (all its
+    /// z cells): same origin and spacing, samples at the same positions. Errors when the
+    /// window has no cell or leaves the grid.
+    pub fn window(&self, lo: [usize; 2], cells: [usize; 2]) -> Result<Self, MeshError> {
+        for a in 0..2 {
+            if cells[a] == 0 || lo[a] + cells[a] > self.cells[a] {
+                return Err(MeshError::GridShape(format!(
+                    "window of cells {}..{} along axis {a}: the grid has {} cells",
+                    lo[a],
+                    lo[a] + cells[a],
+                    self.cells[a]
+                )));
+            }
+        }
+        Ok(GridSpec {
+            cells: [cells[0], cells[1], self.cells[2]],
+            offset: [self.offset[0] + lo[0], self.offset[1] + lo[1]],
+            ..*self
         })
     }
 
@@ -122,13 +151,14 @@ impl GridSpec {
     /// Sample `(i, j, k)`.
     #[inline]
     pub fn point(&self, i: usize, j: usize, k: usize) -> Vec3 {
-        self.origin + Vec3::new(i as f32, j as f32, k as f32) * self.spacing
+        let [oi, oj] = self.offset;
+        self.origin + Vec3::new((oi + i) as f32, (oj + j) as f32, k as f32) * self.spacing
     }
 
     /// The box the grid covers.
     pub fn bounds(&self) -> Aabb {
         Aabb::new(
-            self.origin,
+            self.point(0, 0, 0),
             self.point(self.cells[0], self.cells[1], self.cells[2]),
         )
     }
@@ -150,5 +180,22 @@ mod tests {
         assert!(
             GridSpec::with_cell(&Aabb::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0)), 0.1).is_err()
         );
+    }
+
+    #[test]
+    fn windows_share_the_grid_samples() {
+        let b = Aabb::new(Vec3::new(0.1, -7.3, 0.0), Vec3::new(100.7, 40.0, 3.0));
+        let g = GridSpec::with_cell(&b, 0.37).unwrap();
+        let w = g.window([100, 31], [50, 20]).unwrap();
+        assert_eq!(w.cells, [50, 20, g.cells[2]]);
+        for (i, j, k) in [(0, 0, 0), (50, 20, 3), (17, 3, 1)] {
+            // Bit-identical, not merely close: a window is the same grid.
+            assert_eq!(w.point(i, j, k), g.point(100 + i, 31 + j, k));
+        }
+        let ww = w.window([10, 10], [5, 5]).unwrap();
+        assert_eq!(ww.point(1, 2, 0), g.point(111, 43, 0));
+        assert_eq!(ww.bounds().min, g.point(110, 41, 0));
+        assert!(g.window([0, 0], [0, 1]).is_err());
+        assert!(g.window([g.cells[0] - 1, 0], [2, 1]).is_err());
     }
 }

@@ -63,6 +63,10 @@ pub struct MeshOptions {
     pub budget: u64,
     /// Advanced once per tile and stage when set.
     pub progress: Option<ProgressBar>,
+    /// Keep only the triangles of the cell columns `keep[0][0]..keep[0][1]` ×
+    /// `keep[1][0]..keep[1][1]` (grid indices): a tile meshed with a halo keeps its core.
+    /// `None` keeps all.
+    pub keep: Option<[[usize; 2]; 2]>,
 }
 
 impl Default for MeshOptions {
@@ -73,6 +77,7 @@ impl Default for MeshOptions {
             refine: false,
             budget: DEFAULT_MEMORY_BUDGET,
             progress: None,
+            keep: None,
         }
     }
 }
@@ -179,6 +184,7 @@ pub fn polygonize(
         samples: &samples,
         elevation: &elevation,
         refine: opts.refine,
+        keep: opts.keep,
     };
     let sizes: Vec<usize> = (0..tiles.len())
         .map(|t| tile_samples[t + 1] - tile_samples[t])
@@ -337,6 +343,7 @@ struct Ctx<'a, 'f> {
     samples: &'a Spans<SampleSpan>,
     elevation: &'a Elevations<'f>,
     refine: bool,
+    keep: Option<[[usize; 2]; 2]>,
 }
 
 impl<'f> Ctx<'_, 'f> {
@@ -551,6 +558,11 @@ impl<'f> Ctx<'_, 'f> {
         let mut out = Vec::new();
         for (i, j) in self.tiles.columns(t) {
             if i >= ncx || j >= ncy {
+                continue;
+            }
+            if let Some([x, y]) = self.keep
+                && !((x[0]..x[1]).contains(&i) && (y[0]..y[1]).contains(&j))
+            {
                 continue;
             }
             let cols = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)];

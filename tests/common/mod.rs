@@ -3,7 +3,7 @@
 //! with analytic ground truth, a sum of many Wyvill point blobs with local Lipschitz
 //! bounds from a grid, a heightfield-like terrain chunk) and their GPU tapes; the
 //! Jacksboro DEM; bound and image checks; the GPU context; and the switch that makes a
-//! missing optional tool (GPU adapter, glTF validator, trimesh) a failure.
+//! missing optional tool (GPU adapter, glTF validator, trimesh, Slurm) a failure.
 
 pub mod dem;
 pub mod tapes;
@@ -23,7 +23,7 @@ pub use blobs::Blobs;
 pub use frames::{assert_frames_match, depth_agreement};
 pub use gpu::{assert_probes_match, gpu};
 pub use lipschitz::check_segment_lipschitz;
-pub use optional::{REQUIRE_GDAL, REQUIRE_GLTF_VALIDATOR, REQUIRE_GPU, unavailable};
+pub use optional::{REQUIRE_GDAL, REQUIRE_GLTF_VALIDATOR, REQUIRE_GPU, REQUIRE_SLURM, unavailable};
 pub use rng::Rng;
 pub use sphere::SigmaSphere;
 pub use terrain::Terrain;

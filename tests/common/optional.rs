@@ -1,6 +1,7 @@
 //! Checks that need a tool a machine may lack: the GPU comparisons need an adapter, the
 //! glTF export tests need Node and the Khronos validator, the import checks Python and
-//! trimesh, the heightmap export tests GDAL's `gdalinfo`. Locally a missing tool prints a
+//! trimesh, the heightmap export tests GDAL's `gdalinfo`, the tiles' array job Slurm
+//! (`slurm-wlm` and `munge`, run as root). Locally a missing tool prints a
 //! notice and the check is skipped; where the tool's `KARSTIC_REQUIRE_*` variable is set
 //! (to anything but empty or `0`; `.ci/run` sets them all) its absence fails the test.
 
@@ -15,6 +16,10 @@ pub const REQUIRE_TRIMESH: &str = "KARSTIC_REQUIRE_TRIMESH";
 
 /// Makes a missing `gdalinfo` (GDAL's command-line tools) a test failure.
 pub const REQUIRE_GDAL: &str = "KARSTIC_REQUIRE_GDAL";
+
+/// Makes a missing Slurm (`slurmctld`, `slurmd`, `sbatch`, `munged`, or not running as
+/// root) a test failure.
+pub const REQUIRE_SLURM: &str = "KARSTIC_REQUIRE_SLURM";
 
 /// Whether the environment variable `var` requires its tool: set, not empty, not `0`.
 fn required(var: &str) -> bool {
