@@ -8,7 +8,7 @@ use crate::common;
 use std::path::{Path, PathBuf};
 
 use crate::tape_conformance::conform;
-use common::{assert_frames_match, depth_agreement, gpu};
+use common::{assert_frames_match_within, depth_agreement, gpu};
 use glam::Vec3;
 use indicatif::ProgressBar;
 use karstic::dem::{Heightfield, HeightfieldField, ImplicitParams, Interpolation};
@@ -96,6 +96,20 @@ fn solid_box(tree: &Tree) -> Aabb {
 }
 
 /// A 96 × 64 view framing the solid, and the render settings for the tree.
+/// The share of pixels whose colours must agree between two renders of `tape`'s scene
+/// from `cam`: 99%, or 97% when the scene has noise finer than a pixel at the solid's
+/// distance (the main job's detailed DEM, 5 m relief under 100 m pixels): one sample a
+/// pixel of sub-pixel relief is aliasing, and hits a hair apart shade apart.
+fn colour_share(tree: &Tree, tape: &Tape, cam: &Camera) -> f64 {
+    let footprint = cam.pixel_angle() * cam.eye.distance(solid_box(tree).center());
+    let finest = tape
+        .noises
+        .iter()
+        .map(|f| f.wavelength() / (1u32 << (f.octaves() - 1)) as f32)
+        .fold(f32::INFINITY, f32::min);
+    if finest < footprint { 0.97 } else { 0.99 }
+}
+
 fn view(tree: &Tree) -> (Camera, RenderSettings) {
     let cam = Camera::frame(&solid_box(tree), 40.0, 96, 64).unwrap();
     let settings = RenderSettings::for_scene(&tree.support(), &cam, Method::Segment);
@@ -140,7 +154,7 @@ fn tape_images_match_tree_images_on_the_cpu() {
         let a = render(tree, &cam, &settings, &ProgressBar::hidden());
         let b = render(tape, &cam, &settings, &ProgressBar::hidden());
         assert!(a.hits() >= 600, "{name}: {} hits", a.hits());
-        assert_frames_match(name, &a, &b);
+        assert_frames_match_within(name, &a, &b, colour_share(tree, tape, &cam));
         // The tape's ball bounds are local like the tree's, so its segment tracing takes
         // about the tree's steps; a bound blind to where the ball is (as the prism's
         // unsigned distance once was: 0 inside, so every ball reached `r` outside) takes
@@ -174,7 +188,7 @@ fn gpu_renders_of_the_scenes_match_the_cpu() {
             b.hits()
         );
         assert!(a.hits() >= 600, "{name}: {} hits", a.hits());
-        assert_frames_match(name, &a, &b);
+        assert_frames_match_within(name, &a, &b, colour_share(tree, tape, &cam));
     }
 }
 

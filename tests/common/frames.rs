@@ -20,6 +20,17 @@ pub fn depth_agreement(a: &[f32], b: &[f32], tol: f32) -> (f64, usize) {
 /// Asserts that two renders of the same scene agree: on ≥ 99 % of pixels every colour
 /// channel within 6 levels, and on ≥ 99 % of pixels the same hit/miss.
 pub fn assert_frames_match(name: &str, a: &karstic::render::Frame, b: &karstic::render::Frame) {
+    assert_frames_match_within(name, a, b, 0.99);
+}
+
+/// [`assert_frames_match`] with the colours agreeing on a `share` of the pixels (the hit
+/// masks still on 99 %).
+pub fn assert_frames_match_within(
+    name: &str,
+    a: &karstic::render::Frame,
+    b: &karstic::render::Frame,
+    share: f64,
+) {
     let n = a.depth.len();
     assert_eq!(n, b.depth.len(), "{name}: frame sizes differ");
     let close = (0..n)
@@ -29,7 +40,7 @@ pub fn assert_frames_match(name: &str, a: &karstic::render::Frame, b: &karstic::
         .filter(|&k| a.depth[k].is_finite() == b.depth[k].is_finite())
         .count();
     assert!(
-        close as f64 >= 0.99 * n as f64,
+        close as f64 >= share * n as f64,
         "{name}: {close} of {n} pixels match"
     );
     assert!(

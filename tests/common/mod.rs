@@ -20,7 +20,7 @@ mod trimesh;
 mod uv_sphere;
 
 pub use blobs::Blobs;
-pub use frames::{assert_frames_match, depth_agreement};
+pub use frames::{assert_frames_match, assert_frames_match_within, depth_agreement};
 pub use gpu::{assert_probes_match, gpu};
 pub use lipschitz::check_segment_lipschitz;
 pub use optional::{REQUIRE_GDAL, REQUIRE_GLTF_VALIDATOR, REQUIRE_GPU, REQUIRE_SLURM, unavailable};
