@@ -7,15 +7,16 @@
 //! `|∇n_k| ≤ λ_η 2^k / λ`, `λ_η` = [`SIMPLEX_LIPSCHITZ`]) weighted `a_k = ½^k`:
 //!
 //! * **fBm**: `c_k = a_k n_k`;
-//! * **ridged**: `s_k = (1 − |n_k|)²`, `w_0 = 1`, `w_k = clamp(2 s̃_{k−1}, 0, 1)`,
+//! * **ridged**: `s_k = (1 − |n_k|)²`, `w_0 = 1`, `w_k = clamp(s̃_{k−1}, 0, 1)`,
 //!   `s̃_k = w_k s_k`, `c_k = a_k s̃_k` (the previous octave's ridge gates the next, so
-//!   detail gathers on the crests);
+//!   detail gathers on the crests; Musgrave's gate gain is 2, which makes the bound grow
+//!   as `k 2^k` instead of `2^k`);
 //! * **hybrid**: `s_k = a_k (n_k + 0.7)`, `c_0 = s_0`, `w_1 = clamp(s_0, 0, 1)`,
 //!   `c_k = w_k s_k`, `w_{k+1} = clamp(w_k s_k, 0, 1)` (smooth valleys, rough peaks).
 //!
 //! Every `c_k` lies in a known range `[l_k, u_k]` and has a Lipschitz bound `L_k` by the
 //! product and chain rules (`|s_k| ≤ 1`, clamping is 1-Lipschitz): ridged
-//! `L(s_k) = 2 λ_η 2^k/λ`, `L(s̃_k) ≤ L(s_k) + 2 L(s̃_{k−1})`; hybrid
+//! `L(s_k) = 2 λ_η 2^k/λ`, `L(s̃_k) ≤ L(s_k) + L(s̃_{k−1})`; hybrid
 //! `L(c_k) ≤ L(w_k) max|s_k| + L(s_k)`, `L(w_{k+1}) ≤ L(c_k)`. Continuous LoD
 //! (Génevaux et al. 2015 §6) replaces octave `k` by `b_k c_k + (1 − b_k) m_k`, `m_k` the
 //! middle of its range, so the elevation keeps its range as octaves fade out. The raw sum
@@ -95,7 +96,7 @@ impl Multifractal {
             let (range, lip) = match kind {
                 Kind::Fbm => (Interval::new(-a, a), a * ln),
                 Kind::Ridged => {
-                    let l = 2.0 * ln + if k == 0 { 0.0 } else { 2.0 * chain };
+                    let l = 2.0 * ln + chain;
                     chain = l;
                     (Interval::new(0.0, a), a * l)
                 }
@@ -132,21 +133,19 @@ impl Multifractal {
         }
     }
 
-    /// `h(p)` at level of detail `lod`.
-    #[inline]
-    pub fn value(&self, p: Vec2, lod: &Lod) -> f32 {
+    /// Visits each octave's contribution `c_k(p)` with its table entry.
+    #[inline(always)]
+    fn octaves(&self, p: Vec2, mut visit: impl FnMut(f32, &Octave)) {
         let mut q = (p * self.noise.inv_wavelength()).extend(0.0);
-        let mut sum = 0.0;
         let mut w = 1.0f32;
         for (k, o) in self.octaves.iter().enumerate() {
-            let b = lod.filter(o.wavelength);
             let n = self.noise.octave::<false>(k as u32, q).0;
             let a = o.amp;
             let c = match self.kind {
                 Kind::Fbm => a * n,
                 Kind::Ridged => {
                     let s = (1.0 - n.abs()).powi(2) * w;
-                    w = (2.0 * s).clamp(0.0, 1.0);
+                    w = s.clamp(0.0, 1.0);
                     a * s
                 }
                 Kind::Hybrid => {
@@ -161,14 +160,44 @@ impl Multifractal {
                     }
                 }
             };
+            visit(c, o);
+            q *= LACUNARITY;
+        }
+    }
+
+    /// `h(p)` at level of detail `lod`.
+    #[inline]
+    pub fn value(&self, p: Vec2, lod: &Lod) -> f32 {
+        let mut sum = 0.0;
+        self.octaves(p, |c, o| {
+            let b = lod.filter(o.wavelength);
             sum += if b == 1.0 {
                 c
             } else {
                 b * c + (1.0 - b) * o.range.mid()
             };
-            q *= LACUNARITY;
-        }
+        });
         self.base + self.scale * (sum - self.lo)
+    }
+
+    /// A range of `h` over the disc of radius `reach` around `p`: per octave,
+    /// `c_k(p) ± L_k · reach` clipped to `[l_k, u_k]`, summed. The coarse octaves are
+    /// bounded by their slope, the fine ones by their small amplitude.
+    pub fn range_near(&self, p: Vec2, reach: f32, lod: &Lod) -> Interval {
+        let (mut lo, mut hi) = (0.0f32, 0.0f32);
+        self.octaves(p, |c, o| {
+            let b = lod.filter(o.wavelength);
+            let r = o.lipschitz * reach;
+            let (l, u) = ((c - r).max(o.range.lo), (c + r).min(o.range.hi));
+            let m = (1.0 - b) * o.range.mid();
+            lo += b * l + m;
+            hi += b * u + m;
+        });
+        let eps = 1e-5 * (self.base.abs() + self.scale * (hi - lo) + 1.0);
+        Interval::new(
+            self.base + self.scale * (lo - self.lo) - eps,
+            self.base + self.scale * (hi - self.lo) + eps,
+        )
     }
 
     /// A Lipschitz bound of `h` at level of detail `lod`.

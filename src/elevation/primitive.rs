@@ -269,9 +269,19 @@ impl Primitive {
         let (c, hd) = rect_centre(r);
         let s = self.eval(c, lod);
         let g = self.range();
-        let eps = 1e-5 * (s.f.abs() + g.width());
-        let reach = self.lipschitz_f(lod) * hd + eps;
-        let f = Interval::new((s.f - reach).max(g.lo), (s.f + reach).min(g.hi));
+        let f = match self {
+            Primitive::Disc(Disc {
+                centre,
+                elevation: ElevationFn::Fractal(m),
+                ..
+            }) => m.range_near(c - *centre, hd, lod),
+            _ => {
+                let eps = 1e-5 * (s.f.abs() + g.width());
+                let reach = self.lipschitz_f(lod) * hd + eps;
+                Interval::new(s.f - reach, s.f + reach)
+            }
+        };
+        let f = Interval::new(f.lo.max(g.lo), f.hi.min(g.hi));
         let a = if self.support().overlaps(r) {
             let reach = self.lipschitz_a() * hd + 1e-6;
             Interval::new((s.a - reach).max(0.0), (s.a + reach).min(1.0))
