@@ -127,7 +127,7 @@ fn tree_bounds_hold_on_random_points_and_pairs() {
             global.lf
         );
         assert!(
-            local_below > 1000,
+            local_below > 500,
             "local bounds are no tighter than the global one ({local_below})"
         );
     }
