@@ -7,7 +7,7 @@ use glam::Vec2;
 use crate::field::Rect;
 
 /// Most cells per child: bounds the index's memory whatever the supports.
-const CELLS_PER_CHILD: usize = 16;
+const CELLS_PER_CHILD: usize = 64;
 /// Rectangles spanning more cells than this are answered with every child.
 const MAX_QUERY_CELLS: usize = 16;
 
@@ -38,14 +38,15 @@ impl GridIndex {
             .fold((Vec2::INFINITY, Vec2::NEG_INFINITY), |(l, h), b| {
                 (l.min(b.min), h.max(b.max))
             });
-        // Cells about the median support's half size, capped in number.
+        // Cells about a quarter of the median support's size, capped in number: a cell's
+        // list is then little more than the supports that hold its points.
         let mut sizes: Vec<f32> = boxes
             .iter()
             .map(|b| (b.max - b.min).max_element())
             .collect();
         sizes.sort_by(f32::total_cmp);
         let span = (hi - lo).max(Vec2::splat(1e-3));
-        let mut cell = (sizes[sizes.len() / 2] * 0.5).max(1e-3);
+        let mut cell = (sizes[sizes.len() / 2] * 0.25).max(1e-3);
         let budget = CELLS_PER_CHILD * boxes.len();
         while ((span.x / cell).ceil() as usize) * ((span.y / cell).ceil() as usize) > budget {
             cell *= 1.5;

@@ -132,12 +132,16 @@ impl Node {
             Kind::Blend(b) => {
                 let (mut s, mut fs) = (0.0f32, 0.0f32);
                 let mut visit = |c: &Node| {
-                    if rect_contains(&c.support, p) {
-                        let x = c.eval(p, lod);
-                        if x.a > 0.0 {
-                            s += x.a;
-                            fs += x.a * x.f;
-                        }
+                    if !rect_contains(&c.support, p) {
+                        return;
+                    }
+                    let x = match &c.kind {
+                        Kind::Primitive(q) => q.eval_weighted(p, lod),
+                        _ => Some(c.eval(p, lod)).filter(|x| x.a > 0.0),
+                    };
+                    if let Some(x) = x {
+                        s += x.a;
+                        fs += x.a * x.f;
                     }
                 };
                 match &b.index {

@@ -199,6 +199,23 @@ impl Primitive {
         }
     }
 
+    /// `(f(p), α(p))` where `α(p) > 0`, `None` elsewhere — the weight first, so a blend
+    /// does not evaluate the elevation of a primitive that does not weigh at `p`.
+    #[inline]
+    pub fn eval_weighted(&self, p: Vec2, lod: &Lod) -> Option<Sample> {
+        match self {
+            Primitive::Disc(d) => {
+                let q = p - d.centre;
+                let a = wyvill(q.length() / d.radius);
+                (a > 0.0).then(|| Sample {
+                    f: d.elevation.value(q, lod),
+                    a,
+                })
+            }
+            _ => Some(self.eval(p, lod)).filter(|s| s.a > 0.0),
+        }
+    }
+
     /// The box outside which `α = 0`.
     pub fn support(&self) -> Rect {
         match self {
