@@ -51,6 +51,15 @@ pub struct Disc {
     pub elevation: ElevationFn,
 }
 
+impl Disc {
+    /// `α = g(‖q‖ / r)` at offset `q` from the centre, as `(1 − ‖q‖² / r²)³`: no square root.
+    #[inline]
+    fn weight(&self, q: Vec2) -> f32 {
+        let s = 1.0 - q.length_squared() / (self.radius * self.radius);
+        if s <= 0.0 { 0.0 } else { s * s * s }
+    }
+}
+
 /// A curve primitive.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Curve {
@@ -155,7 +164,7 @@ impl Primitive {
                 let q = p - d.centre;
                 Sample {
                     f: d.elevation.value(q, lod),
-                    a: wyvill(q.length() / d.radius),
+                    a: d.weight(q),
                 }
             }
             Primitive::Curve(c) => {
@@ -206,7 +215,7 @@ impl Primitive {
         match self {
             Primitive::Disc(d) => {
                 let q = p - d.centre;
-                let a = wyvill(q.length() / d.radius);
+                let a = d.weight(q);
                 (a > 0.0).then(|| Sample {
                     f: d.elevation.value(q, lod),
                     a,
