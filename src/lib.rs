@@ -10,6 +10,7 @@
 pub mod analysis;
 pub mod curves;
 pub mod dem;
+pub mod elevation;
 pub mod field;
 pub mod heightmap;
 pub mod io;

@@ -57,6 +57,8 @@ karstic render trees/warped_rocks.ron -o warped_rocks.png --quiet
 karstic render trees/arch.ron -o arch.png --quiet
 karstic render trees/floating_island.ron -o floating_island.png --quiet
 karstic render trees/blobs.ron -o blobs.png --cost blobs_cost.png --quiet
+karstic render trees/elevation_valley.ron -o elevation_valley.png --quiet
+karstic sample trees/elevation_valley.ron --box 212 1050 100 212.5 1550 520 --res 2 501 421 -o elevation_section.npy
 karstic build trees/arch.ron -o arch_mesh.obj --res 40 --quiet
 karstic masks trees/jacksboro_caves.ron -o masks --cell 5 --box 3300 4840 480 4860 5330 1100 --quiet
 karstic render trees/jacksboro_caves.ron -o heightmap_tree.png --quiet
@@ -74,6 +76,8 @@ const PICTURES: &[(&str, &str)] = &[
     ("bare/jacksboro_bare.png", "jacksboro_bare.png"),
     ("cave_section.npy", "cave_section.png"),
     ("cave_plan.npy", "cave_plan.png"),
+    ("elevation_section.npy", "elevation_section.png"),
+    ("elevation_valley.png", "elevation_valley.png"),
     ("curves_overhang.png", "curves_overhang.png"),
     ("curves_arch.png", "curves_arch.png"),
     ("meld_arch_after.png", "meld_arch_after.png"),

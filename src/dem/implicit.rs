@@ -30,12 +30,13 @@ use glam::{Vec2, Vec3};
 use super::detail::{Detail, DetailParams};
 use super::domain::Domain;
 use super::grid::{Heightfield, Interpolation};
+use super::prism::Prism;
 use super::pyramid::MinMaxPyramid;
 use super::{DemError, Georef};
 use crate::field::contract::{Elevation, ElevationSource};
 use crate::field::falloff::{
-    ISO, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope, wyvill,
-    wyvill_d, wyvill_interval, wyvill_slope,
+    ISO, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope,
+    wyvill_interval, wyvill_slope,
 };
 use crate::field::{Aabb, Field, Interval, Rect, ZBands};
 
@@ -77,9 +78,6 @@ impl ImplicitParams {
         }
     }
 }
-
-/// `√(1 − 2^(−1/3))`: `g(x) = ½` at this `x`, so `f_P = T` at distance `R·D_STAR` from `P`.
-const D_STAR: f32 = 0.454_202;
 
 /// The implicit heightfield leaf: `f = min(σ_R(h − z), 2T·g(d(p, P)/R))`.
 #[derive(Clone, Debug)]
@@ -252,22 +250,19 @@ impl HeightfieldField {
         z
     }
 
-    /// Vertical distance from `z` to `Δz` (0 inside).
+    /// The prism closing the terrain (shared with the elevation-tree leaf).
     #[inline]
-    fn dist_z(&self, z: f32) -> f32 {
-        (self.dz.lo - z).max(z - self.dz.hi).max(0.0)
+    fn prism_shape(&self) -> Prism {
+        Prism {
+            r: self.r,
+            dz: self.dz,
+        }
     }
 
     /// `f_P` from the horizontal distance to the eroded domain and the height.
     #[inline]
     fn prism(&self, dxy: f32, z: f32) -> f32 {
-        let dz = self.dist_z(z);
-        let d2 = dxy * dxy + dz * dz;
-        if d2 == 0.0 {
-            2.0 * ISO
-        } else {
-            2.0 * ISO * wyvill(d2.sqrt() / self.r)
-        }
+        self.prism_shape().value(dxy, z)
     }
 
     /// Range of `h` over the cells under `fp` (empty when none has a surface).
@@ -327,14 +322,7 @@ impl HeightfieldField {
 
     /// Range of the distance to `P` over `b`, from the clearance range `e`.
     fn dist_range(&self, e: Interval, z: Interval) -> Interval {
-        let dxy = Interval::new((self.r - e.hi).max(0.0), (self.r - e.lo).max(0.0));
-        let dz_lo = if z.overlaps(&self.dz) {
-            0.0
-        } else {
-            self.dist_z(z.lo).min(self.dist_z(z.hi))
-        };
-        let dz_hi = self.dist_z(z.lo).max(self.dist_z(z.hi));
-        Interval::new(dxy.lo.hypot(dz_lo), dxy.hi.hypot(dz_hi))
+        self.prism_shape().dist_range(e, z)
     }
 
     /// The detail `d(p)` over the elevation `h`, or 0 where it cannot matter: without
@@ -357,7 +345,7 @@ impl HeightfieldField {
     /// A float tolerance for bands around elevations of magnitude `m`.
     #[inline]
     fn eps(&self, m: f32) -> f32 {
-        1e-5 * (m + self.r)
+        self.prism_shape().eps(m)
     }
 }
 
@@ -394,22 +382,9 @@ impl Field for HeightfieldField {
             .map_or((0.0, Vec3::ZERO), |d| d.value_grad(p));
         let (h, gh) = (h + dd, gh.extend(-1.0) + gdd);
         let (ft, dft) = sigma_d(h - p.z, self.r);
-        let dxy = (self.r - e).max(0.0);
-        let (dz, gdz) = if p.z < self.dz.lo {
-            (self.dz.lo - p.z, -1.0)
-        } else if p.z > self.dz.hi {
-            (p.z - self.dz.hi, 1.0)
-        } else {
-            (0.0, 0.0)
-        };
-        let d = dxy.hypot(dz);
-        let (fp, gfp) = if d == 0.0 {
-            (2.0 * ISO, Vec3::ZERO)
-        } else {
-            let (g, dg) = wyvill_d(d / self.r);
-            let gd = (dxy * (-ge)).extend(dz * gdz) / d;
-            (2.0 * ISO * g, gd * (2.0 * ISO * dg / self.r))
-        };
+        let (fp, gfp) = self
+            .prism_shape()
+            .value_grad((self.r - e).max(0.0), -ge, p.z);
         if ft <= fp { (ft, gh * dft) } else { (fp, gfp) }
     }
 
@@ -483,32 +458,21 @@ impl Field for HeightfieldField {
 
     fn z_bands(&self, fp: &Rect, z: Interval, out: &mut ZBands) {
         let e = self.domain.clearance_range(fp);
-        let d_star = D_STAR * self.r * (1.0 + 1e-5);
-        let dxy = Interval::new((self.r - e.hi).max(0.0), (self.r - e.lo).max(0.0));
-        if e.hi <= 0.0 || dxy.lo > d_star {
-            return; // f_P < T everywhere over fp: no surface
-        }
-        let h = self.h_range(fp);
-        if h.is_empty() {
+        if e.hi <= 0.0 {
             return;
         }
         let reach = match (&self.detail, self.hf.cells_overlapping(fp)) {
             (Some(d), Some((i0, i1, j0, j1))) => d.reach(i0, i1, j0, j1),
             _ => 0.0,
         };
-        let h = Interval::new(h.lo - reach, h.hi + reach);
-        let eps = self.eps(h.lo.abs().max(h.hi.abs()));
-        // the terrain itself, z = h + d
-        out.push(Interval::new(h.lo - eps, h.hi + eps).intersect(z));
-        // the prism's walls and floor, f_P = T below the terrain
-        let lower = self.dz.lo - (d_star * d_star - dxy.lo * dxy.lo).max(0.0).sqrt();
-        let upper = if dxy.hi >= d_star {
-            h.hi.min(self.dz.hi)
+        let h = self.h_range(fp);
+        // the terrain z = h + d lies within the detail's reach of h
+        let h = if h.is_empty() {
+            h
         } else {
-            self.dz.lo - (d_star * d_star - dxy.hi * dxy.hi).max(0.0).sqrt()
+            Interval::new(h.lo - reach, h.hi + reach)
         };
-        let eps = self.eps(lower.abs().max(upper.abs()));
-        out.push(Interval::new(lower - eps, upper + eps).intersect(z));
+        self.prism_shape().z_bands(e, h, z, out);
     }
 
     fn eval_block(&self, origin: Vec3, step: Vec3, dims: [usize; 3], out: &mut [f32]) {

@@ -29,6 +29,7 @@ pub mod hgt;
 pub mod implicit;
 pub(crate) mod interp;
 pub mod png16;
+pub mod prism;
 pub mod pyramid;
 pub mod spec;
 

@@ -301,8 +301,7 @@ impl Fbm {
         let (mut amp, mut freq) = (1.0f32, self.inv_wavelength);
         let (mut value, mut grad) = (0.0f32, Vec3::ZERO);
         for k in 0..self.octaves {
-            let seed = self.seed.wrapping_add(k.wrapping_mul(0x9e37_79b9));
-            let (n, g) = simplex_impl::<GRAD>(seed, q + k as f32 * OCTAVE_SHIFT);
+            let (n, g) = self.octave::<GRAD>(k, q);
             value += amp * n;
             if GRAD {
                 grad += (amp * freq) * g;
@@ -312,6 +311,15 @@ impl Fbm {
             q *= LACUNARITY;
         }
         (value * self.norm, grad * self.norm)
+    }
+
+    /// Octave `k` alone, unweighted: `n_k(q + k·c)` (and its gradient in lattice units),
+    /// where `q = 2^k p / λ` is the point in the octave's lattice units. The elevation
+    /// trees' multifractals weight the octaves their own way (`crate::elevation`).
+    #[inline(always)]
+    pub(crate) fn octave<const GRAD: bool>(&self, k: u32, q: Vec3) -> (f32, Vec3) {
+        let seed = self.seed.wrapping_add(k.wrapping_mul(0x9e37_79b9));
+        simplex_impl::<GRAD>(seed, q + k as f32 * OCTAVE_SHIFT)
     }
 
     /// A proven Lipschitz bound: `SIMPLEX_LIPSCHITZ · Σ (½·2)^k / (λ Σ ½^k)`

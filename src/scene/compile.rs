@@ -12,6 +12,7 @@ use std::sync::Arc;
 use crate::curves::FeatureVolumeSpec;
 use crate::curves::spec::BuildOptions;
 use crate::dem::{DemCache, HeightfieldField};
+use crate::elevation::{BuildContext, ElevationField, ElevationSpec};
 use crate::field::{Aabb, Fbm, NodeId, Primitive, Transition, Tree, TreeBuilder, Warp};
 use crate::io::DEFAULT_MEMORY_BUDGET;
 use crate::voxel::SField;
@@ -121,6 +122,17 @@ impl Compiler<'_> {
             .map_err(|e| self.asset_error(n, e))
     }
 
+    /// Builds the elevation tree of `e` (node `n`) and implicitizes it.
+    fn elevation(&self, n: &NodeSpec, e: &ElevationSpec) -> Result<ElevationField, SceneError> {
+        let cx = BuildContext {
+            base_dir: self.base_dir,
+            seed: self.scene.seed,
+            budget: self.budget,
+        };
+        let tree = e.build_tree(&cx).map_err(|err| self.asset_error(n, err))?;
+        ElevationField::new(Arc::new(tree), e.params()).map_err(|err| self.asset_error(n, err))
+    }
+
     fn error(&self, node: &NodeSpec, message: impl Into<String>) -> SceneError {
         SceneError::Node {
             path: self.path.to_path_buf(),
@@ -179,6 +191,10 @@ impl Compiler<'_> {
                 let leaf = h
                     .load_with(self.base_dir, &mut self.dems, self.scene.seed)
                     .map_err(|e| self.asset_error(n, e))?;
+                self.builder.leaf(Arc::new(leaf), name)
+            }
+            NodeSpec::Elevation(e) => {
+                let leaf = self.elevation(n, e)?;
                 self.builder.leaf(Arc::new(leaf), name)
             }
             NodeSpec::FeatureVolume(f) => {

@@ -209,6 +209,14 @@ impl SceneFile {
                     &self.base_dir.join(&h.source),
                     &crate::dem::ReadOptions::default(),
                 )),
+                NodeSpec::Elevation(e) => {
+                    files.extend(e.tree.sources().into_iter().flat_map(|p| {
+                        crate::dem::files_read(
+                            &self.base_dir.join(p),
+                            &crate::dem::ReadOptions::default(),
+                        )
+                    }))
+                }
                 NodeSpec::FeatureVolume(f) => {
                     if let CurveSource::Path(p) = &f.curves {
                         files.push(self.base_dir.join(p));

@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 use super::value::{Dir3, Finite, P3, Positive, Scale3};
 use crate::curves::FeatureVolumeSpec;
 use crate::dem::HeightfieldSpec;
+use crate::elevation::ElevationSpec;
 use crate::field::{NoiseSpec, PrimitiveSpec};
 
 /// The tree-file format version this build reads and writes.
@@ -43,6 +44,8 @@ pub enum NodeSpec {
     Primitive(PrimitiveSpec),
     /// A DEM as an implicit terrain (Paris et al. 2019 §5.1): solid below the elevation.
     Heightfield(HeightfieldSpec),
+    /// An elevation tree (Génevaux et al. 2015) implicitized like a DEM: solid below it.
+    Elevation(ElevationSpec),
     /// Feature Curves compiled by the voxel pipeline into an S-field primitive (Becher 2016).
     FeatureVolume(FeatureVolumeSpec),
     /// A subtree placed on the terrain: its origin moved to `(x, y, h(x, y) + offset)`.
@@ -291,6 +294,7 @@ impl NodeSpec {
         match self {
             NodeSpec::Primitive(_) => "Primitive",
             NodeSpec::Heightfield(_) => "Heightfield",
+            NodeSpec::Elevation(_) => "Elevation",
             NodeSpec::FeatureVolume(_) => "FeatureVolume",
             NodeSpec::Anchor(_) => "Anchor",
             NodeSpec::Blend(_) => "Blend",
@@ -309,6 +313,7 @@ impl NodeSpec {
         match self {
             NodeSpec::Primitive(n) => n.name.as_deref(),
             NodeSpec::Heightfield(n) => n.name.as_deref(),
+            NodeSpec::Elevation(n) => n.name.as_deref(),
             NodeSpec::FeatureVolume(n) => n.name.as_deref(),
             NodeSpec::Anchor(n) => n.name.as_deref(),
             NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => {
@@ -336,6 +341,7 @@ impl NodeSpec {
             NodeSpec::Instance(_)
             | NodeSpec::Primitive(_)
             | NodeSpec::Heightfield(_)
+            | NodeSpec::Elevation(_)
             | NodeSpec::FeatureVolume(_) => Vec::new(),
         }
     }
@@ -367,6 +373,7 @@ impl NodeSpec {
             NodeSpec::Instance(_)
             | NodeSpec::Primitive(_)
             | NodeSpec::Heightfield(_)
+            | NodeSpec::Elevation(_)
             | NodeSpec::FeatureVolume(_) => Vec::new(),
         }
     }

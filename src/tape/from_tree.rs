@@ -29,6 +29,7 @@ use glam::Vec3;
 
 use super::{Combine, HeightGrid, Profile, Shape, Tape, TapeBuilder, TapeError};
 use crate::dem::HeightfieldField;
+use crate::elevation::ElevationField;
 use crate::field::skeleton::Project;
 use crate::field::{Field, ISO, Node, NodeId, Primitive, Skeleton, Tree};
 use crate::voxel::SField;
@@ -213,6 +214,14 @@ fn leaf(tree: &Tree, b: &mut TapeBuilder, id: NodeId, f: &dyn Field) -> Result<(
     }
     if let Some(s) = any.and_then(|a| a.downcast_ref::<SField>()) {
         return b.sfield(s, &describe(tree, id, "S-field volume"));
+    }
+    if any.is_some_and(|a| a.is::<ElevationField>()) {
+        return Err(no_encoding(
+            tree,
+            id,
+            "elevation tree",
+            "elevation trees have no GPU encoding: the CPU renders them",
+        ));
     }
     Err(no_encoding(
         tree,
