@@ -12,11 +12,15 @@ use std::collections::BinaryHeap;
 
 use crate::dem::Heightfield;
 
+mod graph;
+
+pub use graph::FlowGraph;
+
 /// Freeman's (1991) exponent on the slope in the flow partition.
 pub const FREEMAN_EXPONENT: f32 = 1.1;
 
 /// The eight neighbours `(di, dj)`, in a fixed order (determinism).
-const NEIGHBOURS: [(isize, isize); 8] = [
+pub(crate) const NEIGHBOURS: [(isize, isize); 8] = [
     (1, 0),
     (1, 1),
     (0, 1),
@@ -68,8 +72,15 @@ fn neighbours(k: usize, nx: usize, ny: usize) -> impl Iterator<Item = (usize, us
 /// surrounded by higher ground is raised to the next float above its spill point, so
 /// filled flats still drain). Nodata stays nodata.
 pub fn fill_depressions(hf: &Heightfield) -> Heightfield {
-    let (nx, ny) = (hf.nx(), hf.ny());
     let mut z = hf.samples().to_vec();
+    fill_in_place(&mut z, hf.nx(), hf.ny());
+    Heightfield::new(hf.nx(), hf.ny(), hf.origin(), hf.cell(), z)
+        .expect("same sizes as a valid heightfield, finite values")
+}
+
+/// [`fill_depressions`] on the samples `z` of an `nx × ny` grid, in place (the erosion
+/// loop's form: no copy of the grid).
+pub fn fill_in_place(z: &mut [f32], nx: usize, ny: usize) {
     let mut done = vec![false; z.len()];
     let mut open = BinaryHeap::new();
     // Seeds: valid samples on the edge or next to nodata.
@@ -80,7 +91,7 @@ pub fn fill_depressions(hf: &Heightfield) -> Heightfield {
         }
         let (i, j) = (k % nx, k / nx);
         let rim = i == 0 || j == 0 || i + 1 == nx || j + 1 == ny;
-        if rim || neighbours(k, nx, ny).any(|(_, n)| hf.samples()[n].is_nan()) {
+        if rim || neighbours(k, nx, ny).any(|(_, n)| z[n].is_nan()) {
             done[k] = true;
             open.push(Low { z: z[k], k });
         }
@@ -98,8 +109,6 @@ pub fn fill_depressions(hf: &Heightfield) -> Heightfield {
             open.push(Low { z: z[n], k: n });
         }
     }
-    Heightfield::new(nx, ny, hf.origin(), hf.cell(), z)
-        .expect("same sizes as a valid heightfield, finite values")
 }
 
 /// Drainage area (m²) of every sample of `filled` (a grid without depressions, from
