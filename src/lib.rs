@@ -16,6 +16,7 @@ pub mod heightmap;
 pub mod io;
 pub mod job;
 pub mod mesh;
+pub mod procedural;
 pub mod render;
 pub mod scene;
 pub mod tape;

@@ -3,7 +3,9 @@
 mod build;
 mod curves;
 mod dem;
+mod erode;
 mod eval;
+mod generate;
 mod heightmap;
 mod masks;
 mod render;
@@ -53,6 +55,10 @@ enum Command {
     Heightmap(heightmap::HeightmapArgs),
     /// Triangulate a DEM or a tree's heightmap within a vertical error (greedy insertion).
     Tin(tin::TinArgs),
+    /// Write a procedural heightfield (fBm, multifractals, diamond-square, faults, deposition).
+    Generate(generate::GenerateArgs),
+    /// Erode a DEM: uplift and stream power (with hillslope diffusion), then thermal erosion.
+    Erode(erode::ErodeArgs),
 }
 
 /// The `--max-memory` flag of every command that reads or builds grids and images.
@@ -112,6 +118,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Curves(a) => curves::run(a),
         Command::Heightmap(a) => heightmap::run(a),
         Command::Tin(a) => tin::run(a),
+        Command::Generate(a) => generate::run(a),
+        Command::Erode(a) => erode::run(a),
     }
 }
 

@@ -14,6 +14,9 @@
 //!     cell_size: Some(30.0),    // resample to 30 m cells first
 //! ))
 //! ```
+//!
+//! Instead of `source`, `generate: Some((kind: Ridged((wavelength: 2000)), ...))` makes the
+//! raster from a seed, optionally eroded ([`GenerateSpec`]).
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -24,6 +27,7 @@ use serde::{Deserialize, Serialize};
 use super::implicit::{HeightfieldField, ImplicitParams};
 use super::{Dem, DemError, Interpolation, ReadOptions};
 use crate::io::DEFAULT_MEMORY_BUDGET;
+use crate::procedural::GenerateSpec;
 use crate::scene::{Finite, NonNegative, P2, Positive};
 
 fn one() -> Finite {
@@ -50,8 +54,12 @@ pub struct HeightfieldSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// The DEM file (GeoTIFF, PNG + sidecar, ESRI ASCII, SRTM .hgt), relative to the tree
-    /// file's folder.
-    pub source: PathBuf,
+    /// file's folder. Exactly one of `source` and `generate` is given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<PathBuf>,
+    /// A procedural raster instead of a file: generator, size, seed and erosion stages.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub generate: Option<GenerateSpec>,
     /// Falloff distance `R` in metres.
     pub falloff: Positive,
     /// Depth of the prism's floor below the lowest elevation (default: `falloff`).
@@ -85,7 +93,8 @@ impl HeightfieldSpec {
     pub fn new(source: impl Into<PathBuf>, falloff: f32) -> HeightfieldSpec {
         HeightfieldSpec {
             name: None,
-            source: source.into(),
+            source: Some(source.into()),
+            generate: None,
             falloff: Positive::new(falloff),
             base_depth: None,
             vertical_scale: one(),
@@ -115,6 +124,15 @@ impl HeightfieldSpec {
         }
     }
 
+    /// The name, else the source file, for messages.
+    fn label(&self) -> String {
+        match (&self.name, &self.source) {
+            (Some(n), _) => n.clone(),
+            (None, Some(s)) => s.to_string_lossy().into_owned(),
+            (None, None) => "(generated)".into(),
+        }
+    }
+
     /// Loads the DEM (`source` resolved against `base_dir`) and implicitizes it.
     pub fn load(&self, base_dir: &Path) -> Result<HeightfieldField, DemError> {
         self.load_with(base_dir, &mut DemCache::new(DEFAULT_MEMORY_BUDGET))
@@ -126,25 +144,28 @@ impl HeightfieldSpec {
         base_dir: &Path,
         cache: &mut DemCache,
     ) -> Result<HeightfieldField, DemError> {
-        let dem = cache.get(&base_dir.join(&self.source), self)?;
-        let field =
-            HeightfieldField::new(&dem.heightfield, &self.params()).map_err(|e| match e {
-                DemError::Invalid { what } => DemError::Invalid {
-                    what: format!(
-                        "heightfield {}: {what}",
-                        self.name
-                            .as_deref()
-                            .unwrap_or(&self.source.to_string_lossy())
-                    ),
-                },
-                e => e,
-            })?;
+        let named = |e| match e {
+            DemError::Invalid { what } => DemError::Invalid {
+                what: format!("heightfield {}: {what}", self.label()),
+            },
+            e => e,
+        };
+        let dem = match (&self.source, &self.generate) {
+            (Some(source), None) => cache.get(&base_dir.join(source), self)?,
+            (None, Some(g)) => cache.generated(g, self).map_err(named)?,
+            _ => {
+                return Err(named(DemError::Invalid {
+                    what: "give exactly one of `source` and `generate`".into(),
+                }));
+            }
+        };
+        let field = HeightfieldField::new(&dem.heightfield, &self.params()).map_err(named)?;
         Ok(field.with_georef(dem.georef.clone()))
     }
 }
 
-/// What makes two loads the same: canonical path, resampling (bits), PNG range (bits),
-/// interpolation used to resample.
+/// What makes two loads the same: canonical path (or a generator's recipe as RON),
+/// resampling (bits), PNG range (bits), interpolation used to resample.
 type CacheKey = (PathBuf, Option<u32>, Option<(u32, u32)>, Interpolation);
 
 /// Decoded DEMs by path (and resampling), shared by the heightfield nodes of one compile,
@@ -169,6 +190,39 @@ impl DemCache {
     /// Notices of every DEM loaded so far, in load order.
     pub fn notices(&self) -> &[String] {
         &self.notices
+    }
+
+    /// The raster `g` makes (resampled as `spec` asks), generated once per recipe.
+    fn generated(
+        &mut self,
+        g: &GenerateSpec,
+        spec: &HeightfieldSpec,
+    ) -> Result<Arc<Dem>, DemError> {
+        let recipe = ron::to_string(g).map_err(|e| DemError::Invalid {
+            what: format!("generate: {e}"),
+        })?;
+        let key = (
+            PathBuf::from(format!("generate:{recipe}")),
+            spec.cell_size.map(|c| c.get().to_bits()),
+            None,
+            spec.interpolation,
+        );
+        if let Some(d) = self.dems.get(&key) {
+            return Ok(d.clone());
+        }
+        let hf = g.build(self.budget)?;
+        let c = f64::from(hf.cell().x);
+        let mut dem = Dem {
+            heightfield: hf,
+            georef: super::Georef::local(c, c),
+            notices: Vec::new(),
+        };
+        if let Some(c) = spec.cell_size {
+            dem = dem.resample(c.get().into(), spec.interpolation, self.budget)?;
+        }
+        let dem = Arc::new(dem);
+        self.dems.insert(key, dem.clone());
+        Ok(dem)
     }
 
     fn get(&mut self, path: &Path, spec: &HeightfieldSpec) -> Result<Arc<Dem>, DemError> {
