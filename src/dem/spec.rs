@@ -15,7 +15,7 @@
 //! ))
 //! ```
 //!
-//! Instead of `source`, `generate: Some((kind: Ridged((wavelength: 2000)), ...))` makes the
+//! Instead of `source`, `generate: (kind: Ridged(wavelength: 2000), ...)` makes the
 //! raster from a seed, optionally eroded ([`GenerateSpec`]).
 
 use std::collections::HashMap;

@@ -67,10 +67,10 @@ pub fn erode(
             });
         let ratio_r: &[f32] = &ratio;
         next.par_chunks_mut(nx).enumerate().for_each(|(j, row)| {
-            for i in 0..nx {
+            for (i, out) in row.iter_mut().enumerate() {
                 let k = i + nx * j;
                 if zr[k].is_nan() {
-                    row[i] = zr[k];
+                    *out = zr[k];
                     continue;
                 }
                 let mut h = zr[k] - shed[k];
@@ -87,7 +87,7 @@ pub fn erode(
                         h += ratio_r[n] * e;
                     }
                 }
-                row[i] = h;
+                *out = h;
             }
         });
         z.copy_from_slice(&next);

@@ -62,7 +62,11 @@ pub fn generate(
         }
         // Square step: centres of diamonds (edges of the squares), 3 neighbours on the rim.
         for j in (0..side).step_by(half) {
-            let first = if (j / half) % 2 == 0 { half } else { 0 };
+            let first = if (j / half).is_multiple_of(2) {
+                half
+            } else {
+                0
+            };
             for i in (first..side).step_by(step) {
                 let (mut sum, mut count) = (0.0f32, 0.0f32);
                 if i >= half {

@@ -125,8 +125,8 @@ impl FlowGraph {
         }
         self.stack.clear();
         let mut todo = Vec::new();
-        for b in 0..n {
-            if self.receiver[b] as usize != b || z[b].is_nan() {
+        for (b, v) in z.iter().enumerate() {
+            if self.receiver[b] as usize != b || v.is_nan() {
                 continue;
             }
             todo.push(b as u32);
