@@ -61,7 +61,7 @@ karstic masks trees/jacksboro_caves.ron -o masks --cell 5 --box 3300 4840 480 48
 karstic render trees/jacksboro_caves.ron -o heightmap_tree.png --quiet
 karstic heightmap trees/jacksboro_caves.ron -o top.tif --cell 2.5 --region 4300 4700 4900 5200
 karstic render trees/heightmap_top.ron -o heightmap_top.png --camera 4900 4380 780 4480 4990 690 --fov 40 --quiet
-karstic render trees/eroded_range.ron -o eroded_range.png --camera 1250 700 480 1280 1300 200 --fov 45 --quiet
+karstic render trees/eroded_range.ron -o eroded_range.png --camera 560 250 480 680 960 170 --fov 45 --quiet
 ";
 
 /// What [`COMMANDS`] write that becomes a picture, and the picture's name in `docs/img/`.

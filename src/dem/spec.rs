@@ -46,6 +46,19 @@ fn is_default<T: Default + PartialEq>(v: &T) -> bool {
     *v == T::default()
 }
 
+/// `source` is written as a bare path (`source: "dem.tif"`), with or without RON's
+/// implicit `Some`.
+fn some_path<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<PathBuf>, D::Error> {
+    PathBuf::deserialize(d).map(Some)
+}
+
+fn path_or_none<S: serde::Serializer>(p: &Option<PathBuf>, s: S) -> Result<S::Ok, S::Error> {
+    match p {
+        Some(p) => p.serialize(s),
+        None => s.serialize_none(),
+    }
+}
+
 /// A heightfield leaf as written in a tree file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -55,7 +68,12 @@ pub struct HeightfieldSpec {
     pub name: Option<String>,
     /// The DEM file (GeoTIFF, PNG + sidecar, ESRI ASCII, SRTM .hgt), relative to the tree
     /// file's folder. Exactly one of `source` and `generate` is given.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "path_or_none",
+        deserialize_with = "some_path"
+    )]
     pub source: Option<PathBuf>,
     /// A procedural raster instead of a file: generator, size, seed and erosion stages.
     #[serde(default, skip_serializing_if = "Option::is_none")]

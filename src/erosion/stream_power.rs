@@ -3,7 +3,7 @@
 //! sample's new elevation depends only on its receiver's, already updated, so one pass
 //! downstream to upstream solves the whole grid, stably for any time step.
 
-use crate::analysis::flow::{FlowGraph, fill_in_place};
+use crate::analysis::flow::{FlowGraph, NEIGHBOURS, fill_in_place};
 
 /// The stream-power law's constants: `K` (erodibility, in `m^{1−2m} / yr` for `n = 1`),
 /// the area exponent `m` and the slope exponent `n`.
@@ -50,8 +50,14 @@ pub fn step(
         }
     }
     if graph.update(z, nx, ny, dx, dy) > 0 {
-        fill_in_place(z, nx, ny);
-        graph.update(z, nx, ny, dx, dy);
+        // Most pits are single samples that rounding or diffusion left on a filled flat:
+        // raising each to just above its lowest neighbour is what the flood would do to
+        // them, at a fraction of its cost. What remains takes the whole flood.
+        raise_pits(z, nx, ny, graph);
+        if graph.update(z, nx, ny, dx, dy) > 0 {
+            fill_in_place(z, nx, ny);
+            graph.update(z, nx, ny, dx, dy);
+        }
     }
     graph.accumulate(dx * dy, area);
     let (rec, len) = (graph.receivers(), graph.lengths());
@@ -76,6 +82,51 @@ pub fn step(
         };
         z[k] = h as f32;
     }
+}
+
+/// Raises pits to the next float above their lowest neighbour, starting from the pits of
+/// `graph` (valid, non-base samples that are their own receivers) and following the
+/// neighbours a raise turns into pits, for at most [`LOCAL_RAISES`] raises per initial
+/// pit (a deep basin would take one per float step: the flood's work). In a fixed order.
+fn raise_pits(z: &mut [f32], nx: usize, ny: usize, graph: &FlowGraph) {
+    let rec = graph.receivers();
+    let mut todo: Vec<usize> = (0..z.len())
+        .filter(|&k| rec[k] as usize == k && is_pit(z, nx, ny, k))
+        .collect();
+    todo.reverse();
+    let mut budget = todo.len() * LOCAL_RAISES;
+    while let Some(k) = todo.pop() {
+        if budget == 0 {
+            return;
+        }
+        if !is_pit(z, nx, ny, k) {
+            continue;
+        }
+        budget -= 1;
+        let lowest = neighbours(nx, k)
+            .map(|n| z[n])
+            .fold(f32::INFINITY, f32::min);
+        z[k] = lowest.next_up();
+        todo.extend(neighbours(nx, k).filter(|&n| is_pit(z, nx, ny, n)));
+    }
+}
+
+/// Raises per initial pit that [`raise_pits`] may make.
+const LOCAL_RAISES: usize = 16;
+
+/// The 8 neighbours of an interior sample `k`.
+fn neighbours(nx: usize, k: usize) -> impl Iterator<Item = usize> {
+    let (i, j) = ((k % nx) as isize, (k / nx) as isize);
+    NEIGHBOURS
+        .iter()
+        .map(move |&(di, dj)| (i + di) as usize + nx * (j + dj) as usize)
+}
+
+/// A valid sample, not base level, with no lower neighbour.
+fn is_pit(z: &[f32], nx: usize, ny: usize, k: usize) -> bool {
+    !z[k].is_nan()
+        && !FlowGraph::is_base_level(z, nx, ny, k)
+        && neighbours(nx, k).all(|n| z[n] >= z[k])
 }
 
 /// Solves `h − h₀ + F (h − h_r)^n = 0` for `h ∈ (h_r, h₀]` by Newton's method from `h₀`
