@@ -9,8 +9,9 @@ use crate::analysis::flow::FlowGraph;
 /// `nx × ny` grid of `dx × dy` cells. Base-level samples (the edge, the rim of nodata) and
 /// nodata are held fixed.
 pub fn step(z: &mut [f32], nx: usize, ny: usize, dx: f32, dy: f32, d: f32, dt: f32) {
+    let has_nodata = FlowGraph::has_nodata(z);
     let free: Vec<bool> = (0..z.len())
-        .map(|k| !z[k].is_nan() && !FlowGraph::is_base_level(z, nx, ny, k))
+        .map(|k| !z[k].is_nan() && !FlowGraph::base_level(z, nx, ny, k, has_nodata))
         .collect();
     let rx = f64::from(d) * f64::from(dt) / (2.0 * f64::from(dx) * f64::from(dx));
     let ry = f64::from(d) * f64::from(dt) / (2.0 * f64::from(dy) * f64::from(dy));

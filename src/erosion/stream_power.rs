@@ -40,10 +40,11 @@ pub fn step(
     area: &mut Vec<f32>,
 ) {
     let rise = uplift * dt;
+    let has_nodata = FlowGraph::has_nodata(z);
     if rise != 0.0 {
         for j in 1..ny.saturating_sub(1) {
             for k in j * nx + 1..(j + 1) * nx - 1 {
-                if !FlowGraph::is_base_level(z, nx, ny, k) && !z[k].is_nan() {
+                if !FlowGraph::base_level(z, nx, ny, k, has_nodata) && !z[k].is_nan() {
                     z[k] += rise;
                 }
             }
@@ -53,7 +54,7 @@ pub fn step(
         // Most pits are single samples that rounding or diffusion left on a filled flat:
         // raising each to just above its lowest neighbour is what the flood would do to
         // them, at a fraction of its cost. What remains takes the whole flood.
-        raise_pits(z, nx, ny, graph);
+        raise_pits(z, nx, ny, graph, has_nodata);
         if graph.update(z, nx, ny, dx, dy) > 0 {
             fill_in_place(z, nx, ny);
             graph.update(z, nx, ny, dx, dy);
@@ -88,10 +89,10 @@ pub fn step(
 /// `graph` (valid, non-base samples that are their own receivers) and following the
 /// neighbours a raise turns into pits, for at most [`LOCAL_RAISES`] raises per initial
 /// pit (a deep basin would take one per float step: the flood's work). In a fixed order.
-fn raise_pits(z: &mut [f32], nx: usize, ny: usize, graph: &FlowGraph) {
+fn raise_pits(z: &mut [f32], nx: usize, ny: usize, graph: &FlowGraph, has_nodata: bool) {
     let rec = graph.receivers();
     let mut todo: Vec<usize> = (0..z.len())
-        .filter(|&k| rec[k] as usize == k && is_pit(z, nx, ny, k))
+        .filter(|&k| rec[k] as usize == k && is_pit(z, nx, ny, k, has_nodata))
         .collect();
     todo.reverse();
     let mut budget = todo.len() * LOCAL_RAISES;
@@ -99,7 +100,7 @@ fn raise_pits(z: &mut [f32], nx: usize, ny: usize, graph: &FlowGraph) {
         if budget == 0 {
             return;
         }
-        if !is_pit(z, nx, ny, k) {
+        if !is_pit(z, nx, ny, k, has_nodata) {
             continue;
         }
         budget -= 1;
@@ -107,7 +108,7 @@ fn raise_pits(z: &mut [f32], nx: usize, ny: usize, graph: &FlowGraph) {
             .map(|n| z[n])
             .fold(f32::INFINITY, f32::min);
         z[k] = lowest.next_up();
-        todo.extend(neighbours(nx, k).filter(|&n| is_pit(z, nx, ny, n)));
+        todo.extend(neighbours(nx, k).filter(|&n| is_pit(z, nx, ny, n, has_nodata)));
     }
 }
 
@@ -123,9 +124,9 @@ fn neighbours(nx: usize, k: usize) -> impl Iterator<Item = usize> {
 }
 
 /// A valid sample, not base level, with no lower neighbour.
-fn is_pit(z: &[f32], nx: usize, ny: usize, k: usize) -> bool {
+fn is_pit(z: &[f32], nx: usize, ny: usize, k: usize, has_nodata: bool) -> bool {
     !z[k].is_nan()
-        && !FlowGraph::is_base_level(z, nx, ny, k)
+        && !FlowGraph::base_level(z, nx, ny, k, has_nodata)
         && neighbours(nx, k).all(|n| z[n] >= z[k])
 }
 

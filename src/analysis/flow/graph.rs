@@ -32,15 +32,27 @@ impl FlowGraph {
     /// edge or next to nodata (where water leaves the domain, as in
     /// [`super::fill_depressions`]).
     pub fn is_base_level(z: &[f32], nx: usize, ny: usize, k: usize) -> bool {
+        Self::base_level(z, nx, ny, k, true)
+    }
+
+    /// [`FlowGraph::is_base_level`] told whether the grid has nodata at all (when it has
+    /// none, only the edge is base level and the neighbours need no look).
+    pub fn base_level(z: &[f32], nx: usize, ny: usize, k: usize, has_nodata: bool) -> bool {
         let (i, j) = (k % nx, k / nx);
         !z[k].is_nan()
             && (i == 0
                 || j == 0
                 || i + 1 == nx
                 || j + 1 == ny
-                || NEIGHBOURS.iter().any(|&(di, dj)| {
-                    z[(i as isize + di) as usize + nx * (j as isize + dj) as usize].is_nan()
-                }))
+                || has_nodata
+                    && NEIGHBOURS.iter().any(|&(di, dj)| {
+                        z[(i as isize + di) as usize + nx * (j as isize + dj) as usize].is_nan()
+                    }))
+    }
+
+    /// Whether any sample of `z` is nodata.
+    pub fn has_nodata(z: &[f32]) -> bool {
+        z.iter().any(|v| v.is_nan())
     }
 
     /// Recomputes receivers (steepest descent over the 8 neighbours, slopes measured with
@@ -68,6 +80,7 @@ impl FlowGraph {
         self.length.resize(n, 0.0);
         let dist: [f32; 8] = NEIGHBOURS.map(|(di, dj)| (di as f32 * dx).hypot(dj as f32 * dy));
         let offset: [isize; 8] = NEIGHBOURS.map(|(di, dj)| di + nx as isize * dj);
+        let has_nodata = Self::has_nodata(z);
         let pits: usize = self
             .receiver
             .par_chunks_mut(nx)
@@ -79,7 +92,7 @@ impl FlowGraph {
                     let k = i + nx * j;
                     rec[i] = k as u32;
                     len[i] = 1.0;
-                    if z[k].is_nan() || Self::is_base_level(z, nx, ny, k) {
+                    if z[k].is_nan() || Self::base_level(z, nx, ny, k, has_nodata) {
                         continue;
                     }
                     let (mut best, mut steepest) = (k, 0.0f32);
