@@ -24,6 +24,7 @@ mod doc_commands;
 mod doc_pictures;
 mod docs;
 mod elevation_trees;
+mod erosion;
 mod heightmap;
 mod main_job;
 mod masks;

@@ -3,7 +3,9 @@
 mod build;
 mod curves;
 mod dem;
+mod erode;
 mod eval;
+mod generate;
 mod heightmap;
 mod masks;
 mod render;
@@ -56,6 +58,10 @@ enum Command {
     Tin(tin::TinArgs),
     /// Large terrains: plan a quadtree of tiles, mesh each (an array job), merge into 3D Tiles.
     Tile(tile::TileArgs),
+    /// Write a procedural heightfield (fBm, multifractals, diamond-square, faults, deposition).
+    Generate(generate::GenerateArgs),
+    /// Erode a DEM: uplift and stream power (with hillslope diffusion), then thermal erosion.
+    Erode(erode::ErodeArgs),
 }
 
 /// The `--max-memory` flag of every command that reads or builds grids and images.
@@ -116,6 +122,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Heightmap(a) => heightmap::run(a),
         Command::Tin(a) => tin::run(a),
         Command::Tile(a) => tile::run(a),
+        Command::Generate(a) => generate::run(a),
+        Command::Erode(a) => erode::run(a),
     }
 }
 

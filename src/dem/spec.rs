@@ -16,6 +16,9 @@
 //!     detail: (noise: (amplitude: 4.0, wavelength: 48.0, octaves: 4), flat: 0.2),
 //! ))
 //! ```
+//!
+//! Instead of `source`, `generate: (kind: Ridged(wavelength: 2000), ...)` makes the
+//! raster from a seed, optionally eroded ([`GenerateSpec`]).
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -28,6 +31,7 @@ use super::implicit::{HeightfieldField, ImplicitParams};
 use super::{Dem, DemError, Interpolation, ReadOptions};
 use crate::field::{Fbm, NoiseSpec};
 use crate::io::DEFAULT_MEMORY_BUDGET;
+use crate::procedural::GenerateSpec;
 use crate::scene::{Finite, NonNegative, P2, Positive, Unit};
 
 fn one() -> Finite {
@@ -46,6 +50,19 @@ fn is_default<T: Default + PartialEq>(v: &T) -> bool {
     *v == T::default()
 }
 
+/// `source` is written as a bare path (`source: "dem.tif"`), with or without RON's
+/// implicit `Some`.
+fn some_path<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<PathBuf>, D::Error> {
+    PathBuf::deserialize(d).map(Some)
+}
+
+fn path_or_none<S: serde::Serializer>(p: &Option<PathBuf>, s: S) -> Result<S::Ok, S::Error> {
+    match p {
+        Some(p) => p.serialize(s),
+        None => s.serialize_none(),
+    }
+}
+
 /// A heightfield leaf as written in a tree file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -54,8 +71,17 @@ pub struct HeightfieldSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// The DEM file (GeoTIFF, PNG + sidecar, ESRI ASCII, SRTM .hgt), relative to the tree
-    /// file's folder.
-    pub source: PathBuf,
+    /// file's folder. Exactly one of `source` and `generate` is given.
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "path_or_none",
+        deserialize_with = "some_path"
+    )]
+    pub source: Option<PathBuf>,
+    /// A procedural raster instead of a file: generator, size, seed and erosion stages.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub generate: Option<GenerateSpec>,
     /// Falloff distance `R` in metres.
     pub falloff: Positive,
     /// Depth of the prism's floor below the lowest elevation (default: `falloff`).
@@ -137,7 +163,8 @@ impl HeightfieldSpec {
     pub fn new(source: impl Into<PathBuf>, falloff: f32) -> HeightfieldSpec {
         HeightfieldSpec {
             name: None,
-            source: source.into(),
+            source: Some(source.into()),
+            generate: None,
             falloff: Positive::new(falloff),
             base_depth: None,
             vertical_scale: one(),
@@ -170,8 +197,17 @@ impl HeightfieldSpec {
         }
     }
 
-    /// Loads the DEM (`source` resolved against `base_dir`) and implicitizes it (scene
-    /// seed 0).
+    /// The name, else the source file, for messages.
+    fn label(&self) -> String {
+        match (&self.name, &self.source) {
+            (Some(n), _) => n.clone(),
+            (None, Some(s)) => s.to_string_lossy().into_owned(),
+            (None, None) => "(generated)".into(),
+        }
+    }
+
+    /// Loads the DEM (`source` resolved against `base_dir`, or generated) and
+    /// implicitizes it (scene seed 0).
     pub fn load(&self, base_dir: &Path) -> Result<HeightfieldField, DemError> {
         self.load_with(base_dir, &mut DemCache::new(DEFAULT_MEMORY_BUDGET), 0)
     }
@@ -184,25 +220,28 @@ impl HeightfieldSpec {
         cache: &mut DemCache,
         seed: u32,
     ) -> Result<HeightfieldField, DemError> {
-        let dem = cache.get(&base_dir.join(&self.source), self)?;
-        let field =
-            HeightfieldField::new(&dem.heightfield, &self.params(seed)).map_err(|e| match e {
-                DemError::Invalid { what } => DemError::Invalid {
-                    what: format!(
-                        "heightfield {}: {what}",
-                        self.name
-                            .as_deref()
-                            .unwrap_or(&self.source.to_string_lossy())
-                    ),
-                },
-                e => e,
-            })?;
+        let named = |e| match e {
+            DemError::Invalid { what } => DemError::Invalid {
+                what: format!("heightfield {}: {what}", self.label()),
+            },
+            e => e,
+        };
+        let dem = match (&self.source, &self.generate) {
+            (Some(source), None) => cache.get(&base_dir.join(source), self)?,
+            (None, Some(g)) => cache.generated(g, self).map_err(named)?,
+            _ => {
+                return Err(named(DemError::Invalid {
+                    what: "give exactly one of `source` and `generate`".into(),
+                }));
+            }
+        };
+        let field = HeightfieldField::new(&dem.heightfield, &self.params(seed)).map_err(named)?;
         Ok(field.with_georef(dem.georef.clone()))
     }
 }
 
-/// What makes two loads the same: canonical path, resampling (bits), PNG range (bits),
-/// interpolation used to resample.
+/// What makes two loads the same: canonical path (or a generator's recipe as RON),
+/// resampling (bits), PNG range (bits), interpolation used to resample.
 type CacheKey = (PathBuf, Option<u32>, Option<(u32, u32)>, Interpolation);
 
 /// Decoded DEMs by path (and resampling), shared by the heightfield nodes of one compile,
@@ -227,6 +266,39 @@ impl DemCache {
     /// Notices of every DEM loaded so far, in load order.
     pub fn notices(&self) -> &[String] {
         &self.notices
+    }
+
+    /// The raster `g` makes (resampled as `spec` asks), generated once per recipe.
+    fn generated(
+        &mut self,
+        g: &GenerateSpec,
+        spec: &HeightfieldSpec,
+    ) -> Result<Arc<Dem>, DemError> {
+        let recipe = ron::to_string(g).map_err(|e| DemError::Invalid {
+            what: format!("generate: {e}"),
+        })?;
+        let key = (
+            PathBuf::from(format!("generate:{recipe}")),
+            spec.cell_size.map(|c| c.get().to_bits()),
+            None,
+            spec.interpolation,
+        );
+        if let Some(d) = self.dems.get(&key) {
+            return Ok(d.clone());
+        }
+        let hf = g.build(self.budget)?;
+        let c = f64::from(hf.cell().x);
+        let mut dem = Dem {
+            heightfield: hf,
+            georef: super::Georef::local(c, c),
+            notices: Vec::new(),
+        };
+        if let Some(c) = spec.cell_size {
+            dem = dem.resample(c.get().into(), spec.interpolation, self.budget)?;
+        }
+        let dem = Arc::new(dem);
+        self.dems.insert(key, dem.clone());
+        Ok(dem)
     }
 
     fn get(&mut self, path: &Path, spec: &HeightfieldSpec) -> Result<Arc<Dem>, DemError> {

@@ -205,10 +205,14 @@ impl SceneFile {
         let mut files = vec![self.path.clone()];
         for n in self.scene.all_nodes() {
             match n {
-                NodeSpec::Heightfield(h) => files.extend(crate::dem::files_read(
-                    &self.base_dir.join(&h.source),
-                    &crate::dem::ReadOptions::default(),
-                )),
+                NodeSpec::Heightfield(h) => {
+                    if let Some(source) = &h.source {
+                        files.extend(crate::dem::files_read(
+                            &self.base_dir.join(source),
+                            &crate::dem::ReadOptions::default(),
+                        ));
+                    }
+                }
                 NodeSpec::Elevation(e) => {
                     files.extend(e.tree.sources().into_iter().flat_map(|p| {
                         crate::dem::files_read(

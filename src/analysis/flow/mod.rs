@@ -7,16 +7,20 @@
 //! Grids are [`Heightfield`]s: 8-connected samples, NaN for nodata. Water leaves the
 //! domain at the grid's edges and at nodata: those cells are the seeds of the flood.
 
-use std::cmp::Ordering;
-use std::collections::BinaryHeap;
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, VecDeque};
 
 use crate::dem::Heightfield;
+
+mod graph;
+
+pub use graph::FlowGraph;
 
 /// Freeman's (1991) exponent on the slope in the flow partition.
 pub const FREEMAN_EXPONENT: f32 = 1.1;
 
 /// The eight neighbours `(di, dj)`, in a fixed order (determinism).
-const NEIGHBOURS: [(isize, isize); 8] = [
+pub(crate) const NEIGHBOURS: [(isize, isize); 8] = [
     (1, 0),
     (1, 1),
     (0, 1),
@@ -28,26 +32,18 @@ const NEIGHBOURS: [(isize, isize); 8] = [
 ];
 
 /// A cell in the flood's queue: lowest elevation first, then lowest index (so equal
-/// elevations pop in a fixed order).
-#[derive(Clone, Copy, PartialEq)]
-struct Low {
-    z: f32,
-    k: usize,
+/// elevations pop in a fixed order). The elevation is kept as an integer with the order of
+/// the floats (finite values only: nodata never enters the queue), so comparing is cheap.
+type Low = Reverse<(u32, usize)>;
+
+/// `z`'s bits as a `u32` that sorts as `z` does.
+fn ordered(z: f32) -> u32 {
+    let b = z.to_bits();
+    if b >> 31 == 1 { !b } else { b | 1 << 31 }
 }
 
-impl Eq for Low {}
-
-impl Ord for Low {
-    fn cmp(&self, o: &Self) -> Ordering {
-        // BinaryHeap pops the largest: reverse both keys.
-        o.z.total_cmp(&self.z).then(o.k.cmp(&self.k))
-    }
-}
-
-impl PartialOrd for Low {
-    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
-        Some(self.cmp(o))
-    }
+fn low(z: f32, k: usize) -> Low {
+    Reverse((ordered(z), k))
 }
 
 /// The valid neighbours of sample `k` of an `nx × ny` grid, as indices.
@@ -68,10 +64,21 @@ fn neighbours(k: usize, nx: usize, ny: usize) -> impl Iterator<Item = (usize, us
 /// surrounded by higher ground is raised to the next float above its spill point, so
 /// filled flats still drain). Nodata stays nodata.
 pub fn fill_depressions(hf: &Heightfield) -> Heightfield {
-    let (nx, ny) = (hf.nx(), hf.ny());
     let mut z = hf.samples().to_vec();
+    fill_in_place(&mut z, hf.nx(), hf.ny());
+    Heightfield::new(hf.nx(), hf.ny(), hf.origin(), hf.cell(), z)
+        .expect("same sizes as a valid heightfield, finite values")
+}
+
+/// [`fill_depressions`] on the samples `z` of an `nx × ny` grid, in place (the erosion
+/// loop's form: no copy of the grid).
+pub fn fill_in_place(z: &mut [f32], nx: usize, ny: usize) {
     let mut done = vec![false; z.len()];
     let mut open = BinaryHeap::new();
+    // Samples raised inside a depression: each is just above the sample that reached it,
+    // so they go first and in order of arrival, without the heap (Barnes et al. 2014,
+    // Algorithm 3's "pit" queue).
+    let mut pit = VecDeque::new();
     // Seeds: valid samples on the edge or next to nodata.
     for k in 0..z.len() {
         if z[k].is_nan() {
@@ -80,12 +87,20 @@ pub fn fill_depressions(hf: &Heightfield) -> Heightfield {
         }
         let (i, j) = (k % nx, k / nx);
         let rim = i == 0 || j == 0 || i + 1 == nx || j + 1 == ny;
-        if rim || neighbours(k, nx, ny).any(|(_, n)| hf.samples()[n].is_nan()) {
+        if rim || neighbours(k, nx, ny).any(|(_, n)| z[n].is_nan()) {
             done[k] = true;
-            open.push(Low { z: z[k], k });
+            open.push(low(z[k], k));
         }
     }
-    while let Some(Low { z: zc, k }) = open.pop() {
+    loop {
+        let k = match pit.pop_front() {
+            Some(k) => k,
+            None => match open.pop() {
+                Some(Reverse((_, k))) => k,
+                None => break,
+            },
+        };
+        let zc = z[k];
         for (_, n) in neighbours(k, nx, ny) {
             if done[n] {
                 continue;
@@ -94,12 +109,12 @@ pub fn fill_depressions(hf: &Heightfield) -> Heightfield {
             // Raise a pit to just above its spill point.
             if z[n] <= zc {
                 z[n] = zc.next_up();
+                pit.push_back(n);
+            } else {
+                open.push(low(z[n], n));
             }
-            open.push(Low { z: z[n], k: n });
         }
     }
-    Heightfield::new(nx, ny, hf.origin(), hf.cell(), z)
-        .expect("same sizes as a valid heightfield, finite values")
 }
 
 /// Drainage area (m²) of every sample of `filled` (a grid without depressions, from
