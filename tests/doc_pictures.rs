@@ -66,7 +66,7 @@ karstic heightmap trees/jacksboro_caves.ron -o top.tif --cell 2.5 --region 4300 
 karstic render trees/heightmap_top.ron -o heightmap_top.png --camera 4900 4380 780 4480 4990 690 --fov 40 --quiet
 karstic render trees/jacksboro_bare.ron -o detail_on.png --camera 3920 5150 790 3560 5120 880 --fov 50 --quiet
 karstic render trees/jacksboro_smooth.ron -o detail_off.png --camera 3920 5150 790 3560 5120 880 --fov 50 --quiet
-karstic render trees/eroded_range.ron -o eroded_range.png --camera 560 250 480 680 960 170 --fov 45 --quiet
+karstic render trees/eroded_range.ron -o eroded_range.png --camera 600 380 300 660 700 200 --fov 50 --quiet
 ";
 
 /// What [`COMMANDS`] write that becomes a picture, and the picture's name in `docs/img/`.
