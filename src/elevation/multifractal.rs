@@ -136,10 +136,19 @@ impl Multifractal {
     /// Visits each octave's contribution `c_k(p)` with its table entry.
     #[inline(always)]
     fn octaves(&self, p: Vec2, mut visit: impl FnMut(f32, &Octave)) {
+        // The octaves' noises first, four at a time (they are independent), then their
+        // combination, in order.
+        let mut noise = [0.0f32; MAX_OCTAVES as usize];
         let mut q = (p * self.noise.inv_wavelength()).extend(0.0);
+        for (k0, chunk) in noise[..self.octaves.len().next_multiple_of(4)]
+            .chunks_exact_mut(4)
+            .enumerate()
+        {
+            chunk.copy_from_slice(&self.noise.octaves4(4 * k0 as u32, q).to_array());
+            q *= LACUNARITY.powi(4);
+        }
         let mut w = 1.0f32;
-        for (k, o) in self.octaves.iter().enumerate() {
-            let n = self.noise.octave::<false>(k as u32, q).0;
+        for (k, (o, &n)) in self.octaves.iter().zip(&noise).enumerate() {
             let a = o.amp;
             let c = match self.kind {
                 Kind::Fbm => a * n,
@@ -161,7 +170,6 @@ impl Multifractal {
                 }
             };
             visit(c, o);
-            q *= LACUNARITY;
         }
     }
 

@@ -52,12 +52,19 @@ pub struct Disc {
 }
 
 impl Disc {
-    /// `α = g(‖q‖ / r)` at offset `q` from the centre, as `(1 − ‖q‖² / r²)³`: no square root.
+    /// `α = g(‖q‖ / r)` at offset `q` from the centre.
     #[inline]
     fn weight(&self, q: Vec2) -> f32 {
-        let s = 1.0 - q.length_squared() / (self.radius * self.radius);
-        if s <= 0.0 { 0.0 } else { s * s * s }
+        disc_weight(q, self.radius * self.radius)
     }
+}
+
+/// A disc's weight `g(‖q‖ / r)` at offset `q` from its centre, `r2 = r²`, as
+/// `(1 − ‖q‖² / r²)³₊`: no square root, and no branch.
+#[inline(always)]
+pub(super) fn disc_weight(q: Vec2, r2: f32) -> f32 {
+    let s = (1.0 - q.length_squared() / r2).max(0.0);
+    s * s * s
 }
 
 /// A curve primitive.

@@ -15,7 +15,7 @@
 //! whole lattice and `n` is C¹. With `0.6` it jumps on simplex faces and has no Lipschitz
 //! constant at all. The test `four_corners_equal_the_whole_lattice` checks this.
 
-use glam::Vec3;
+use glam::{BVec4A, Mat4, Vec3, Vec4};
 use serde::de::Error as _;
 use serde::{Deserialize, Deserializer, Serialize};
 
@@ -92,13 +92,18 @@ pub fn mix32(mut h: u32) -> u32 {
     h ^ (h >> 16)
 }
 
+/// The lattice hash's multipliers of `i`, `j`, `k`.
+const HASH_X: u32 = 0x8da6_b343;
+const HASH_Y: u32 = 0xd816_3841;
+const HASH_Z: u32 = 0xcb1a_b31f;
+
 /// The gradient of lattice vertex `(i, j, k)` for `seed`.
 #[inline]
 fn gradient(seed: u32, i: i32, j: i32, k: i32) -> Vec3 {
     let h = mix32(
-        seed ^ (i as u32).wrapping_mul(0x8da6_b343)
-            ^ (j as u32).wrapping_mul(0xd816_3841)
-            ^ (k as u32).wrapping_mul(0xcb1a_b31f),
+        seed ^ (i as u32).wrapping_mul(HASH_X)
+            ^ (j as u32).wrapping_mul(HASH_Y)
+            ^ (k as u32).wrapping_mul(HASH_Z),
     );
     Vec3::from_array(GRADIENTS[(h >> 28) as usize])
 }
@@ -115,29 +120,32 @@ pub fn simplex_grad(seed: u32, p: Vec3) -> (f32, Vec3) {
     simplex_impl::<true>(seed, p)
 }
 
+/// `⌊x⌋` without a call into libm (the baseline x86-64 has no rounding instruction):
+/// truncation, one step down for negative non-integers. Exact for every `x` (from `2²³`
+/// on, every float is an integer), except that `−0` gives `+0`.
+#[inline(always)]
+fn floor(x: f32) -> f32 {
+    if x.abs() < 8_388_608.0 {
+        let t = x as i32 as f32;
+        if t > x { t - 1.0 } else { t }
+    } else {
+        x
+    }
+}
+
 #[inline(always)]
 fn simplex_impl<const GRAD: bool>(seed: u32, p: Vec3) -> (f32, Vec3) {
     // Skew to find the lattice cell, then unskew the cell origin back.
     let s = (p.x + p.y + p.z) * F3;
-    let (i, j, k) = ((p.x + s).floor(), (p.y + s).floor(), (p.z + s).floor());
+    let (i, j, k) = (floor(p.x + s), floor(p.y + s), floor(p.z + s));
     let t = (i + j + k) * G3;
     let d0 = p - Vec3::new(i - t, j - t, k - t);
-    // The simplex of the cell holding p: walk the axes in decreasing order of d0.
-    let (o1, o2) = if d0.x >= d0.y {
-        if d0.y >= d0.z {
-            ([1, 0, 0], [1, 1, 0])
-        } else if d0.x >= d0.z {
-            ([1, 0, 0], [1, 0, 1])
-        } else {
-            ([0, 0, 1], [1, 0, 1])
-        }
-    } else if d0.y < d0.z {
-        ([0, 0, 1], [0, 1, 1])
-    } else if d0.x < d0.z {
-        ([0, 1, 0], [0, 1, 1])
-    } else {
-        ([0, 1, 0], [1, 1, 0])
-    };
+    // The simplex of the cell holding p: walk the axes in decreasing order of d0. The
+    // first step is along the largest component, the second adds the middle one; written
+    // with comparisons instead of branches, which the CPU cannot predict here.
+    let (xy, yz, xz) = (d0.x >= d0.y, d0.y >= d0.z, d0.x >= d0.z);
+    let o1 = [xy & xz, !xy & yz, !xz & !yz].map(i32::from);
+    let o2 = [xy | xz, !xy | yz, !yz | !xz].map(i32::from);
     let (ii, jj, kk) = (i as i32, j as i32, k as i32);
     let corners = [[0, 0, 0], o1, o2, [1, 1, 1]];
     let mut value = 0.0;
@@ -145,18 +153,75 @@ fn simplex_impl<const GRAD: bool>(seed: u32, p: Vec3) -> (f32, Vec3) {
     for (c, o) in corners.iter().enumerate() {
         let off = Vec3::new(o[0] as f32, o[1] as f32, o[2] as f32);
         let d = d0 - off + Vec3::splat(c as f32 * G3);
-        let a = R2 - d.length_squared();
-        if a > 0.0 {
-            let g = gradient(seed, ii + o[0], jj + o[1], kk + o[2]);
-            let gd = g.dot(d);
-            let a2 = a * a;
-            value += a2 * a2 * gd;
-            if GRAD {
-                grad += a2 * a * (a * g - 8.0 * gd * d);
-            }
+        // A corner out of reach adds `0 · (g · d)`, which leaves the sums as they are.
+        let a = (R2 - d.length_squared()).max(0.0);
+        let g = gradient(seed, ii + o[0], jj + o[1], kk + o[2]);
+        let gd = g.dot(d);
+        let a2 = a * a;
+        value += a2 * a2 * gd;
+        if GRAD {
+            grad += a2 * a * (a * g - 8.0 * gd * d);
         }
     }
     (SIMPLEX_SCALE * value, SIMPLEX_SCALE * grad)
+}
+
+/// [`GRADIENTS`] as SIMD rows (the fourth lane 0), for [`simplex4`].
+const GRADIENT_ROWS: [Vec4; 16] = {
+    let mut rows = [Vec4::ZERO; 16];
+    let mut r = 0;
+    while r < 16 {
+        let g = GRADIENTS[r];
+        rows[r] = Vec4::new(g[0], g[1], g[2], 0.0);
+        r += 1;
+    }
+    rows
+};
+
+/// Four noises at once, one per lane: lane `l` is `simplex(seeds[l], (x, y, z)[l])` bit for
+/// bit — the same operations in the same order on the lanes of SIMD registers (glam's
+/// `Vec4`; no fused multiply-add), the simplex's corners chosen by masks. The octaves of a
+/// multifractal are independent noises, evaluated this way. The lattice hash stays per
+/// lane (the baseline x86-64 has no 32-bit vector multiply); `(i + 1)·m = i·m + m` spares
+/// its products by the corner offsets.
+#[inline(always)]
+fn simplex4(seeds: [u32; 4], x: Vec4, y: Vec4, z: Vec4) -> Vec4 {
+    let s = (x + y + z) * F3;
+    let (i, j, k) = ((x + s).floor(), (y + s).floor(), (z + s).floor());
+    let t = (i + j + k) * G3;
+    let d0 = [x - (i - t), y - (j - t), z - (k - t)];
+    let (xy, yz, xz) = (d0[0].cmpge(d0[1]), d0[1].cmpge(d0[2]), d0[0].cmpge(d0[2]));
+    let (no, yes) = (BVec4A::splat(false), BVec4A::splat(true));
+    let corners = [
+        [no; 3],
+        [xy & xz, !xy & yz, !xz & !yz],
+        [xy | xz, !xy | yz, !yz | !xz],
+        [yes; 3],
+    ];
+    // Per axis and lane, the hash's products for the cell's two lattice planes.
+    let products: [[[u32; 2]; 4]; 3] = [(i, HASH_X), (j, HASH_Y), (k, HASH_Z)].map(|(v, m)| {
+        v.to_array().map(|f| {
+            let p = (f as i32 as u32).wrapping_mul(m);
+            [p, p.wrapping_add(m)]
+        })
+    });
+    let mut value = Vec4::ZERO;
+    for (c, o) in corners.iter().enumerate() {
+        let off = o.map(|m| Vec4::select(m, Vec4::ONE, Vec4::ZERO));
+        let g = Vec4::splat(c as f32 * G3);
+        let d: [Vec4; 3] = std::array::from_fn(|a| d0[a] - off[a] + g);
+        let a = (R2 - (d[0] * d[0] + d[1] * d[1] + d[2] * d[2])).max(Vec4::ZERO);
+        let bits = o.map(|m| m.bitmask());
+        let rows: [Vec4; 4] = std::array::from_fn(|l| {
+            let p = |a: usize| products[a][l][(bits[a] >> l) as usize & 1];
+            GRADIENT_ROWS[(mix32(seeds[l] ^ p(0) ^ p(1) ^ p(2)) >> 28) as usize]
+        });
+        let gt = Mat4::from_cols(rows[0], rows[1], rows[2], rows[3]).transpose();
+        let gd = gt.x_axis * d[0] + gt.y_axis * d[1] + gt.z_axis * d[2];
+        let a2 = a * a;
+        value += a2 * a2 * gd;
+    }
+    SIMPLEX_SCALE * value
 }
 
 /// How many octaves an fBm sums: `1..=12`, 4 when omitted.
@@ -322,6 +387,24 @@ impl Fbm {
         simplex_impl::<GRAD>(seed, q + k as f32 * OCTAVE_SHIFT)
     }
 
+    /// Octaves `k0 .. k0 + 4` alone, unweighted, as [`Fbm::octave`] gives them (bit for
+    /// bit; lanes past the last octave hold noise too), `q` the point in octave `k0`'s
+    /// lattice units.
+    #[inline]
+    pub(crate) fn octaves4(&self, k0: u32, q: Vec3) -> Vec4 {
+        let ks: [u32; 4] = std::array::from_fn(|l| k0 + l as u32);
+        let seeds = ks.map(|k| self.seed.wrapping_add(k.wrapping_mul(0x9e37_79b9)));
+        let kf = Vec4::from_array(ks.map(|k| k as f32));
+        let scale = Vec4::new(1.0, LACUNARITY, LACUNARITY * LACUNARITY, LACUNARITY.powi(3));
+        let lane = |q: f32, c: f32| Vec4::splat(q) * scale + kf * c;
+        simplex4(
+            seeds,
+            lane(q.x, OCTAVE_SHIFT.x),
+            lane(q.y, OCTAVE_SHIFT.y),
+            lane(q.z, OCTAVE_SHIFT.z),
+        )
+    }
+
     /// A proven Lipschitz bound: `SIMPLEX_LIPSCHITZ · Σ (½·2)^k / (λ Σ ½^k)`
     /// `= SIMPLEX_LIPSCHITZ · o / (λ (2 − 2^{1−o}))` for `o` octaves.
     #[inline]
@@ -391,6 +474,31 @@ mod tests {
                 simplex(7, p),
                 brute(7, p)
             );
+        }
+    }
+
+    #[test]
+    fn four_octaves_at_once_are_the_octaves_bit_for_bit() {
+        let mut rng = Rng(3);
+        for n in 0..20_000 {
+            // Points of every scale, lattice vertices and faces among them.
+            let q = if n % 10 == 0 {
+                rng.v(8.0).round()
+            } else {
+                rng.v([0.01, 40.0, 3e4][n % 3])
+            };
+            let f = Fbm::with(rng.0, 1.0, 12);
+            let k0 = 4 * (n as u32 % 3);
+            let four = f.octaves4(k0, q).to_array();
+            for (l, v) in four.iter().enumerate() {
+                let k = k0 + l as u32;
+                let one = f.octave::<false>(k, q * 2f32.powi(l as i32)).0;
+                assert_eq!(
+                    v.to_bits(),
+                    one.to_bits(),
+                    "octave {k} at {q}: {v} vs {one}"
+                );
+            }
         }
     }
 
