@@ -1,6 +1,6 @@
 //! A Delaunay triangulation of grid points in flat half-edge arrays, grown by inserting
 //! points into known triangles and legalising the edges around them by flips (Lawson's
-//! incremental algorithm, as Garland & Heckbert 1995 §4 use it).
+//! incremental algorithm, as Garland & Heckbert 1995 use it).
 //!
 //! Triangle `t` owns half-edges `3t`, `3t + 1` and `3t + 2`, counter-clockwise; a
 //! half-edge has an origin vertex and a twin (the same edge in the neighbouring triangle,
