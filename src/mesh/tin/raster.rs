@@ -1,6 +1,6 @@
 //! The grid points of one TIN triangle and the worst of them: a scan of the triangle's
-//! rows, each row's span (from the edges' `x` at that row; vertices sit on grid points, so
-//! a small slack makes the rounding exact) compared with the triangle's plane.
+//! rows, each row's span (from the edges' `x` at that row, stepped exactly in integers:
+//! vertices sit on grid points) compared with the triangle's plane.
 
 /// The grid point of a triangle farthest (vertically) from the triangle's plane.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -8,17 +8,62 @@ pub struct Worst {
     /// `|plane − h|` there, metres; 0 when the triangle holds no grid point but its corners.
     pub error: f64,
     /// Its grid index `i + nx·j`.
-    pub at: usize,
+    pub at: u32,
+    /// Its height, metres (kept here: the sample is long out of cache when the point is
+    /// inserted).
+    pub z: f32,
 }
 
-/// Slack when rounding an edge's `x` at a row: the true `x` is a fraction with a
-/// denominator below 2³², so it is an integer or at least 2⁻³² away from one, far more
-/// than the rounding error of computing it.
-const SLACK: f64 = 1e-10;
+/// Rows whose spans are found (and first samples touched) before they are scanned.
+const ROWS: usize = 32;
+
+/// An edge's `x` at successive rows, exactly: `x + r/dy` with `0 ≤ r < dy`, stepped by
+/// `dx/dy` (a digital differential analyser on integers).
+struct Edge {
+    x: i64,
+    r: i64,
+    q: i64,
+    rs: i64,
+    dy: i64,
+}
+
+impl Edge {
+    /// The edge from grid point `p` up to `q` (`q` not below `p`), at `p`'s row.
+    fn new(p: [i64; 2], q: [i64; 2]) -> Edge {
+        let (dx, dy) = (q[0] - p[0], (q[1] - p[1]).max(1));
+        Edge {
+            x: p[0],
+            r: 0,
+            q: dx.div_euclid(dy),
+            rs: dx.rem_euclid(dy),
+            dy,
+        }
+    }
+
+    /// Moves to the next row.
+    fn step(&mut self) {
+        self.x += self.q;
+        self.r += self.rs;
+        if self.r >= self.dy {
+            self.x += 1;
+            self.r -= self.dy;
+        }
+    }
+
+    /// The smallest grid column at or right of the edge.
+    fn ceil(&self) -> i64 {
+        self.x + i64::from(self.r > 0)
+    }
+
+    /// The largest grid column at or left of the edge.
+    fn floor(&self) -> i64 {
+        self.x
+    }
+}
 
 /// The grid point of the triangle with grid corners `t` (any orientation) over the
-/// samples `h` (row-major, `nx` per row) farthest from the plane through `z`, its
-/// corners excluded.
+/// samples `h` (row-major, `nx` per row, fewer than 2³² in all) farthest from the plane
+/// through `z`, its corners excluded.
 pub fn worst_point(t: [[i64; 2]; 3], z: [f64; 3], h: &[f32], nx: usize) -> Worst {
     let [a, mut b, mut c] = t;
     let [za, mut zb, mut zc] = z;
@@ -42,76 +87,66 @@ pub fn worst_point(t: [[i64; 2]; 3], z: [f64; 3], h: &[f32], nx: usize) -> Worst
     let gx = (dzb * vy - dzc * uy) / det;
     let gy = (dzc * ux - dzb * vx) / det;
 
-    // Counter-clockwise, an edge p → q going up (qy > py) bounds the triangle on its
-    // right, one going down on its left; horizontal edges bound no row's span.
-    let mut left = [(0.0, 0.0, 0.0); 2];
-    let mut right = [(0.0, 0.0, 0.0); 2];
-    let (mut nl, mut nr) = (0, 0);
-    for (p, q) in [(a, b), (b, c), (c, a)] {
-        if q[1] == p[1] {
-            continue;
-        }
-        // x on the edge at row y: px + (y − py)·slope.
-        let e = (
-            p[0] as f64,
-            p[1] as f64,
-            (q[0] - p[0]) as f64 / (q[1] - p[1]) as f64,
-        );
-        if q[1] > p[1] {
-            right[nr] = e;
-            nr += 1;
-        } else {
-            left[nl] = e;
-            nl += 1;
-        }
-    }
-    let y0 = a[1].min(b[1]).min(c[1]);
-    let y1 = a[1].max(b[1]).max(c[1]);
-    let at = |e: (f64, f64, f64), y: f64| e.0 + (y - e.1) * e.2;
-    // ceil and floor of grid coordinates (|v| < 2⁶³), inlined: the library calls cost
-    // more than the short rows they bound.
-    let ceil = |v: f64| {
-        let t = v as i64;
-        t + i64::from((t as f64) < v)
-    };
-    let floor = |v: f64| {
-        let t = v as i64;
-        t - i64::from((t as f64) > v)
-    };
+    // The rows from the lowest corner v0 to the highest v2: the long edge v0 → v2 bounds
+    // every row on one side, v0 → v1 then v1 → v2 on the other.
+    let mut v = [a, b, c];
+    v.sort_unstable_by_key(|p| p[1]);
+    let [v0, v1, v2] = v;
+    let long_left = (v2[0] - v0[0]) * (v1[1] - v0[1]) - (v2[1] - v0[1]) * (v1[0] - v0[0]) < 0;
+    let mut long = Edge::new(v0, v2);
+    let mut short = Edge::new(v0, v1);
     let mut worst = Worst::default();
-    for y in y0..=y1 {
-        let fy = y as f64;
-        let mut lo = i64::MIN;
-        for &e in &left[..nl] {
-            lo = lo.max(ceil(at(e, fy) - SLACK));
-        }
-        let mut hi = i64::MAX;
-        for &e in &right[..nr] {
-            hi = hi.min(floor(at(e, fy) + SLACK));
-        }
-        if lo > hi {
-            continue;
-        }
-        let (lo, hi) = (lo as usize, hi as usize);
-        let row = y as usize * nx;
-        let base = za + gx * (lo as f64 - a[0] as f64) + gy * (fy - a[1] as f64);
-        let span = &h[row + lo..=row + hi];
-        // First the row's largest error in f32 (four lanes, vectorised), then — only
-        // where that can beat the worst so far — exact errors in f64 and where they are.
-        if row_max_f32(base, gx, span) <= worst.error {
-            continue;
-        }
-        let err = |k: usize, s: f32| (base + gx * k as f64 - f64::from(s)).abs();
-        let corner_row = y == a[1] || y == b[1] || y == c[1];
-        for (k, &s) in span.iter().enumerate() {
-            let e = err(k, s);
-            if e > worst.error && !(corner_row && [a, b, c].contains(&[(lo + k) as i64, y])) {
-                worst = Worst {
-                    error: e,
-                    at: row + lo + k,
-                };
+    let mut spans = [(0i64, 0i64); ROWS];
+    let mut y = v0[1];
+    while y <= v2[1] {
+        // A batch of rows' spans, each row's first samples touched so that the rows'
+        // cache misses overlap instead of stalling the scan one after the other.
+        let rows = ((v2[1] - y + 1) as usize).min(ROWS);
+        for (k, span) in spans[..rows].iter_mut().enumerate() {
+            let yk = y + k as i64;
+            if yk == v1[1] {
+                short = Edge::new(v1, v2);
+            }
+            *span = if long_left {
+                (long.ceil(), short.floor())
+            } else {
+                (short.ceil(), long.floor())
+            };
+            long.step();
+            short.step();
+            if span.0 <= span.1 {
+                std::hint::black_box(h[yk as usize * nx + span.0 as usize]);
             }
         }
+        for (k, &(lo, hi)) in spans[..rows].iter().enumerate() {
+            if lo > hi {
+                continue;
+            }
+            let y = y + k as i64;
+            let fy = y as f64;
+            let (lo, hi) = (lo as usize, hi as usize);
+            let row = y as usize * nx;
+            let base = za + gx * (lo as f64 - a[0] as f64) + gy * (fy - a[1] as f64);
+            let span = &h[row + lo..=row + hi];
+            // First the row's largest error in f32 (four lanes, vectorised), then — only
+            // where that can beat the worst so far — exact errors in f64 and where they are.
+            if row_max_f32(base, gx, span) <= worst.error {
+                continue;
+            }
+            let err = |k: usize, s: f32| (base + gx * k as f64 - f64::from(s)).abs();
+            let corner_row = y == a[1] || y == b[1] || y == c[1];
+            for (k, &s) in span.iter().enumerate() {
+                let e = err(k, s);
+                if e > worst.error && !(corner_row && [a, b, c].contains(&[(lo + k) as i64, y])) {
+                    worst = Worst {
+                        error: e,
+                        at: (row + lo + k) as u32,
+                        z: s,
+                    };
+                }
+            }
+        }
+        y += rows as i64;
     }
     worst
 }
@@ -207,9 +242,11 @@ mod tests {
                     "{t:?}: {} vs {best}",
                     w.error
                 );
+                assert!(best == 0.0 || w.z == h[w.at as usize]);
                 assert!(
                     best == 0.0
-                        || inside(t, n as i64).contains(&[(w.at % n) as i64, (w.at / n) as i64])
+                        || inside(t, n as i64)
+                            .contains(&[(w.at as usize % n) as i64, (w.at as usize / n) as i64])
                 );
             }
         }
