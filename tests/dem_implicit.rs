@@ -2,7 +2,7 @@
 //! sampling, on the real UTM DEM (with its nodata edges) and on synthetic grids with
 //! polygons and bicubic.
 
-use crate::common::Rng;
+use crate::common::{Rng, check_z_bands};
 
 use std::path::Path;
 
@@ -11,7 +11,7 @@ use karstic::dem::{
     DetailParams, Heightfield, HeightfieldField, HeightfieldSpec, ImplicitParams, Interpolation,
 };
 use karstic::field::falloff::sigma;
-use karstic::field::{Aabb, Fbm, Field, ISO, Interval, Rect, ZBands};
+use karstic::field::{Aabb, Fbm, Field, ISO, Rect};
 
 fn utm_leaf(r: f32, interp: Interpolation) -> HeightfieldField {
     utm_leaf_with(r, interp, "")
@@ -204,47 +204,15 @@ fn gradients_match_finite_differences() {
 #[test]
 fn z_bands_contain_every_sampled_crossing() {
     for (name, f) in leaves() {
-        let mut rng = Rng(4);
-        let s = f.support().dilate(10.0);
-        let zr = Interval::new(s.min.z, s.max.z);
-        let mut bands = ZBands::new();
-        let (mut crossings, mut pruned) = (0, 0.0);
-        for _ in 0..600 {
-            let c = rng.in_box(&s).truncate();
-            let half = Vec2::new(rng.range(1.0, 60.0), rng.range(1.0, 60.0));
-            let fp = Rect::new(c - half, c + half);
-            bands.clear();
-            f.z_bands(&fp, zr, &mut bands);
-            pruned += 1.0 - bands.as_slice().iter().map(|b| b.width()).sum::<f32>() / zr.width();
-            for _ in 0..6 {
-                let xy = Vec2::new(rng.range(fp.min.x, fp.max.x), rng.range(fp.min.y, fp.max.y));
-                let n = 2000;
-                let dz = zr.width() / n as f32;
-                let mut prev = f.value(xy.extend(zr.lo)) - ISO;
-                for k in 1..=n {
-                    let z = zr.lo + k as f32 * dz;
-                    let cur = f.value(xy.extend(z)) - ISO;
-                    if (prev > 0.0) != (cur > 0.0) {
-                        crossings += 1;
-                        let seg = Interval::new(z - dz, z);
-                        assert!(
-                            bands.as_slice().iter().any(|b| b.overlaps(&seg)),
-                            "{name}: crossing in {seg:?} at {xy} outside {:?}",
-                            bands.as_slice()
-                        );
-                    }
-                    prev = cur;
-                }
-            }
-        }
+        let (crossings, pruned) = check_z_bands(name, &f, 600, 6, 4);
         assert!(
             crossings > 300,
             "{name}: too few crossings sampled ({crossings})"
         );
         assert!(
-            pruned / 600.0 > 0.5,
+            pruned > 0.5,
             "{name}: bands prune only {:.0}% of z",
-            100.0 * pruned / 600.0
+            100.0 * pruned
         );
     }
 }

@@ -2,14 +2,14 @@
 //! pairs, replace is continuous, LoD at level ∞ is the full evaluation, and the 3D leaf
 //! over a tree keeps every bound of the field contract (sampled like the raster leaf's).
 
-use crate::common::Rng;
+use crate::common::{Rng, check_z_bands};
 
 use std::path::Path;
 use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 use karstic::elevation::{BuildContext, ElevationField, ElevationSpec, ElevationTree, Lod, Node};
-use karstic::field::{Aabb, Field, ISO, Interval, Rect, ZBands};
+use karstic::field::{Aabb, Field, ISO, Rect};
 use karstic::io::DEFAULT_MEMORY_BUDGET;
 
 /// A tree with every primitive and operator: blended multifractal discs (one warped), an
@@ -257,46 +257,9 @@ fn leaf_intervals_and_lipschitz_bounds_are_sound() {
 
 #[test]
 fn leaf_z_bands_contain_every_sampled_crossing() {
-    let f = leaf(Lod::FULL);
-    let mut rng = Rng(6);
-    let s = f.support().dilate(10.0);
-    let zr = Interval::new(s.min.z, s.max.z);
-    let mut bands = ZBands::new();
-    let (mut crossings, mut pruned) = (0, 0.0);
-    for _ in 0..300 {
-        let c = rng.in_box(&s).truncate();
-        let half = Vec2::new(rng.range(1.0, 60.0), rng.range(1.0, 60.0));
-        let fp = Rect::new(c - half, c + half);
-        bands.clear();
-        f.z_bands(&fp, zr, &mut bands);
-        pruned += 1.0 - bands.as_slice().iter().map(|b| b.width()).sum::<f32>() / zr.width();
-        for _ in 0..4 {
-            let xy = Vec2::new(rng.range(fp.min.x, fp.max.x), rng.range(fp.min.y, fp.max.y));
-            let n = 2000;
-            let dz = zr.width() / n as f32;
-            let mut prev = f.value(xy.extend(zr.lo)) - ISO;
-            for k in 1..=n {
-                let z = zr.lo + k as f32 * dz;
-                let cur = f.value(xy.extend(z)) - ISO;
-                if (prev > 0.0) != (cur > 0.0) {
-                    crossings += 1;
-                    let seg = Interval::new(z - dz, z);
-                    assert!(
-                        bands.as_slice().iter().any(|b| b.overlaps(&seg)),
-                        "crossing in {seg:?} at {xy} outside {:?}",
-                        bands.as_slice()
-                    );
-                }
-                prev = cur;
-            }
-        }
-    }
+    let (crossings, pruned) = check_z_bands("leaf", &leaf(Lod::FULL), 300, 4, 6);
     assert!(crossings > 200, "too few crossings sampled ({crossings})");
-    assert!(
-        pruned / 300.0 > 0.5,
-        "bands prune only {:.0}% of z",
-        100.0 * pruned / 300.0
-    );
+    assert!(pruned > 0.5, "bands prune only {:.0}% of z", 100.0 * pruned);
 }
 
 #[test]

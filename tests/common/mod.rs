@@ -2,7 +2,7 @@
 //! concern: the seeded random generator; small test fields for the renderer (a σ-sphere
 //! with analytic ground truth, a sum of many Wyvill point blobs with local Lipschitz
 //! bounds from a grid, a heightfield-like terrain chunk) and their GPU tapes; the
-//! Jacksboro DEM; bound and image checks; the GPU context; and the switch that makes a
+//! Jacksboro DEM; bound, z-band and image checks; the GPU context; and the switch that makes a
 //! missing optional tool (GPU adapter, glTF validator, trimesh, Slurm) a failure.
 
 pub mod dem;
@@ -18,6 +18,7 @@ mod sphere;
 mod terrain;
 mod trimesh;
 mod uv_sphere;
+mod z_bands;
 
 pub use blobs::Blobs;
 pub use frames::{assert_frames_match, assert_frames_match_within, depth_agreement};
@@ -29,3 +30,4 @@ pub use sphere::SigmaSphere;
 pub use terrain::Terrain;
 pub use trimesh::{trimesh_import, trimesh_version};
 pub use uv_sphere::uv_sphere;
+pub use z_bands::check_z_bands;
