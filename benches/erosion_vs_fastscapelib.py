@@ -26,7 +26,6 @@ Two measurements:
 
 import argparse
 import os
-import platform
 import re
 import statistics
 import subprocess
@@ -35,6 +34,9 @@ import tempfile
 import time
 
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from machine import machine_line  # noqa: E402
 
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 import fastscapelib as fs  # noqa: E402
@@ -97,16 +99,6 @@ def karstic(exe, asc, out, steps):
     return read_asc(out), step
 
 
-def cpu():
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
-
-
 def quantiles(h):
     return np.quantile(h[1:-1, 1:-1], np.linspace(0.1, 0.9, 9))
 
@@ -142,9 +134,7 @@ def main():
 
     q_fs, q_k = quantiles(h_fs), quantiles(h_k)
     rel = np.abs(q_k - q_fs) / q_fs
-    print(f"machine: {cpu()}, {os.cpu_count()} logical CPUs, load average "
-          f"{os.getloadavg()[0]:.1f}, Python {platform.python_version()}, "
-          f"fastscapelib {fs.__version__}")
+    print(f"{machine_line()}, fastscapelib {fs.__version__}")
     print(f"model: K {K}, m {M}, n {N_EXP}, uplift {UPLIFT} m/yr, diffusion {DIFFUSION} m2/yr, "
           f"dt {DT:.0f} yr, cell {CELL:.0f} m, one core")
     print(f"speed, {args.size}x{args.size}, {args.rounds} alternating rounds of {args.steps} "

@@ -17,7 +17,6 @@ reported apart, as the command's total).
 
 import argparse
 import os
-import platform
 import re
 import resource
 import statistics
@@ -27,6 +26,9 @@ import tempfile
 import time
 
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from machine import machine_line  # noqa: E402
 from pydelatin import Delatin
 
 N = 1025
@@ -55,16 +57,6 @@ def write_asc(path, z):
         f.write(f"ncols {N}\nnrows {N}\nxllcenter 0\nyllcenter 0\ncellsize 10\n")
         f.write("NODATA_value -99999\n")
         np.savetxt(f, z, fmt="%.3f")
-
-
-def cpu():
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
 
 
 def main():
@@ -110,8 +102,7 @@ def main():
 
     med = statistics.median
     dm, km = med(delatin), med(ours)
-    print(f"machine: {cpu()}, {os.cpu_count()} logical CPUs, load average "
-          f"{os.getloadavg()[0]:.1f}, Python {platform.python_version()}")
+    print(machine_line())
     print(f"input: {N}x{N} spectral fBm (beta {BETA}, seed {SEED}), relief {RELIEF:.0f} m, "
           f"max error {MAX_ERROR} m, median of {args.runs} runs, one core")
     print(f"pydelatin  Delatin():           wall {dm:.3f} s  CPU {med(delatin_cpu):.3f} s  "
