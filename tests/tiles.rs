@@ -253,6 +253,16 @@ fn karstic(args: &[&str], env: &[(&str, &str)]) -> (bool, String) {
     (out.status.success(), text)
 }
 
+/// `karstic tile plan TREE --job-region --cell CELL --tile 64 --levels 2 -o DIR`.
+fn plan_job_region(tree: &Path, dir: &str, cell: &str) -> (bool, String) {
+    let tree = tree.to_str().unwrap();
+    let args = ["tile", "plan", tree, "--job-region", "--cell", cell];
+    karstic(
+        &[&args[..], &["--tile", "64", "--levels", "2", "-o", dir]].concat(),
+        &[],
+    )
+}
+
 /// The box's corners `(min, max)` from a 3D Tiles `box` (axis-aligned half-axes).
 fn corners(b: &Value) -> (DVec3, DVec3) {
     let v: Vec<f64> = b["boundingVolume"]["box"]
@@ -309,23 +319,7 @@ fn the_tiles_are_valid_gltf_and_the_tileset_is_3d_tiles() {
     let dir = tmp.path().join("tiles");
     let d = dir.to_str().unwrap();
     let tree = tree();
-    let (ok, out) = karstic(
-        &[
-            "tile",
-            "plan",
-            tree.to_str().unwrap(),
-            "--job-region",
-            "--cell",
-            "4",
-            "--tile",
-            "64",
-            "--levels",
-            "2",
-            "-o",
-            d,
-        ],
-        &[],
-    );
+    let (ok, out) = plan_job_region(&tree, d, "4");
     assert!(ok, "{out}");
     assert!(out.contains("8 tiles over 2 levels"), "{out}");
     // The merge refuses a folder whose tiles have not run, naming them.
@@ -391,23 +385,7 @@ fn the_tiles_are_valid_gltf_and_the_tileset_is_3d_tiles() {
         assert!(out.contains(&format!("tile {index} (")), "{out}");
     }
     // A new plan in the same folder does not merge the tiles of the old one.
-    let (ok, out) = karstic(
-        &[
-            "tile",
-            "plan",
-            tree.to_str().unwrap(),
-            "--job-region",
-            "--cell",
-            "4.4",
-            "--tile",
-            "64",
-            "--levels",
-            "2",
-            "-o",
-            d,
-        ],
-        &[],
-    );
+    let (ok, out) = plan_job_region(&tree, d, "4.4");
     assert!(ok, "{out}");
     let (ok, out) = karstic(&["tile", "merge", d], &[]);
     assert!(!ok && out.contains("were run for another plan"), "{out}");
