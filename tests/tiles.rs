@@ -42,7 +42,8 @@ fn planned() -> &'static (Plan, Loaded) {
     static P: OnceLock<(Plan, Loaded)> = OnceLock::new();
     P.get_or_init(|| {
         let plan = Plan::new(&tree(), &region(), 4.0, 32, 2).unwrap();
-        let loaded = Loaded::new(&plan, BUDGET).unwrap();
+        let all: Vec<usize> = (0..plan.tiles.len()).collect();
+        let loaded = Loaded::new(&plan, BUDGET, &all).unwrap();
         (plan, loaded)
     })
 }
@@ -161,6 +162,49 @@ fn neighbours_share_borders_and_a_level_welds_into_the_single_mesh() {
 
 /// The top of the mesh's section by the plane `axis = at`, at `u` along the other
 /// horizontal axis: the highest point of the mesh's edges lying in the plane over `u`.
+/// A tile compiles only the features its window meets: one far from the tunnel leaves its
+/// Feature Volume unbuilt (a smaller tree), and every tile's mesh, near the tunnel or
+/// not, is the mesh of the whole tree bit for bit.
+#[test]
+fn a_tile_builds_only_the_features_its_window_meets() {
+    // Wider than the tunnel's domain (x 3180–4220), so that some windows miss it.
+    let wide = Aabb::new(
+        glam::Vec3::new(1000.0, 5900.0, 700.0),
+        glam::Vec3::new(6400.0, 6500.0, 1100.0),
+    );
+    let plan = Plan::new(&tree(), &wide, 16.0, 32, 1).unwrap();
+    let all: Vec<usize> = (0..plan.tiles.len()).collect();
+    let whole = Loaded::new(&plan, BUDGET, &all).unwrap();
+    let full_nodes = whole.compiled.tree.nodes().len();
+    let (mut far, mut near, mut far_meshed) = (0, 0, 0);
+    for i in all {
+        let alone = Loaded::new(&plan, BUDGET, &[i]).unwrap();
+        let tile = &plan.tiles[i];
+        let (window, _) = plan.window(tile).unwrap();
+        let (lo, hi) = (window.bounds().min.x, window.bounds().max.x);
+        let nodes = alone.compiled.tree.nodes().len();
+        let is_far = hi < 3180.0 - 32.0 || lo > 4220.0 + 32.0;
+        if hi >= 3400.0 && lo <= 4000.0 {
+            near += 1;
+            assert_eq!(nodes, full_nodes, "tile {i} meets the tunnel");
+        } else if is_far {
+            far += 1;
+            assert!(
+                nodes < full_nodes,
+                "tile {i} built the tunnel it never sees"
+            );
+        }
+        let a = mesh_core(&whole.compiled.tree, &plan, tile, BUDGET).unwrap();
+        let b = mesh_core(&alone.compiled.tree, &plan, tile, BUDGET).unwrap();
+        far_meshed += usize::from(is_far && !a.triangles.is_empty());
+        assert_eq!(a.triangles, b.triangles, "tile {i}");
+        let pos = |m: &Mesh| m.positions.iter().map(|&p| bits(p)).collect::<Vec<_>>();
+        assert_eq!(pos(&a), pos(&b), "tile {i}");
+    }
+    assert!(far >= 2 && near >= 2, "{far} far and {near} near tiles");
+    assert!(far_meshed > 0, "no far tile holds any surface");
+}
+
 fn top_on_plane(m: &Mesh, axis: usize, at: f32, cell: f32, u: f32) -> Option<f32> {
     let other = 1 - axis;
     let on = |p: [f32; 3]| (p[axis] - at).abs() <= 1e-3 * cell;

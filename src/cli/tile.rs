@@ -166,7 +166,7 @@ fn run_tiles(a: RunArgs) -> anyhow::Result<()> {
         );
     }
     let started = Instant::now();
-    let loaded = Loaded::new(&plan, a.budget.max_memory)?;
+    let loaded = Loaded::new(&plan, a.budget.max_memory, &indices)?;
     println!(
         "loaded {} in {:.2} s",
         plan.tree.display(),

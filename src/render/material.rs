@@ -123,7 +123,18 @@ impl Materials {
     /// compiled scene's terrain, with the job's snow line. The preview, the feature
     /// views, the mesh colours and the texture masks all take theirs from here.
     pub fn for_tree(scene: &Scene, tree: &Tree, ground: Option<Arc<HeightfieldField>>) -> Self {
-        let b = scene_box(scene, tree);
+        Self::for_scene_in(scene, tree.support(), ground)
+    }
+
+    /// [`Self::for_tree`] with `support` standing for the tree's support: the scale of a
+    /// scene without a job region, for consumers that compile only part of the tree (tiles
+    /// take the plan's region, the same for all of them).
+    pub fn for_scene_in(
+        scene: &Scene,
+        support: Aabb,
+        ground: Option<Arc<HeightfieldField>>,
+    ) -> Self {
+        let b = job_region(scene).unwrap_or(support);
         let mut m = Materials::for_scene(&b, ground);
         m.snow_line = scene
             .job
@@ -190,11 +201,13 @@ impl Materials {
 /// The box that sets the scale of a scene's shading and materials: its job's region, or
 /// the tree's support.
 pub fn scene_box(scene: &Scene, tree: &Tree) -> Aabb {
-    scene
-        .job
-        .as_ref()
-        .and_then(|j| j.region)
-        .map_or_else(|| tree.support(), |r| Aabb::new(r.min.0, r.max.0))
+    job_region(scene).unwrap_or_else(|| tree.support())
+}
+
+/// The region of the scene's job, when it gives one.
+fn job_region(scene: &Scene) -> Option<Aabb> {
+    let r = scene.job.as_ref()?.region?;
+    Some(Aabb::new(r.min.0, r.max.0))
 }
 
 /// Hermite step from 0 at `a` to 1 at `b` (`a > b` steps down).

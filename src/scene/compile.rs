@@ -45,6 +45,8 @@ struct Compiler<'s> {
     index: HashMap<&'s str, &'s NodeSpec>,
     /// Memory budget of DEMs and voxel grids, bytes.
     budget: u64,
+    /// Where the field will be asked for ([`SceneFile::compile_within`]); `None`: anywhere.
+    roi: Option<Aabb>,
 }
 
 impl Compiler<'_> {
@@ -131,6 +133,20 @@ impl Compiler<'_> {
         };
         let tree = e.build_tree(&cx).map_err(|err| self.asset_error(n, err))?;
         ElevationField::new(Arc::new(tree), e.params()).map_err(|err| self.asset_error(n, err))
+    }
+
+    /// A replacement's region must be a finite, non-empty box.
+    fn check_region(&self, n: &NodeSpec, region: &Aabb) -> Result<(), SceneError> {
+        if region.is_empty() || !region.size().is_finite() {
+            return Err(self.error(
+                n,
+                format!(
+                    "the region {:?} .. {:?} is empty or unbounded: give `region`",
+                    region.min, region.max
+                ),
+            ));
+        }
+        Ok(())
     }
 
     fn error(&self, node: &NodeSpec, message: impl Into<String>) -> SceneError {
@@ -244,24 +260,28 @@ impl Compiler<'_> {
             }
             NodeSpec::Replace(r) => {
                 let base = self.node(&r.base, depth + 1)?;
-                let by = self.node(&r.by, depth + 1)?;
-                let region = match (&r.region, &*r.by) {
-                    (Some(b), _) => Aabb::new(b.min.0, b.max.0),
+                // The region, without building the replacement when the file tells it.
+                let told = match (&r.region, &*r.by) {
+                    (Some(b), _) => Some(Aabb::new(b.min.0, b.max.0)),
                     (None, NodeSpec::FeatureVolume(f)) => {
                         let (_, field) = f.params(self.scene.seed, DEFAULT_MEMORY_BUDGET);
-                        field.domain.dilate(-field.falloff)
+                        Some(field.domain.dilate(-field.falloff))
                     }
-                    (None, _) => self.builder.support(by),
+                    (None, _) => None,
                 };
-                if region.is_empty() || !region.size().is_finite() {
-                    return Err(self.error(
-                        n,
-                        format!(
-                            "the region {:?} .. {:?} is empty or unbounded: give `region`",
-                            region.min, region.max
-                        ),
-                    ));
+                if let Some(region) = &told {
+                    self.check_region(n, region)?;
                 }
+                // Outside its region the replacement weighs exactly 0: one that misses
+                // the region of interest leaves the base there, unbuilt.
+                if let (Some(roi), Some(region)) = (self.roi, told)
+                    && !region.overlaps(&roi)
+                {
+                    return Ok(base);
+                }
+                let by = self.node(&r.by, depth + 1)?;
+                let region = told.unwrap_or_else(|| self.builder.support(by));
+                self.check_region(n, &region)?;
                 let blend = r
                     .blend
                     .map_or_else(|| 0.125 * region.size().x.min(region.size().y), |b| b.0);
@@ -309,6 +329,18 @@ impl SceneFile {
         Compiler::new(&self.scene, &self.path, &self.base_dir, budget).run()
     }
 
+    /// Compiles only what can change the field inside `roi`, for consumers that never ask
+    /// outside it (a tile and its halo): a `Replace` whose region misses `roi` becomes its
+    /// base, and its replacement — often a Feature Volume, whose voxel pipeline takes
+    /// seconds — is not built. Inside `roi` the tree's values equal [`Self::compile_with`]'s
+    /// bit for bit (a replacement weighs exactly 0 outside its region); its support and
+    /// bounds may be smaller, and the outline lists only the nodes compiled.
+    pub fn compile_within(&self, budget: u64, roi: Aabb) -> Result<Compiled, SceneError> {
+        let mut c = Compiler::new(&self.scene, &self.path, &self.base_dir, budget);
+        c.roi = Some(roi);
+        c.run()
+    }
+
     /// The scene's `FeatureVolume` nodes (in `defs` and the tree, pre-order).
     pub fn feature_volumes(&self) -> Vec<&FeatureVolumeSpec> {
         self.scene
@@ -350,6 +382,7 @@ impl<'s> Compiler<'s> {
             terrain: None,
             index: scene.named(),
             budget,
+            roi: None,
         }
     }
 

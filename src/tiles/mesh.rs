@@ -115,10 +115,22 @@ pub struct Loaded {
 }
 
 impl Loaded {
-    /// Loads and compiles `plan`'s tree within `budget` bytes.
-    pub fn new(plan: &Plan, budget: u64) -> anyhow::Result<Loaded> {
+    /// Loads `plan`'s tree and compiles what the tiles numbered `tiles` need, within
+    /// `budget` bytes: only their windows are ever evaluated, so features (Feature
+    /// Volumes) whose regions miss them are not built ([`SceneFile::compile_within`]);
+    /// the values in the windows are those of the whole tree.
+    pub fn new(plan: &Plan, budget: u64, tiles: &[usize]) -> anyhow::Result<Loaded> {
         let file = crate::scene::load(&plan.tree)?;
-        let compiled = file.compile_with(budget)?;
+        let mut roi = Aabb::EMPTY;
+        for &i in tiles {
+            let tile = plan.tiles.get(i).with_context(|| {
+                format!("tile index {i}: the plan has {} tiles", plan.tiles.len())
+            })?;
+            let (window, _) = plan.window(tile)?;
+            // A cell of margin: vertex normals may look just past the window's samples.
+            roi = roi.union(window.bounds().dilate(window.spacing.max_element()));
+        }
+        let compiled = file.compile_within(budget, roi)?;
         Ok(Loaded { file, compiled })
     }
 }
@@ -160,13 +172,15 @@ pub fn run_tile(
     } else {
         let ground = loaded.compiled.ground.clone();
         let opts = ExportOptions {
-            materials: Some(Materials::for_tree(
+            // The plan's region stands for the tree's support: the same scale in every
+            // tile, whatever part of the tree each compiled.
+            materials: Some(Materials::for_scene_in(
                 &loaded.file.scene,
-                tree,
+                plan.region(),
                 ground.clone(),
             )),
             origin: Origin::Dem,
-            uv_frame: Some(texture_frame(None, ground.as_deref(), &tree.support())),
+            uv_frame: Some(texture_frame(None, ground.as_deref(), &plan.region())),
         };
         export::write(&mesh, &glb, &opts)?;
     }
