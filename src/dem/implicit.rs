@@ -329,16 +329,23 @@ impl HeightfieldField {
     /// detail, or where σ is saturated whatever it is (`|h − z| ≥ R + A·m`).
     #[inline]
     fn detail_at(&self, h: f32, p: Vec3) -> f32 {
+        self.detail_in_column(self.reach_at(p.truncate()), h, p)
+    }
+
+    /// The detail's reach `A·m` over the column at `xy` (0 without detail).
+    #[inline]
+    fn reach_at(&self, xy: Vec2) -> f32 {
+        self.detail.as_ref().map_or(0.0, |d| d.reach_at(xy))
+    }
+
+    /// [`Self::detail_at`] in a column whose reach ([`Self::reach_at`]) is known.
+    #[inline]
+    fn detail_in_column(&self, reach: f32, h: f32, p: Vec3) -> f32 {
         match &self.detail {
-            Some(d) => {
-                let reach = d.reach_at(p.truncate());
-                if reach > 0.0 && (h - p.z).abs() < self.r + reach {
-                    reach * d.params().noise.value(p)
-                } else {
-                    0.0
-                }
+            Some(d) if reach > 0.0 && (h - p.z).abs() < self.r + reach => {
+                reach * d.params().noise.value(p)
             }
-            None => 0.0,
+            _ => 0.0,
         }
     }
 
@@ -496,9 +503,10 @@ impl Field for HeightfieldField {
                     continue;
                 }
                 let dxy = (self.r - e).max(0.0);
+                let reach = self.reach_at(xy);
                 for k in 0..nz {
                     let z = (origin + Vec3::new(i as f32, j as f32, k as f32) * step).z;
-                    let hd = h + self.detail_at(h, xy.extend(z));
+                    let hd = h + self.detail_in_column(reach, h, xy.extend(z));
                     out[base + plane * k] = sigma(hd - z, self.r).min(self.prism(dxy, z));
                 }
             }
