@@ -232,7 +232,7 @@ fn geology_errors_carry_positions() {
         ),
         (
             "Stratum(profile: Band(half_width: 2, resistance: 1))",
-            "unknown variant `Stratum`",
+            "variant named `Stratum`",
         ),
         ("Constant(1.5)", "expected a number in [0, 1]"),
         (
