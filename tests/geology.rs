@@ -211,6 +211,18 @@ fn erosion_node_bounds_are_sound() {
 }
 
 #[test]
+fn erosion_has_no_gpu_encoding_and_says_so() {
+    let tree = karstic::scene::load(CLIFF).unwrap().compile().unwrap().tree;
+    let e = karstic::tape::tape_from_tree(&tree).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        matches!(e, karstic::tape::TapeError::NoEncoding { .. }),
+        "{msg}"
+    );
+    assert!(msg.contains("the erosion node \"erosion\""), "{msg}");
+}
+
+#[test]
 fn geology_errors_carry_positions() {
     let scene = |geology: &str| {
         format!(
