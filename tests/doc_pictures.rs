@@ -67,6 +67,9 @@ karstic render trees/heightmap_top.ron -o heightmap_top.png --camera 4900 4380 7
 karstic render trees/jacksboro_bare.ron -o detail_on.png --camera 3920 5150 790 3560 5120 880 --fov 50 --quiet
 karstic render trees/jacksboro_smooth.ron -o detail_off.png --camera 3920 5150 790 3560 5120 880 --fov 50 --quiet
 karstic render trees/eroded_range.ron -o eroded_range.png --camera 600 380 300 660 700 200 --fov 50 --quiet
+karstic render trees/strata_cliff.ron -o strata_cliff.png --quiet
+karstic render trees/strata_islands.ron -o strata_islands.png --quiet
+karstic geology section trees/strata_cliff.ron --plane -100 0 60 0 --z -5 75 --width 960 --outline -o strata_cliff_section.png
 ";
 
 /// What [`COMMANDS`] write that becomes a picture, and the picture's name in `docs/img/`.
@@ -98,6 +101,9 @@ const PICTURES: &[(&str, &str)] = &[
     ("detail_on.png", "detail_on.png"),
     ("detail_off.png", "detail_off.png"),
     ("eroded_range.png", "eroded_range.png"),
+    ("strata_cliff.png", "strata_cliff.png"),
+    ("strata_islands.png", "strata_islands.png"),
+    ("strata_cliff_section.png", "strata_cliff_section.png"),
 ];
 
 /// Whether [`PICTURES`] makes a picture named `name`.

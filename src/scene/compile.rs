@@ -13,7 +13,8 @@ use crate::curves::FeatureVolumeSpec;
 use crate::curves::spec::BuildOptions;
 use crate::dem::{DemCache, HeightfieldField};
 use crate::elevation::{BuildContext, ElevationField, ElevationSpec};
-use crate::field::{Aabb, Fbm, NodeId, Primitive, Transition, Tree, TreeBuilder, Warp};
+use crate::field::{Aabb, NodeId, Primitive, Transition, Tree, TreeBuilder, Warp};
+use crate::geology::{Erosion, Geology, Resistance};
 use crate::io::DEFAULT_MEMORY_BUDGET;
 use crate::voxel::SField;
 
@@ -28,9 +29,12 @@ pub struct Compiled {
     pub notices: Vec<String>,
     /// The scene's terrain: its `terrain` heightfield, or its only one (`None` without).
     pub ground: Option<Arc<HeightfieldField>>,
+    /// The scene's geology (uniform [`crate::geology::DEFAULT_RESISTANCE`] without one).
+    pub geology: Arc<Geology>,
 }
 
-struct Compiler<'s> {
+/// Compiles one scene: walks its tree once, children first, into a [`TreeBuilder`].
+pub struct Compiler<'s> {
     scene: &'s Scene,
     path: &'s Path,
     base_dir: &'s Path,
@@ -47,9 +51,18 @@ struct Compiler<'s> {
     budget: u64,
     /// Where the field will be asked for ([`SceneFile::compile_within`]); `None`: anywhere.
     roi: Option<Aabb>,
+    /// The scene's geology, built once before the tree.
+    geology: Arc<Geology>,
 }
 
 impl Compiler<'_> {
+    /// The scene's rock resistance (Paris et al. 2019 §4), for the nodes that read it
+    /// while they compile: uniform [`crate::geology::DEFAULT_RESISTANCE`] when the scene
+    /// has no `geology`.
+    pub fn resistance(&self) -> Arc<dyn Resistance> {
+        self.geology.clone()
+    }
+
     /// The terrain heightfield (the scene's `terrain`, or its only `Heightfield`).
     fn terrain(&mut self, asking: &NodeSpec) -> Result<Arc<HeightfieldField>, SceneError> {
         if let Some(t) = &self.terrain {
@@ -291,13 +304,20 @@ impl Compiler<'_> {
             NodeSpec::Warp(w) => {
                 let child = self.node(&w.child, depth + 1)?;
                 let region = w.region.map(|r| (Aabb::new(r.min.0, r.max.0), r.falloff.0));
-                let noise = Fbm::new(&w.turbulence, self.scene.seed);
-                let seed = self.scene.seed ^ w.turbulence.seed_offset.rotate_left(16);
-                self.builder.warp(
-                    child,
-                    Warp::new(noise, seed, w.turbulence.amplitude.0, region),
-                    name,
-                )
+                let warp = Warp::from_spec(&w.turbulence, region, self.scene.seed);
+                self.builder.warp(child, warp, name)
+            }
+            NodeSpec::Erode(e) => {
+                let child = self.node(&e.child, depth + 1)?;
+                let region = Aabb::new(e.region.min.0, e.region.max.0);
+                if region.is_empty() {
+                    return Err(self.error(n, "the erosion region is empty: give min <= max"));
+                }
+                let blend = e
+                    .blend
+                    .map_or_else(|| 0.125 * region.size().x.min(region.size().y), |b| b.0);
+                let erosion = Erosion::new(self.geology.clone(), region, blend, e.strength.0);
+                self.builder.erode(child, erosion, name)
             }
             NodeSpec::Instance(i) => {
                 if let Some(&id) = self.named.get(&i.of) {
@@ -383,6 +403,12 @@ impl<'s> Compiler<'s> {
             index: scene.named(),
             budget,
             roi: None,
+            geology: Arc::new(
+                scene
+                    .geology
+                    .as_ref()
+                    .map_or_else(Geology::default, |g| Geology::from_spec(g, scene.seed)),
+            ),
         }
     }
 
@@ -393,6 +419,7 @@ impl<'s> Compiler<'s> {
         Ok(Compiled {
             tree,
             ground,
+            geology: self.geology,
             outline: self.outline,
             notices: self.dems.notices().to_vec(),
         })

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::value::{Dir3, Finite, P3, Positive, Scale3};
+use super::value::{Dir3, Finite, NonNegative, P3, Positive, Scale3};
 use crate::curves::FeatureVolumeSpec;
 use crate::dem::HeightfieldSpec;
 use crate::elevation::ElevationSpec;
@@ -30,6 +30,10 @@ pub struct Scene {
     /// What `karstic run` makes of the scene: mesh region, cell size, preview camera.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub job: Option<JobSpec>,
+    /// The rock's resistance to erosion (Paris et al. 2019 §4), read by `Erode` nodes and
+    /// the landform generators; uniform when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub geology: Option<crate::geology::GeologySpec>,
     /// Named subtrees that are not drawn themselves but can be instanced.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub defs: Vec<NodeSpec>,
@@ -67,6 +71,31 @@ pub enum NodeSpec {
     /// `by` stands in for `base` inside a region, with a smooth transition near the
     /// region's faces: how a terrain-aware Feature Volume goes into its terrain.
     Replace(ReplaceSpec),
+    /// The child worn away where the scene's geology is soft, inside a region:
+    /// `f − a·w·(1 − ρ)` (Paris et al. 2019 §6).
+    Erode(ErodeSpec),
+}
+
+/// An erosion node: `f_child(p) − strength · w(p) · (1 − ρ(p))`, `ρ` the scene's
+/// `geology`, `w` 1 inside the region and falling to 0 over `blend` metres inside its
+/// faces.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ErodeSpec {
+    /// Unique node name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// How much the field drops where the rock is softest (`ρ = 0`), in field units
+    /// (the iso-value is 0.5): 0.2 to 0.45 recess soft layers, more cuts through.
+    pub strength: NonNegative,
+    /// Where erosion acts.
+    pub region: BoxSpec,
+    /// Width of the fade inside the region's faces, metres (default: an eighth of the
+    /// region's smaller horizontal side).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blend: Option<Positive>,
+    /// The eroded subtree.
+    pub child: Box<NodeSpec>,
 }
 
 /// A replace node: `f_base + w·(f_by − f_base)` with `w` a partition of unity of the
@@ -305,6 +334,7 @@ impl NodeSpec {
             NodeSpec::Instance(_) => "Instance",
             NodeSpec::Warp(_) => "Warp",
             NodeSpec::Replace(_) => "Replace",
+            NodeSpec::Erode(_) => "Erode",
         }
     }
 
@@ -324,6 +354,7 @@ impl NodeSpec {
             NodeSpec::Instance(n) => n.name.as_deref(),
             NodeSpec::Warp(n) => n.name.as_deref(),
             NodeSpec::Replace(n) => n.name.as_deref(),
+            NodeSpec::Erode(n) => n.name.as_deref(),
         }
     }
 
@@ -337,6 +368,7 @@ impl NodeSpec {
             NodeSpec::Replace(r) => vec![&*r.base, &*r.by],
             NodeSpec::Transform(t) => vec![&*t.child],
             NodeSpec::Warp(w) => vec![&*w.child],
+            NodeSpec::Erode(e) => vec![&*e.child],
             NodeSpec::Anchor(a) => vec![&*a.child],
             NodeSpec::Instance(_)
             | NodeSpec::Primitive(_)
@@ -369,6 +401,7 @@ impl NodeSpec {
             NodeSpec::Replace(r) => vec![&mut *r.base, &mut *r.by],
             NodeSpec::Transform(t) => vec![&mut *t.child],
             NodeSpec::Warp(w) => vec![&mut *w.child],
+            NodeSpec::Erode(e) => vec![&mut *e.child],
             NodeSpec::Anchor(a) => vec![&mut *a.child],
             NodeSpec::Instance(_)
             | NodeSpec::Primitive(_)
