@@ -16,6 +16,7 @@ pub mod field;
 pub mod heightmap;
 pub mod io;
 pub mod job;
+pub mod landform;
 pub mod mesh;
 pub mod procedural;
 pub mod render;

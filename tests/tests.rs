@@ -26,6 +26,7 @@ mod docs;
 mod elevation_trees;
 mod erosion;
 mod heightmap;
+mod landform;
 mod main_job;
 mod masks;
 mod meld;

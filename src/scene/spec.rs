@@ -7,6 +7,7 @@ use crate::curves::FeatureVolumeSpec;
 use crate::dem::HeightfieldSpec;
 use crate::elevation::ElevationSpec;
 use crate::field::{NoiseSpec, PrimitiveSpec};
+use crate::landform::LandformSpec;
 
 /// The tree-file format version this build reads and writes.
 pub const FORMAT_VERSION: u32 = 1;
@@ -67,6 +68,9 @@ pub enum NodeSpec {
     /// `by` stands in for `base` inside a region, with a smooth transition near the
     /// region's faces: how a terrain-aware Feature Volume goes into its terrain.
     Replace(ReplaceSpec),
+    /// A landform generator (Paris et al. 2019 §6) over a base terrain: expanded into
+    /// plain primitives when the tree compiles (`karstic tree expand` writes them out).
+    Landform(LandformSpec),
 }
 
 /// A replace node: `f_base + w·(f_by − f_base)` with `w` a partition of unity of the
@@ -92,7 +96,7 @@ pub struct ReplaceSpec {
 }
 
 /// An n-ary operator node.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Nary {
     /// Unique node name.
@@ -305,6 +309,7 @@ impl NodeSpec {
             NodeSpec::Instance(_) => "Instance",
             NodeSpec::Warp(_) => "Warp",
             NodeSpec::Replace(_) => "Replace",
+            NodeSpec::Landform(_) => "Landform",
         }
     }
 
@@ -324,6 +329,7 @@ impl NodeSpec {
             NodeSpec::Instance(n) => n.name.as_deref(),
             NodeSpec::Warp(n) => n.name.as_deref(),
             NodeSpec::Replace(n) => n.name.as_deref(),
+            NodeSpec::Landform(n) => n.name.as_deref(),
         }
     }
 
@@ -338,6 +344,7 @@ impl NodeSpec {
             NodeSpec::Transform(t) => vec![&*t.child],
             NodeSpec::Warp(w) => vec![&*w.child],
             NodeSpec::Anchor(a) => vec![&*a.child],
+            NodeSpec::Landform(l) => vec![&*l.base],
             NodeSpec::Instance(_)
             | NodeSpec::Primitive(_)
             | NodeSpec::Heightfield(_)
@@ -370,6 +377,7 @@ impl NodeSpec {
             NodeSpec::Transform(t) => vec![&mut *t.child],
             NodeSpec::Warp(w) => vec![&mut *w.child],
             NodeSpec::Anchor(a) => vec![&mut *a.child],
+            NodeSpec::Landform(l) => vec![&mut *l.base],
             NodeSpec::Instance(_)
             | NodeSpec::Primitive(_)
             | NodeSpec::Heightfield(_)
