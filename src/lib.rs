@@ -13,6 +13,7 @@ pub mod dem;
 pub mod elevation;
 pub mod erosion;
 pub mod field;
+pub mod geology;
 pub mod heightmap;
 pub mod io;
 pub mod job;

@@ -25,6 +25,7 @@ mod doc_pictures;
 mod docs;
 mod elevation_trees;
 mod erosion;
+mod geology;
 mod heightmap;
 mod landform;
 mod main_job;

@@ -15,6 +15,8 @@ use karstic::field::{
     Aabb, Fbm, Field, Grid, ISO, Interval, Line, NodeId, Primitive, Rect, Skeleton, Transition,
     Tree, TreeBuilder, Warp, ZBands, eval_grid, eval_grid_naive,
 };
+use karstic::geology::{Erosion, Geology, GeologySpec};
+use karstic::scene::ron_options;
 use proptest::prelude::*;
 
 /// `energy · g(|p − c| / r)`.
@@ -76,6 +78,29 @@ enum Shape {
     Warp(Box<Shape>, f32, u32),
     /// One subtree used twice (a union of it and a moved copy): the tree is a DAG.
     Shared(Box<Shape>, Vec3),
+    /// Erosion by a geology inside a box (corner, size, strength, geology seed).
+    Erode(Box<Shape>, Vec3, Vec3, f32, u32),
+}
+
+/// A geology with every continuous node kind at the scale of these trees: strata (band,
+/// layers, noise of the altitude), turbulence, a softening sphere, a fold and a taper.
+fn geology(seed: u32) -> Arc<Geology> {
+    let text = r#"(root: Blend([
+        Turbulence(base: 0.6, noise: (amplitude: 0.2, wavelength: 1.5, octaves: 2)),
+        Strata(normal: (0.2, 0, 1), profile: Band(half_width: 0.8, resistance: -0.7)),
+        Fold(
+            turbulence: (amplitude: 0.6, wavelength: 4, octaves: 2),
+            region: (min: (-3, -3, -3), max: (3, 3, 3), falloff: 2),
+            child: Strata(point: (0, 0, 0.3), profile: Layers(layers: [
+                (thickness: 0.7, resistance: 0.1), (thickness: 1.1, resistance: 0.5)]),
+                turbulence: (amplitude: 0.05, wavelength: 1)),
+        ),
+        Taper(axis: (1, 0.5, 0), from: -4, to: 4, factor: (0.6, 1.8), z0: 1,
+              child: Strata(profile: Noise(base: -0.2, noise: (amplitude: 0.3, wavelength: 2)))),
+        Local(shape: Sphere(center: (1, -1, 0), radius: 1), falloff: 1.5, energy: -0.5),
+    ]))"#;
+    let spec: GeologySpec = ron_options().from_str(text).expect("a valid geology");
+    Arc::new(Geology::from_spec(&spec, seed))
 }
 
 fn shape() -> impl Strategy<Value = Shape> {
@@ -114,7 +139,10 @@ fn shape() -> impl Strategy<Value = Shape> {
                 amp,
                 seed
             )),
-            (inner, v()).prop_map(|(a, t)| Shape::Shared(Box::new(a), t)),
+            (inner.clone(), v()).prop_map(|(a, t)| Shape::Shared(Box::new(a), t)),
+            (inner, v(), v(), 0.0f32..0.8, 0u32..100).prop_map(|(a, c, s, k, seed)| {
+                Shape::Erode(Box::new(a), c, s.abs() + 1.0, k, seed)
+            }),
         ]
     })
 }
@@ -169,6 +197,12 @@ fn build(s: &Shape, b: &mut TreeBuilder) -> NodeId {
                 *t,
             );
             b.transform(a, m, None)
+        }
+        Shape::Erode(a, corner, size, strength, seed) => {
+            let a = build(a, b);
+            let region = Aabb::new(*corner, *corner + *size);
+            let erosion = Erosion::new(geology(*seed), region, 0.3 * size.min_element(), *strength);
+            b.erode(a, erosion, None)
         }
         Shape::Warp(a, amp, seed) => {
             let a = build(a, b);

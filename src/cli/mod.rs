@@ -6,6 +6,7 @@ mod dem;
 mod erode;
 mod eval;
 mod generate;
+mod geology;
 mod heightmap;
 mod masks;
 mod render;
@@ -62,6 +63,8 @@ enum Command {
     Generate(generate::GenerateArgs),
     /// Erode a DEM: uplift and stream power (with hillslope diffusion), then thermal erosion.
     Erode(erode::ErodeArgs),
+    /// Inspect a scene's geology: vertical sections of the rock resistance.
+    Geology(geology::GeologyArgs),
 }
 
 /// The `--max-memory` flag of every command that reads or builds grids and images.
@@ -124,6 +127,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Tile(a) => tile::run(a),
         Command::Generate(a) => generate::run(a),
         Command::Erode(a) => erode::run(a),
+        Command::Geology(a) => geology::run(a),
     }
 }
 

@@ -334,6 +334,12 @@ impl Tree {
                 child, to_child, ..
             } => self.mapped(*child, pts, out, s, |p| to_child.transform_point3(p)),
             Node::Warp { child, warp } => self.mapped(*child, pts, out, s, |p| warp.apply(p)),
+            Node::Erode { child, erosion } => {
+                self.block(*child, pts, bounds, out, s);
+                if erosion.interval(bounds).hi > 0.0 {
+                    pts.for_each(|i, p| out[i] -= erosion.amount(p));
+                }
+            }
         }
     }
 

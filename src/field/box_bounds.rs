@@ -82,6 +82,10 @@ impl Tree {
                 child, to_child, ..
             } => self.interval_at(*child, &map_box(to_child, b)),
             Node::Warp { child, warp } => self.interval_at(*child, &b.dilate(warp.reach())),
+            Node::Erode { child, erosion } => {
+                let (c, e) = (self.interval_at(*child, b), erosion.interval(b));
+                Interval::new(c.lo - e.hi, c.hi - e.lo)
+            }
         };
         if support.contains_box(b) {
             r
@@ -133,6 +137,9 @@ impl Tree {
             } => self.lipschitz_box_at(*child, &map_box(to_child, b)) * stretch,
             Node::Warp { child, warp } => {
                 self.lipschitz_box_at(*child, &b.dilate(warp.reach())) * warp.lipschitz()
+            }
+            Node::Erode { child, erosion } => {
+                self.lipschitz_box_at(*child, b) + erosion.lipschitz_box(b)
             }
         }
     }
@@ -197,6 +204,9 @@ impl Tree {
                 self.lipschitz_segment_with(*child, ca, cb, at) * stretch
             }
             Node::Warp { .. } => self.lipschitz_box_at(id, &bx),
+            Node::Erode { child, erosion } => {
+                self.lipschitz_segment_with(*child, a, b, at) + erosion.lipschitz_box(&bx)
+            }
         }
     }
 }

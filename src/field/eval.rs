@@ -64,6 +64,8 @@ impl Tree {
             } => self.value_at_with(*child, to_child.transform_point3(p), at),
             // A warp bends it: below one, blends use their BVHs.
             Node::Warp { child, warp } => self.value_at(*child, warp.apply(p)),
+            // The point stays: the child's lists still apply.
+            Node::Erode { child, erosion } => self.value_at_with(*child, p, at) - erosion.amount(p),
         }
     }
 
@@ -142,6 +144,11 @@ impl Tree {
                 let (q, j) = warp.apply_jacobian(p);
                 let (v, g) = self.value_grad_at(*child, q);
                 (v, j.transpose() * g)
+            }
+            Node::Erode { child, erosion } => {
+                let (v, g) = self.value_grad_at_with(*child, p, at);
+                let (e, ge) = erosion.amount_grad(p);
+                (v - e, g - ge)
             }
         }
     }

@@ -440,6 +440,7 @@ impl<'t> Line<'t> {
                 self.walk(*base, o, d, span);
                 self.walk(*by, o, d, span);
             }
+            Node::Erode { child, .. } => self.walk(*child, o, d, span),
             Node::Affine {
                 child, to_child, ..
             } => {

@@ -9,6 +9,7 @@ use super::contract::Field;
 use super::primitive::Primitive;
 use super::replace::Transition;
 use super::warp::Warp;
+use crate::geology::Erosion;
 
 /// Index of a node in a [`super::Tree`] arena. Children always have smaller ids than their
 /// parents (post-order), and a node may have several parents (instancing).
@@ -66,6 +67,14 @@ pub enum Node {
         /// δ and f_D.
         warp: Box<Warp>,
     },
+    /// Erosion by the geology `f(p) = f_child(p) − f_D(p)·(1 − ρ(p))` over a region
+    /// (Paris et al. 2019 §6).
+    Erode {
+        /// The eroded subtree.
+        child: NodeId,
+        /// The region, its strength and the geology.
+        erosion: Box<Erosion>,
+    },
 }
 
 impl Node {
@@ -90,7 +99,9 @@ impl Node {
                 .chain(carves.iter().copied())
                 .collect(),
             Node::Replace { base, by, .. } => vec![*base, *by],
-            Node::Affine { child, .. } | Node::Warp { child, .. } => vec![*child],
+            Node::Affine { child, .. } | Node::Warp { child, .. } | Node::Erode { child, .. } => {
+                vec![*child]
+            }
         }
     }
 
@@ -107,6 +118,7 @@ impl Node {
             Node::Replace { .. } => "replace",
             Node::Affine { .. } => "transform",
             Node::Warp { .. } => "warp",
+            Node::Erode { .. } => "erode",
         }
     }
 }

@@ -151,6 +151,14 @@ impl Pruner<'_> {
                 let child = self.node(*child, &b.dilate(warp.reach()))?;
                 Some(self.out.warp(child, (**warp).clone(), name))
             }
+            Node::Erode { child, erosion } => {
+                let pruned = self.node(*child, b);
+                if erosion.interval(b).hi <= 0.0 {
+                    return pruned;
+                }
+                let child = pruned.unwrap_or_else(|| self.out.constant(0.0, None));
+                Some(self.out.erode(child, (**erosion).clone(), name))
+            }
         }
     }
 }

@@ -13,6 +13,7 @@ use super::primitive::Primitive;
 use super::replace::{Transition, gap};
 use super::slope_grid::blend_lipschitz;
 use super::warp::Warp;
+use crate::geology::Erosion;
 
 /// What the compiler caches for every node.
 #[derive(Clone, Debug)]
@@ -174,6 +175,17 @@ impl TreeBuilder {
         )
     }
 
+    /// `child` worn away by `erosion` where the rock is soft (Paris et al. 2019 §6).
+    pub fn erode(&mut self, child: NodeId, erosion: Erosion, name: Option<String>) -> NodeId {
+        self.push(
+            Node::Erode {
+                child,
+                erosion: Box::new(erosion),
+            },
+            name,
+        )
+    }
+
     /// Finishes the tree with `root` as its root.
     pub fn build(self, root: NodeId) -> Tree {
         let mut parents = vec![0u8; self.nodes.len()];
@@ -305,6 +317,21 @@ impl TreeBuilder {
                     support,
                     info(child).range,
                     info(child).lipschitz * warp.lipschitz(),
+                )
+            }
+            Node::Erode { child, erosion } => {
+                let c = info(child);
+                // f − e with e ∈ [0, a], non-zero only in the region.
+                let support = if erosion.strength() > 0.0 {
+                    c.support.union(*erosion.region())
+                } else {
+                    c.support
+                };
+                let range = Interval::new(c.range.lo - erosion.strength(), c.range.hi);
+                (
+                    support,
+                    range.hull(Interval::ZERO),
+                    c.lipschitz + erosion.lipschitz(),
                 )
             }
         };

@@ -6,7 +6,7 @@ use glam::{Mat3, Vec3};
 
 use super::bounds::Aabb;
 use super::falloff::{WYVILL_MAX_SLOPE, wyvill_d};
-use super::noise::Fbm;
+use super::noise::{Fbm, NoiseSpec};
 
 /// A localized turbulence warp.
 #[derive(Clone, Debug, PartialEq)]
@@ -33,6 +33,14 @@ impl Warp {
             amplitude,
             region,
         }
+    }
+
+    /// The warp of a tree-file turbulence spec (`amplitude` in metres) within `region`;
+    /// `scene_seed` is the tree's global seed.
+    pub fn from_spec(spec: &NoiseSpec, region: Option<(Aabb, f32)>, scene_seed: u32) -> Self {
+        let noise = Fbm::new(spec, scene_seed);
+        let seed = scene_seed ^ spec.seed_offset.rotate_left(16);
+        Warp::new(noise, seed, spec.amplitude.get(), region)
     }
 
     /// The turbulence of each axis.

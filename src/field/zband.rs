@@ -75,6 +75,14 @@ impl Tree {
             Node::Replace { base, by, mix } => {
                 self.replace_bands(id, [*base, *by], mix, fp, z, out)
             }
+            // Outside the region the node is its child; inside, interval subdivision.
+            Node::Erode { child, erosion } => {
+                if erosion.region().footprint().overlaps(fp) {
+                    z_bands_by_interval(&self.subtree(id), fp, z, out);
+                } else {
+                    self.z_bands_at(*child, fp, z, out);
+                }
+            }
             Node::Warp { child, warp } => {
                 // The child is evaluated at most `r` away: its bands, widened by `r`.
                 let r = warp.reach();
@@ -176,6 +184,9 @@ impl Tree {
             // Outside the region the node is its base.
             Node::Replace { base, mix, .. } if !mix.region().footprint().overlaps(fp) => {
                 self.elevation_at(*base, fp)
+            }
+            Node::Erode { child, erosion } if !erosion.region().footprint().overlaps(fp) => {
+                self.elevation_at(*child, fp)
             }
             Node::Blend { .. } | Node::Union(_) | Node::Difference { .. } => {
                 let children = self.children_in_column(id, fp, support.z());

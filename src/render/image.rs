@@ -132,7 +132,13 @@ pub fn write_contact_sheet(path: &Path, frames: &[&Frame]) -> Result<(), RenderE
     write_rgba_png(path, sheet.width(), sheet.height(), sheet.as_raw())
 }
 
-fn write_rgba_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<(), RenderError> {
+/// Writes RGBA8 pixels (row-major from the top-left) as a PNG, atomically.
+pub fn write_rgba_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgba: &[u8],
+) -> Result<(), RenderError> {
     let mut bytes = Vec::new();
     PngEncoder::new(&mut bytes)
         .write_image(rgba, width, height, image::ExtendedColorType::Rgba8)

@@ -13,7 +13,8 @@ use crate::curves::FeatureVolumeSpec;
 use crate::curves::spec::BuildOptions;
 use crate::dem::{DemCache, HeightfieldField};
 use crate::elevation::{BuildContext, ElevationField, ElevationSpec};
-use crate::field::{Aabb, Fbm, Field, NodeId, Primitive, Transition, Tree, TreeBuilder, Warp};
+use crate::field::{Aabb, Field, NodeId, Primitive, Transition, Tree, TreeBuilder, Warp};
+use crate::geology::{Erosion, Geology, Resistance};
 use crate::io::DEFAULT_MEMORY_BUDGET;
 use crate::landform::Ground;
 use crate::voxel::SField;
@@ -32,9 +33,12 @@ pub struct Compiled {
     /// The scene with its `Landform` nodes expanded into plain primitives, when it had
     /// any: the scene the tree (and [`Compiled::outline`]) was compiled from.
     pub expanded: Option<Scene>,
+    /// The scene's geology (uniform [`crate::geology::DEFAULT_RESISTANCE`] without one).
+    pub geology: Arc<Geology>,
 }
 
-struct Compiler<'s> {
+/// Compiles one scene: walks its tree once, children first, into a [`TreeBuilder`].
+pub struct Compiler<'s> {
     scene: &'s Scene,
     path: &'s Path,
     base_dir: &'s Path,
@@ -49,9 +53,18 @@ struct Compiler<'s> {
     index: HashMap<&'s str, &'s NodeSpec>,
     /// Memory budget of DEMs and voxel grids, bytes.
     budget: u64,
+    /// The scene's geology, built once before the tree.
+    geology: Arc<Geology>,
 }
 
 impl Compiler<'_> {
+    /// The scene's rock resistance (Paris et al. 2019 §4), for the nodes that read it
+    /// while they compile: uniform [`crate::geology::DEFAULT_RESISTANCE`] when the scene
+    /// has no `geology`.
+    pub fn resistance(&self) -> Arc<dyn Resistance> {
+        self.geology.clone()
+    }
+
     /// The terrain heightfield (the scene's `terrain`, or its only `Heightfield`).
     fn terrain(&mut self, asking: &NodeSpec) -> Result<Arc<HeightfieldField>, SceneError> {
         if let Some(t) = &self.terrain {
@@ -137,11 +150,6 @@ impl Compiler<'_> {
         Ok(sub.builder.build(id?))
     }
 
-    /// The rock's resistance ρ the landform generators read.
-    fn resistance(&self) -> impl Fn(Vec3) -> f32 + Sync + use<> {
-        |_| 0.0
-    }
-
     /// Expands every `Landform` node of `n`, innermost first: each base is compiled on
     /// its own, its generator run on it, and the node replaced by the plain result.
     fn expand(&mut self, n: &mut NodeSpec) -> Result<(), SceneError> {
@@ -155,7 +163,8 @@ impl Compiler<'_> {
         let region = l
             .region
             .map_or_else(|| tree.support(), |b| Aabb::new(b.min.0, b.max.0));
-        let rho = self.resistance();
+        let rock = self.resistance();
+        let rho = |p: Vec3| rock.resistance(p);
         let seed = l.full_seed(self.scene.seed);
         let generated = Ground::new(&tree, region, l.cell.0, &rho, seed)
             .and_then(|ground| l.generate(&ground))
@@ -333,13 +342,20 @@ impl Compiler<'_> {
             NodeSpec::Warp(w) => {
                 let child = self.node(&w.child, depth + 1)?;
                 let region = w.region.map(|r| (Aabb::new(r.min.0, r.max.0), r.falloff.0));
-                let noise = Fbm::new(&w.turbulence, self.scene.seed);
-                let seed = self.scene.seed ^ w.turbulence.seed_offset.rotate_left(16);
-                self.builder.warp(
-                    child,
-                    Warp::new(noise, seed, w.turbulence.amplitude.0, region),
-                    name,
-                )
+                let warp = Warp::from_spec(&w.turbulence, region, self.scene.seed);
+                self.builder.warp(child, warp, name)
+            }
+            NodeSpec::Erode(e) => {
+                let child = self.node(&e.child, depth + 1)?;
+                let region = Aabb::new(e.region.min.0, e.region.max.0);
+                if region.is_empty() {
+                    return Err(self.error(n, "the erosion region is empty: give min <= max"));
+                }
+                let blend = e
+                    .blend
+                    .map_or_else(|| 0.125 * region.size().x.min(region.size().y), |b| b.0);
+                let erosion = Erosion::new(self.geology.clone(), region, blend, e.strength.0);
+                self.builder.erode(child, erosion, name)
             }
             NodeSpec::Landform(l) => {
                 // Scenes are expanded before they compile; a landform met here (a subtree
@@ -443,6 +459,12 @@ impl<'s> Compiler<'s> {
             terrain: None,
             index: scene.named(),
             budget,
+            geology: Arc::new(
+                scene
+                    .geology
+                    .as_ref()
+                    .map_or_else(Geology::default, |g| Geology::from_spec(g, scene.seed)),
+            ),
         }
     }
 
@@ -454,6 +476,7 @@ impl<'s> Compiler<'s> {
             tree,
             ground,
             expanded: None,
+            geology: self.geology,
             outline: self.outline,
             notices: self.dems.notices().to_vec(),
         })

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::value::{Dir3, Finite, P3, Positive, Scale3};
+use super::value::{Dir3, Finite, NonNegative, P3, Positive, Scale3};
 use crate::curves::FeatureVolumeSpec;
 use crate::dem::HeightfieldSpec;
 use crate::elevation::ElevationSpec;
@@ -31,6 +31,10 @@ pub struct Scene {
     /// What `karstic run` makes of the scene: mesh region, cell size, preview camera.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub job: Option<JobSpec>,
+    /// The rock's resistance to erosion (Paris et al. 2019 §4), read by `Erode` nodes and
+    /// the landform generators; uniform when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub geology: Option<crate::geology::GeologySpec>,
     /// Named subtrees that are not drawn themselves but can be instanced.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub defs: Vec<NodeSpec>,
@@ -68,9 +72,34 @@ pub enum NodeSpec {
     /// `by` stands in for `base` inside a region, with a smooth transition near the
     /// region's faces: how a terrain-aware Feature Volume goes into its terrain.
     Replace(ReplaceSpec),
+    /// The child worn away where the scene's geology is soft, inside a region:
+    /// `f − a·w·(1 − ρ)` (Paris et al. 2019 §6).
+    Erode(ErodeSpec),
     /// A landform generator (Paris et al. 2019 §6) over a base terrain: expanded into
     /// plain primitives when the tree compiles (`karstic tree expand` writes them out).
     Landform(LandformSpec),
+}
+
+/// An erosion node: `f_child(p) − strength · w(p) · (1 − ρ(p))`, `ρ` the scene's
+/// `geology`, `w` 1 inside the region and falling to 0 over `blend` metres inside its
+/// faces.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ErodeSpec {
+    /// Unique node name.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// How much the field drops where the rock is softest (`ρ = 0`), in field units
+    /// (the iso-value is 0.5): 0.2 to 0.45 recess soft layers, more cuts through.
+    pub strength: NonNegative,
+    /// Where erosion acts.
+    pub region: BoxSpec,
+    /// Width of the fade inside the region's faces, metres (default: an eighth of the
+    /// region's smaller horizontal side).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub blend: Option<Positive>,
+    /// The eroded subtree.
+    pub child: Box<NodeSpec>,
 }
 
 /// A replace node: `f_base + w·(f_by − f_base)` with `w` a partition of unity of the
@@ -310,6 +339,7 @@ impl NodeSpec {
             NodeSpec::Warp(_) => "Warp",
             NodeSpec::Replace(_) => "Replace",
             NodeSpec::Landform(_) => "Landform",
+            NodeSpec::Erode(_) => "Erode",
         }
     }
 
@@ -330,6 +360,7 @@ impl NodeSpec {
             NodeSpec::Warp(n) => n.name.as_deref(),
             NodeSpec::Replace(n) => n.name.as_deref(),
             NodeSpec::Landform(n) => n.name.as_deref(),
+            NodeSpec::Erode(n) => n.name.as_deref(),
         }
     }
 
@@ -343,6 +374,7 @@ impl NodeSpec {
             NodeSpec::Replace(r) => vec![&*r.base, &*r.by],
             NodeSpec::Transform(t) => vec![&*t.child],
             NodeSpec::Warp(w) => vec![&*w.child],
+            NodeSpec::Erode(e) => vec![&*e.child],
             NodeSpec::Anchor(a) => vec![&*a.child],
             NodeSpec::Landform(l) => vec![&*l.base],
             NodeSpec::Instance(_)
@@ -376,6 +408,7 @@ impl NodeSpec {
             NodeSpec::Replace(r) => vec![&mut *r.base, &mut *r.by],
             NodeSpec::Transform(t) => vec![&mut *t.child],
             NodeSpec::Warp(w) => vec![&mut *w.child],
+            NodeSpec::Erode(e) => vec![&mut *e.child],
             NodeSpec::Anchor(a) => vec![&mut *a.child],
             NodeSpec::Landform(l) => vec![&mut *l.base],
             NodeSpec::Instance(_)

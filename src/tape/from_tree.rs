@@ -14,6 +14,7 @@
 //! | difference | base, then each carve and `DIFF` |
 //! | affine transform | `WARP`, child, `UNWARP` with the tree's own `M⁻¹` |
 //! | turbulence warp | `TWARP`, child, `UNWARP` (the tree's bound: the child's over the ball grown by the warp's reach, times its Lipschitz bound) |
+//! | erosion by a geology (`Erode`) | none: [`TapeError::NoEncoding`], the CPU renders it |
 //!
 //! Every emitted subtree is then told its support from the tree's cache
 //! ([`TapeBuilder::assume_support`]), so the tape's guards and support box are the tree's;
@@ -180,6 +181,14 @@ fn emit_node(tree: &Tree, b: &mut TapeBuilder, id: NodeId, node: &Node) -> Resul
             b.turbulence_begin(warp)?;
             emit(tree, b, *child)?;
             b.warp_end()?;
+        }
+        Node::Erode { .. } => {
+            return Err(no_encoding(
+                tree,
+                id,
+                "erosion node",
+                "the tape has no encoding of geology trees",
+            ));
         }
     }
     Ok(())
