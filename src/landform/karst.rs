@@ -114,9 +114,11 @@ impl KarstSpec {
             let r = &ground.region;
             p.cmpge(r.min).all() && p.cmple(r.max).all()
         };
+        // Queues `p` if its rock is soft and its Poisson sphere free (hard candidates
+        // take no room: a softer one may come close later).
         let mut push = |queue: &mut BinaryHeap<Candidate>, rng: &mut Rng, p: Vec3| {
             let rho = (ground.resistance)(p);
-            if rho >= rho0 {
+            if rho >= rho0 || !poisson.take(p) {
                 return;
             }
             let key = (rho + eps * rng.unit()).max(0.0);
@@ -124,7 +126,7 @@ impl KarstSpec {
             seq += 1;
         };
         for s in self.seeds(ground) {
-            if inside(s) && poisson.take(s) {
+            if inside(s) {
                 push(&mut queue, &mut rng, s);
             }
         }
@@ -138,7 +140,7 @@ impl KarstSpec {
             carved.push((p, effect(rho, 1.0, self.beta.0)));
             for _ in 0..self.directions {
                 let q = p + rng.lower_hemisphere() * step;
-                if inside(q) && ground.solid(q) && poisson.take(q) {
+                if inside(q) && ground.solid(q) {
                     push(&mut queue, &mut rng, q);
                 }
             }

@@ -230,9 +230,12 @@ impl Rng {
         (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
     }
 
-    /// A uniform direction of the lower hemisphere (`z ≤ 0`).
+    /// A direction of the lower hemisphere (`z ≤ 0`), its `z = −u²` (`u` uniform): more
+    /// often near the horizontal than a uniform draw, as water that reached a bed spreads
+    /// along it.
     pub fn lower_hemisphere(&mut self) -> Vec3 {
-        let z = -self.unit();
+        let u = self.unit();
+        let z = -u * u;
         let phi = std::f32::consts::TAU * self.unit();
         let r = (1.0 - z * z).max(0.0).sqrt();
         Vec3::new(r * phi.cos(), r * phi.sin(), z)
