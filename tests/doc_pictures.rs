@@ -67,6 +67,9 @@ karstic render trees/heightmap_top.ron -o heightmap_top.png --camera 4900 4380 7
 karstic render trees/jacksboro_bare.ron -o detail_on.png --camera 3920 5150 790 3560 5120 880 --fov 50 --quiet
 karstic render trees/jacksboro_smooth.ron -o detail_off.png --camera 3920 5150 790 3560 5120 880 --fov 50 --quiet
 karstic render trees/eroded_range.ron -o eroded_range.png --camera 600 380 300 660 700 200 --fov 50 --quiet
+karstic render trees/sea_cliffs.ron -o sea_cliffs.png --quiet
+karstic sample trees/karst_network.ron --box 0 300 -5 396 300.5 75 --res 397 2 161 -o karst_section.npy
+karstic render trees/hoodoo_field.ron -o hoodoo_field.png --size 640 360 --quiet
 ";
 
 /// What [`COMMANDS`] write that becomes a picture, and the picture's name in `docs/img/`.
@@ -98,6 +101,9 @@ const PICTURES: &[(&str, &str)] = &[
     ("detail_on.png", "detail_on.png"),
     ("detail_off.png", "detail_off.png"),
     ("eroded_range.png", "eroded_range.png"),
+    ("sea_cliffs.png", "sea_cliffs.png"),
+    ("karst_section.npy", "karst_section.png"),
+    ("hoodoo_field.png", "hoodoo_field.png"),
 ];
 
 /// Whether [`PICTURES`] makes a picture named `name`.
