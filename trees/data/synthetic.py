@@ -7,9 +7,14 @@ karst_plateau.asc a 60 m limestone plateau ending in a cliff on its south side, 
                   five closed dolines 3-6 m deep where water sinks in
                   (trees/karst_network.ron).
 
-Deterministic (no random numbers): `python3 synthetic.py` rewrites both files.
+`python3 synthetic.py --big` also writes big_plateau.asc (not committed): a 5.2 km
+plateau of 20 m cells with 120 dolines, the Fig. 17-scale karst of BENCHMARKS.md.
+
+Deterministic: `python3 synthetic.py` rewrites the files byte for byte.
 """
 import math
+import random
+import sys
 
 
 def write(path, nx, ny, cell, f):
@@ -49,3 +54,23 @@ def plateau(x, y):
 
 write("sea_cliff.asc", 128, 128, 2, cliff)
 write("karst_plateau.asc", 100, 100, 4, plateau)
+
+
+def big_plateau():
+    rng = random.Random(5)
+    dolines = [(rng.uniform(300, 4900), rng.uniform(900, 4900), rng.uniform(40, 90),
+                rng.uniform(4, 9)) for _ in range(120)]
+
+    def f(x, y):
+        edge = 600 + 150 * math.sin(x / 450.0)
+        top = 120 + 8 * math.sin(x / 600.0) * math.cos(y / 500.0)
+        for (cx, cy, r, d) in dolines:
+            q = ((x - cx) ** 2 + (y - cy) ** 2) / (r * r)
+            if q < 1:
+                top -= d * (1 - q) ** 2
+        return 0.003 * y + top * smoothstep(edge - 40, edge + 40, y)
+    return f
+
+
+if "--big" in sys.argv:
+    write("big_plateau.asc", 261, 261, 20, big_plateau())
