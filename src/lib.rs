@@ -17,6 +17,7 @@ pub mod geology;
 pub mod heightmap;
 pub mod io;
 pub mod job;
+pub mod landform;
 pub mod mesh;
 pub mod procedural;
 pub mod render;

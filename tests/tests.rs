@@ -27,6 +27,7 @@ mod elevation_trees;
 mod erosion;
 mod geology;
 mod heightmap;
+mod landform;
 mod main_job;
 mod masks;
 mod meld;

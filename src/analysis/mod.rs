@@ -1,10 +1,12 @@
 //! Terrain analysis over the tree and its DEM: drainage ([`flow`]: depression filling and
-//! multiple-flow-direction drainage area), what vertical lines meet ([`column`]), and the
+//! multiple-flow-direction drainage area), slope, stream power, sinks and coastal
+//! accessibility ([`relief`]), what vertical lines meet ([`column`]), and the
 //! texture masks engines take as splat maps ([`masks`]).
 
 pub mod column;
 pub mod flow;
 pub mod masks;
+pub mod relief;
 
 use crate::dem::HeightfieldField;
 use crate::field::{Aabb, Rect};

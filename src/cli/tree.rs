@@ -49,6 +49,15 @@ pub(super) enum TreeCommand {
         /// The node, in RON.
         node: String,
     },
+    /// Expand the tree's `Landform` generators into the plain primitives they make, and
+    /// write the result as a tree file (for hand editing; it compiles to the same tree).
+    Expand {
+        /// Tree file.
+        file: PathBuf,
+        /// The expanded tree file to write.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Remove the node named NAME.
     Rm {
         /// Tree file.
@@ -104,6 +113,23 @@ pub(super) fn run(args: TreeArgs) -> anyhow::Result<()> {
             println!("{}: added a node under {parent}", file.display());
             Ok(())
         }
+        TreeCommand::Expand { file, output } => {
+            let sf = scene::load(&file)?;
+            let expanded = sf
+                .expand()
+                .with_context(|| format!("expanding {}", file.display()))?;
+            karstic::io::write_bytes_atomic(&output, expanded.to_ron().as_bytes())?;
+            let mut primitives = 0;
+            expanded
+                .root
+                .walk(&mut |n, _| primitives += usize::from(n.kind() == "Primitive"));
+            println!(
+                "{}: expanded into {} ({primitives} primitives)",
+                file.display(),
+                output.display()
+            );
+            Ok(())
+        }
         TreeCommand::Rm { file, name } => {
             edit::remove_node(&file, &name)?;
             println!("{}: removed {name}", file.display());
@@ -119,7 +145,8 @@ fn show(file: &PathBuf) -> anyhow::Result<()> {
         .with_context(|| format!("compiling {}", file.display()))?;
     let tree = &compiled.tree;
     let mut specs = Vec::new();
-    sf.scene.root.walk(&mut |n, _| specs.push(n));
+    let scene = compiled.expanded.as_ref().unwrap_or(&sf.scene);
+    scene.root.walk(&mut |n, _| specs.push(n));
     let mut kinds: BTreeMap<&str, usize> = BTreeMap::new();
     println!("{}", sf.scene.name.as_deref().unwrap_or("(unnamed scene)"));
     for (spec, &(depth, id)) in specs.iter().zip(&compiled.outline) {

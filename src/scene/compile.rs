@@ -3,19 +3,20 @@
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
-use glam::{Affine3A, Quat};
+use glam::{Affine3A, Quat, Vec3};
 
 use super::load::{SceneError, SceneFile};
-use super::spec::{NodeSpec, Scene};
+use super::spec::{Nary, NodeSpec, Scene};
 use std::sync::Arc;
 
 use crate::curves::FeatureVolumeSpec;
 use crate::curves::spec::BuildOptions;
 use crate::dem::{DemCache, HeightfieldField};
 use crate::elevation::{BuildContext, ElevationField, ElevationSpec};
-use crate::field::{Aabb, NodeId, Primitive, Transition, Tree, TreeBuilder, Warp};
+use crate::field::{Aabb, Field, NodeId, Primitive, Transition, Tree, TreeBuilder, Warp};
 use crate::geology::{Erosion, Geology, Resistance};
 use crate::io::DEFAULT_MEMORY_BUDGET;
+use crate::landform::Ground;
 use crate::voxel::SField;
 
 /// A compiled scene: the tree, and for each node of the scene's root (pre-order, the order
@@ -29,6 +30,9 @@ pub struct Compiled {
     pub notices: Vec<String>,
     /// The scene's terrain: its `terrain` heightfield, or its only one (`None` without).
     pub ground: Option<Arc<HeightfieldField>>,
+    /// The scene with its `Landform` nodes expanded into plain primitives, when it had
+    /// any: the scene the tree (and [`Compiled::outline`]) was compiled from.
+    pub expanded: Option<Scene>,
     /// The scene's geology (uniform [`crate::geology::DEFAULT_RESISTANCE`] without one).
     pub geology: Arc<Geology>,
 }
@@ -135,6 +139,60 @@ impl Compiler<'_> {
         };
         f.build_with(self.base_dir, &opts)
             .map_err(|e| self.asset_error(n, e))
+    }
+
+    /// Compiles `n` (a node of the scene, or one derived from it) into a tree of its own,
+    /// sharing this compiler's DEM cache.
+    fn subtree(&mut self, n: &NodeSpec) -> Result<Tree, SceneError> {
+        let mut sub = Compiler::new(self.scene, self.path, self.base_dir, self.budget);
+        sub.record = false;
+        std::mem::swap(&mut sub.dems, &mut self.dems);
+        let id = sub.node(n, 0);
+        std::mem::swap(&mut sub.dems, &mut self.dems);
+        Ok(sub.builder.build(id?))
+    }
+
+    /// Expands every `Landform` node of `n`, innermost first: each base is compiled on
+    /// its own, its generator run on it, and the node replaced by the plain result.
+    fn expand(&mut self, n: &mut NodeSpec) -> Result<(), SceneError> {
+        for c in n.children_mut() {
+            self.expand(c)?;
+        }
+        let NodeSpec::Landform(l) = &*n else {
+            return Ok(());
+        };
+        let tree = self.subtree(&l.base)?;
+        let region = l
+            .region
+            .map_or_else(|| tree.support(), |b| Aabb::new(b.min.0, b.max.0));
+        let rock = self.resistance();
+        let rho = |p: Vec3| rock.resistance(p);
+        let seed = l.full_seed(self.scene.seed);
+        let generated = Ground::new(&tree, region, l.cell.0, &rho, seed)
+            .and_then(|ground| l.generate(&ground))
+            .map_err(|e| self.asset_error(n, e))?;
+        if let NodeSpec::Landform(l) = std::mem::replace(n, NodeSpec::Blend(Nary::default())) {
+            *n = l.expansion(generated);
+        }
+        Ok(())
+    }
+
+    /// The scene with its landforms expanded (`None` when it has none).
+    fn expanded_scene(&mut self) -> Result<Option<Scene>, SceneError> {
+        let has = |n: &NodeSpec| {
+            let mut found = false;
+            n.walk(&mut |m, _| found |= matches!(m, NodeSpec::Landform(_)));
+            found
+        };
+        if !has(&self.scene.root) && !self.scene.defs.iter().any(has) {
+            return Ok(None);
+        }
+        let mut scene = self.scene.clone();
+        for d in &mut scene.defs {
+            self.expand(d)?;
+        }
+        self.expand(&mut scene.root)?;
+        Ok(Some(scene))
     }
 
     /// Builds the elevation tree of `e` (node `n`) and implicitizes it.
@@ -319,6 +377,16 @@ impl Compiler<'_> {
                 let erosion = Erosion::new(self.geology.clone(), region, blend, e.strength.0);
                 self.builder.erode(child, erosion, name)
             }
+            NodeSpec::Landform(l) => {
+                // Scenes are expanded before they compile; a landform met here (a subtree
+                // compiled on its own) expands in place.
+                let mut plain = NodeSpec::Landform(l.clone());
+                self.expand(&mut plain)?;
+                let record = std::mem::replace(&mut self.record, false);
+                let id = self.node(&plain, depth);
+                self.record = record;
+                id?
+            }
             NodeSpec::Instance(i) => {
                 if let Some(&id) = self.named.get(&i.of) {
                     return Ok(id);
@@ -346,7 +414,28 @@ impl SceneFile {
     /// Compiles the scene into a tree; DEMs and voxel grids are refused beyond `budget`
     /// bytes each, before they are read or allocated.
     pub fn compile_with(&self, budget: u64) -> Result<Compiled, SceneError> {
-        Compiler::new(&self.scene, &self.path, &self.base_dir, budget).run()
+        let mut first = Compiler::new(&self.scene, &self.path, &self.base_dir, budget);
+        let Some(expanded) = first.expanded_scene()? else {
+            return first.run();
+        };
+        let mut plain = Compiler::new(&expanded, &self.path, &self.base_dir, budget);
+        plain.dems = first.dems;
+        let mut compiled = plain.run()?;
+        compiled.expanded = Some(expanded);
+        Ok(compiled)
+    }
+
+    /// The scene with every `Landform` node expanded into plain primitives, as it
+    /// compiles (the scene itself when it has none): what `karstic tree expand` writes.
+    pub fn expand(&self) -> Result<Scene, SceneError> {
+        Compiler::new(
+            &self.scene,
+            &self.path,
+            &self.base_dir,
+            DEFAULT_MEMORY_BUDGET,
+        )
+        .expanded_scene()
+        .map(|e| e.unwrap_or_else(|| self.scene.clone()))
     }
 
     /// Compiles only what can change the field inside `roi`, for consumers that never ask
@@ -419,6 +508,7 @@ impl<'s> Compiler<'s> {
         Ok(Compiled {
             tree,
             ground,
+            expanded: None,
             geology: self.geology,
             outline: self.outline,
             notices: self.dems.notices().to_vec(),

@@ -7,6 +7,7 @@ use crate::curves::FeatureVolumeSpec;
 use crate::dem::HeightfieldSpec;
 use crate::elevation::ElevationSpec;
 use crate::field::{NoiseSpec, PrimitiveSpec};
+use crate::landform::LandformSpec;
 
 /// The tree-file format version this build reads and writes.
 pub const FORMAT_VERSION: u32 = 1;
@@ -74,6 +75,9 @@ pub enum NodeSpec {
     /// The child worn away where the scene's geology is soft, inside a region:
     /// `f − a·w·(1 − ρ)` (Paris et al. 2019 §6).
     Erode(ErodeSpec),
+    /// A landform generator (Paris et al. 2019 §6) over a base terrain: expanded into
+    /// plain primitives when the tree compiles (`karstic tree expand` writes them out).
+    Landform(LandformSpec),
 }
 
 /// An erosion node: `f_child(p) − strength · w(p) · (1 − ρ(p))`, `ρ` the scene's
@@ -121,7 +125,7 @@ pub struct ReplaceSpec {
 }
 
 /// An n-ary operator node.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Nary {
     /// Unique node name.
@@ -334,6 +338,7 @@ impl NodeSpec {
             NodeSpec::Instance(_) => "Instance",
             NodeSpec::Warp(_) => "Warp",
             NodeSpec::Replace(_) => "Replace",
+            NodeSpec::Landform(_) => "Landform",
             NodeSpec::Erode(_) => "Erode",
         }
     }
@@ -354,6 +359,7 @@ impl NodeSpec {
             NodeSpec::Instance(n) => n.name.as_deref(),
             NodeSpec::Warp(n) => n.name.as_deref(),
             NodeSpec::Replace(n) => n.name.as_deref(),
+            NodeSpec::Landform(n) => n.name.as_deref(),
             NodeSpec::Erode(n) => n.name.as_deref(),
         }
     }
@@ -370,6 +376,7 @@ impl NodeSpec {
             NodeSpec::Warp(w) => vec![&*w.child],
             NodeSpec::Erode(e) => vec![&*e.child],
             NodeSpec::Anchor(a) => vec![&*a.child],
+            NodeSpec::Landform(l) => vec![&*l.base],
             NodeSpec::Instance(_)
             | NodeSpec::Primitive(_)
             | NodeSpec::Heightfield(_)
@@ -403,6 +410,7 @@ impl NodeSpec {
             NodeSpec::Warp(w) => vec![&mut *w.child],
             NodeSpec::Erode(e) => vec![&mut *e.child],
             NodeSpec::Anchor(a) => vec![&mut *a.child],
+            NodeSpec::Landform(l) => vec![&mut *l.base],
             NodeSpec::Instance(_)
             | NodeSpec::Primitive(_)
             | NodeSpec::Heightfield(_)

@@ -1,0 +1,383 @@
+//! Landform generators (Paris et al. 2019 §6): tree-file nodes that read the terrain
+//! below them (its top surface, drainage, the rock's resistance ρ) and emit plain
+//! skeletal primitives — negative spheres that carve caves, sea undercuts and canyon
+//! walls, positive blocks and cones that stand as hoodoos.
+//!
+//! A `Landform(base: …, generator: …)` node is *expanded* when its tree compiles: the
+//! base is compiled on its own, the generator runs on it, and the node becomes
+//! `Blend([base, Blend(carves)])` (erosion) or `Union([base, Blend(rocks)])` (accretion)
+//! of ordinary primitives, so bounds, BVH pruning, meshing and rendering need nothing new.
+//! `karstic tree expand` writes that plain tree out for hand editing. Generators are
+//! sequential and seeded from the node's `seed`: the same file gives the same primitives,
+//! byte for byte, on any number of threads.
+
+mod canyon;
+mod hoodoo;
+mod karst;
+mod sea;
+
+use std::collections::HashMap;
+
+use glam::{IVec3, Vec2, Vec3};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+pub use canyon::CanyonSpec;
+pub use hoodoo::{Hoodoo, HoodooSpec, Terminal};
+pub use karst::KarstSpec;
+pub use sea::SeaSpec;
+
+use crate::dem::{Heightfield, Interpolation};
+use crate::field::{Aabb, Field, ISO, PrimitiveSpec, SkeletonSpec, Tree};
+use crate::heightmap::{Columns, TopOptions};
+use crate::scene::spec::{BoxSpec, Nary};
+use crate::scene::{Finite, NodeSpec, P3, Positive};
+
+/// A landform node of a tree file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LandformSpec {
+    /// Unique node name; the expansion keeps it, its primitives' blend is `NAME-carves`
+    /// (or `NAME-rocks`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Seed of the generator's random choices (mixed with the scene's seed).
+    #[serde(default)]
+    pub seed: u32,
+    /// The terrain the landforms are generated on (any subtree; often a `Heightfield`,
+    /// or an earlier `Landform` for repeated steps).
+    pub base: Box<NodeSpec>,
+    /// Where the generator works (default: the base's support box).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub region: Option<BoxSpec>,
+    /// Cell of the analysis grid (top surface, drainage, accessibility), metres.
+    pub cell: Positive,
+    /// What to generate.
+    pub generator: GeneratorSpec,
+}
+
+/// The generators.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum GeneratorSpec {
+    /// Caves by invasion percolation from the sinks (Paris et al. 2019 §6.2).
+    Karst(KarstSpec),
+    /// Undercuts, arches and sea caves around sea level (Paris et al. 2019 §6.1).
+    SeaErosion(SeaSpec),
+    /// Hoodoos and goblins grown by an open grammar (Paris et al. 2019 §6.3).
+    Hoodoos(HoodooSpec),
+    /// River canyons whose walls the stream erodes (Paris et al. 2019 §6.1).
+    Canyon(CanyonSpec),
+}
+
+/// Errors of a generator: bad parameters for the terrain it meets.
+#[derive(Debug, thiserror::Error)]
+pub enum LandformError {
+    /// The region or the analysis grid cannot be built.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+/// What a generator reads: the base compiled, its top surface, the rock, a seed.
+pub struct Ground<'a> {
+    /// The base subtree, compiled.
+    pub tree: &'a Tree,
+    /// The region the generator works in.
+    pub region: Aabb,
+    /// The top surface of the base over the region's footprint, sample `(0, 0)` at the
+    /// region's south-west corner (NaN where a column holds no solid).
+    pub top: Heightfield,
+    /// Rock resistance ρ(p) ∈ [0, 1] (1 = hard).
+    pub resistance: &'a (dyn Fn(Vec3) -> f32 + Sync),
+    /// The generator's seed.
+    pub seed: u64,
+}
+
+impl<'a> Ground<'a> {
+    /// Reads the top surface of `tree` over `region` on a grid of `cell` metres.
+    pub fn new(
+        tree: &'a Tree,
+        region: Aabb,
+        cell: f32,
+        resistance: &'a (dyn Fn(Vec3) -> f32 + Sync),
+        seed: u64,
+    ) -> Result<Ground<'a>, LandformError> {
+        let size = region.size();
+        if region.is_empty() || !size.is_finite() || size.x <= 0.0 || size.y <= 0.0 {
+            return Err(LandformError::Invalid(format!(
+                "the landform region {:?} .. {:?} is empty or unbounded: give `region`",
+                region.min, region.max
+            )));
+        }
+        let (nx, ny) = (
+            (size.x / cell).floor() as usize + 1,
+            (size.y / cell).floor() as usize + 1,
+        );
+        if nx < 3 || ny < 3 || nx * ny > 64 << 20 {
+            return Err(LandformError::Invalid(format!(
+                "a {nx}×{ny} analysis grid: choose a `cell` giving between 3×3 and 64 M samples"
+            )));
+        }
+        let origin = Vec2::new(region.min.x, region.min.y);
+        let opts = TopOptions {
+            tolerance: 0.01 * cell,
+            direct: true,
+        };
+        let mut z = vec![f32::NAN; nx * ny];
+        z.par_chunks_mut(nx).enumerate().for_each_init(
+            || Columns::new(tree, &opts),
+            |columns, (j, row)| {
+                for (i, out) in row.iter_mut().enumerate() {
+                    let xy = origin + Vec2::new(i as f32, j as f32) * cell;
+                    *out = columns
+                        .top(xy)
+                        .filter(|&h| h <= region.max.z)
+                        .unwrap_or(f32::NAN);
+                }
+            },
+        );
+        let top = Heightfield::new(nx, ny, origin, Vec2::splat(cell), z)
+            .map_err(|e| LandformError::Invalid(e.to_string()))?;
+        Ok(Ground {
+            tree,
+            region,
+            top,
+            resistance,
+            seed,
+        })
+    }
+
+    /// The top surface's height at `xy` (bilinear), NaN outside or over nodata.
+    pub fn height(&self, xy: Vec2) -> f32 {
+        self.top.sample(xy, Interpolation::Bilinear)
+    }
+
+    /// Whether `p` is in the base's solid.
+    pub fn solid(&self, p: Vec3) -> bool {
+        self.tree.value(p) > ISO
+    }
+
+    /// The tree-frame position of sample `k` of [`Ground::top`], at its height.
+    pub fn sample_point(&self, k: usize) -> Vec3 {
+        let nx = self.top.nx();
+        let xy = self.top.origin() + Vec2::new((k % nx) as f32, (k / nx) as f32) * self.top.cell();
+        xy.extend(self.top.samples()[k])
+    }
+
+    /// The top grid's sample nearest `xy`, if inside.
+    pub fn nearest_sample(&self, xy: Vec2) -> Option<usize> {
+        let q = ((xy - self.top.origin()) / self.top.cell()).round();
+        let (nx, ny) = (self.top.nx(), self.top.ny());
+        (q.x >= 0.0 && q.y >= 0.0 && (q.x as usize) < nx && (q.y as usize) < ny)
+            .then(|| q.x as usize + nx * q.y as usize)
+    }
+}
+
+/// The erosion effect `e(ρ, σ) = σ(1 − ρ)(1 − β) + σβ` of Paris et al. 2019 §6.1: no
+/// effect without stress, `β` at full stress on the hardest rock, `σ` on the softest.
+pub fn effect(rho: f32, sigma: f32, beta: f32) -> f32 {
+    sigma * (1.0 - rho) * (1.0 - beta) + sigma * beta
+}
+
+/// The falloff radius of a carving sphere whose cavity, at full effect `e = 1`, has
+/// radius `r` inside saturated solid: a sphere `−2e·g(d/R)` carves where
+/// `1 − 2e·g > T`, i.e. `g(d/R) > 1/4` at `e = 1`, `d < 0.61 R`.
+const CAVITY_FRACTION: f32 = 0.61;
+
+/// A carving sphere of cavity radius `radius` (at full effect) and effect `e`: a point
+/// primitive of energy `−2e` (coordinates rounded to the millimetre, so expanded files
+/// read well).
+pub fn carving_sphere(center: Vec3, radius: f32, e: f32) -> NodeSpec {
+    point(center, radius / CAVITY_FRACTION, -2.0 * e)
+}
+
+fn round3(v: f32) -> f32 {
+    (v * 1000.0).round() / 1000.0
+}
+
+/// A point primitive (a blob) of falloff `falloff` and energy `energy`.
+pub fn point(center: Vec3, falloff: f32, energy: f32) -> NodeSpec {
+    NodeSpec::Primitive(PrimitiveSpec {
+        name: None,
+        shape: SkeletonSpec::Point {
+            center: P3(center.to_array().map(round3).into()),
+        },
+        falloff: Positive(round3(falloff).max(0.001)),
+        energy: Finite(round3(energy)),
+        noise: None,
+    })
+}
+
+/// A deterministic random stream (SplitMix64).
+pub struct Rng(u64);
+
+impl Rng {
+    /// A stream from `seed`.
+    pub fn new(seed: u64) -> Rng {
+        Rng(seed ^ 0x6a09_e667_f3bc_c909)
+    }
+
+    /// The next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    /// A uniform number in `[0, 1)`.
+    pub fn unit(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    /// A direction of the lower hemisphere (`z ≤ 0`), its `z = −u²` (`u` uniform): more
+    /// often near the horizontal than a uniform draw, as water that reached a bed spreads
+    /// along it.
+    pub fn lower_hemisphere(&mut self) -> Vec3 {
+        let u = self.unit();
+        let z = -u * u;
+        let phi = std::f32::consts::TAU * self.unit();
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    }
+}
+
+/// Poisson-disk acceptance in 3D: a point is taken only if no taken point lies closer
+/// than the spacing (a hash grid of cells of the spacing's side).
+pub struct Poisson {
+    spacing: f32,
+    cells: HashMap<IVec3, Vec<Vec3>>,
+}
+
+impl Poisson {
+    /// An empty set with minimum distance `spacing`.
+    pub fn new(spacing: f32) -> Poisson {
+        Poisson {
+            spacing,
+            cells: HashMap::new(),
+        }
+    }
+
+    fn cell(&self, p: Vec3) -> IVec3 {
+        (p / self.spacing).floor().as_ivec3()
+    }
+
+    /// Whether `p` keeps its distance from every point taken so far.
+    pub fn free(&self, p: Vec3) -> bool {
+        let c = self.cell(p);
+        let r2 = self.spacing * self.spacing;
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    if let Some(v) = self.cells.get(&(c + IVec3::new(dx, dy, dz)))
+                        && v.iter().any(|q| q.distance_squared(p) < r2)
+                    {
+                        return false;
+                    }
+                }
+            }
+        }
+        true
+    }
+
+    /// Takes `p` if it is free; says whether it was.
+    pub fn take(&mut self, p: Vec3) -> bool {
+        if !self.free(p) {
+            return false;
+        }
+        self.cells.entry(self.cell(p)).or_default().push(p);
+        true
+    }
+}
+
+/// How a generator's primitives join the base.
+pub enum Joining {
+    /// `Blend([base, Blend(carves)])`: negative spheres summed into the terrain.
+    Carve,
+    /// `Union([base, Blend(rocks)])`: new rock standing on the terrain.
+    Accrete,
+}
+
+/// What a generator made: its primitives and how they join the base.
+pub struct Generated {
+    /// The primitives.
+    pub primitives: Vec<NodeSpec>,
+    /// How they join the base.
+    pub joining: Joining,
+}
+
+impl LandformSpec {
+    /// Runs the generator on `ground`.
+    pub fn generate(&self, ground: &Ground) -> Result<Generated, LandformError> {
+        Ok(match &self.generator {
+            GeneratorSpec::Karst(k) => Generated {
+                primitives: k.generate(ground)?,
+                joining: Joining::Carve,
+            },
+            GeneratorSpec::SeaErosion(s) => Generated {
+                primitives: s.generate(ground)?,
+                joining: Joining::Carve,
+            },
+            GeneratorSpec::Canyon(c) => Generated {
+                primitives: c.generate(ground)?,
+                joining: Joining::Carve,
+            },
+            GeneratorSpec::Hoodoos(h) => Generated {
+                primitives: h.generate(ground)?,
+                joining: Joining::Accrete,
+            },
+        })
+    }
+
+    /// The seed of the generator: the node's, mixed with the scene's.
+    pub fn full_seed(&self, scene_seed: u32) -> u64 {
+        (u64::from(scene_seed) << 32) | u64::from(self.seed)
+    }
+
+    /// The plain node this landform expands into (its base already expanded).
+    pub fn expansion(self, generated: Generated) -> NodeSpec {
+        let suffix = match generated.joining {
+            Joining::Carve => "carves",
+            Joining::Accrete => "rocks",
+        };
+        let mut children = vec![*self.base];
+        // An empty blend is refused by the tree file's checks: nothing generated, nothing
+        // added.
+        if !generated.primitives.is_empty() {
+            children.push(NodeSpec::Blend(Nary {
+                name: self.name.as_ref().map(|n| format!("{n}-{suffix}")),
+                children: generated.primitives,
+            }));
+        }
+        let node = Nary {
+            name: self.name,
+            children,
+        };
+        match generated.joining {
+            Joining::Carve => NodeSpec::Blend(node),
+            Joining::Accrete => NodeSpec::Union(node),
+        }
+    }
+}
+
+/// Newton steps that bring a dart onto the surface.
+const PROJECTION_STEPS: usize = 6;
+
+/// `p` moved onto the surface `f = T` by Newton steps along the gradient; `None` when it
+/// does not settle within `tolerance` metres or wanders more than `wander` metres.
+pub fn project(ground: &Ground, p: Vec3, tolerance: f32, wander: f32) -> Option<Vec3> {
+    let mut q = p;
+    for _ in 0..PROJECTION_STEPS {
+        let (f, g) = ground.tree.value_grad(q);
+        let g2 = g.length_squared();
+        if g2 < 1e-12 {
+            return None;
+        }
+        let dq = g * ((ISO - f) / g2);
+        q += dq;
+        if dq.length() < tolerance {
+            return ((q - p).length() < wander).then_some(q);
+        }
+    }
+    None
+}

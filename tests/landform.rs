@@ -1,0 +1,344 @@
+//! Terrain analysis (slope, stream power, sinks, coastal accessibility) and the landform
+//! generators of Paris et al. 2019 §6: karst networks are connected and stay out of hard
+//! rock, sea erosion stays in its band, expansion is deterministic across thread counts
+//! and `tree expand` writes a plain tree that compiles to the same field.
+
+use std::collections::VecDeque;
+use std::path::Path;
+
+use glam::{Vec2, Vec3};
+
+use karstic::analysis::flow::{drainage_area, fill_depressions};
+use karstic::analysis::relief::{coastal_accessibility, sinks, slope, stream_power};
+use karstic::dem::Heightfield;
+use karstic::field::{Aabb, Field, ISO, Tree};
+use karstic::landform::{Ground, HoodooSpec, KarstSpec, SeaSpec, Terminal, carving_sphere};
+use karstic::scene::spec::Nary;
+use karstic::scene::{NodeSpec, SceneFile, parse_scene};
+
+fn grid(nx: usize, ny: usize, cell: f32, f: impl Fn(f32, f32) -> f32) -> Heightfield {
+    let z = (0..nx * ny)
+        .map(|k| f((k % nx) as f32 * cell, (k / nx) as f32 * cell))
+        .collect();
+    Heightfield::new(nx, ny, Vec2::ZERO, Vec2::splat(cell), z).unwrap()
+}
+
+#[test]
+fn slope_and_stream_power_on_a_tilted_plane() {
+    // z = 100 − 0.5·x: slope 0.5 everywhere; drainage grows by one cell per column
+    // downslope, so stream power grows as the square root of the distance.
+    let (nx, ny) = (40, 41);
+    let hf = grid(nx, ny, 10.0, |x, _| 100.0 - 0.5 * x);
+    for s in slope(&hf) {
+        assert!((s - 0.5).abs() < 1e-4, "slope {s}");
+    }
+    let area = drainage_area(&fill_depressions(&hf));
+    let sp = stream_power(&hf);
+    let j = ny / 2;
+    for i in 0..nx {
+        let k = i + nx * j;
+        let want = ((i + 1) as f32 * 100.0).sqrt() * 0.5;
+        assert!((area[k] - (i + 1) as f32 * 100.0).abs() < 0.1, "area {i}");
+        assert!(
+            (sp[k] - want).abs() < 1e-3 * want,
+            "σ at {i}: {} ≠ {want}",
+            sp[k]
+        );
+    }
+}
+
+#[test]
+fn sinks_are_the_deep_pits_only() {
+    // A plane with two closed basins, 5 m and 0.5 m deep, and noise-free elsewhere.
+    let hf = grid(50, 50, 2.0, |x, y| {
+        let bowl = |cx: f32, cy: f32, r: f32, d: f32| {
+            let q = ((x - cx).powi(2) + (y - cy).powi(2)) / (r * r);
+            if q < 1.0 { -d * (1.0 - q).powi(2) } else { 0.0 }
+        };
+        0.02 * x + bowl(30.0, 30.0, 12.0, 5.0) + bowl(70.0, 70.0, 8.0, 0.5)
+    });
+    let deep = sinks(&hf, 1.0);
+    assert_eq!(deep, vec![15 + 50 * 15], "the deep bowl's bottom only");
+    assert_eq!(sinks(&hf, 0.1).len(), 2);
+}
+
+#[test]
+fn coastal_accessibility_is_higher_on_a_headland_than_in_a_bay() {
+    // Sea below y = 40 except a headland (x in 40..60) reaching to y = 20, and a bay
+    // (x in 120..140) reaching inland to y = 60.
+    let land = |x: f32, y: f32| {
+        let coast = if (40.0..60.0).contains(&x) {
+            20.0
+        } else if (120.0..140.0).contains(&x) {
+            60.0
+        } else {
+            40.0
+        };
+        if y >= coast { 20.0 } else { -5.0 }
+    };
+    let hf = grid(100, 50, 2.0, land);
+    let alpha = coastal_accessibility(&hf, 0.0, 1.0, 30.0);
+    let at = |x: f32, y: f32| alpha[(x / 2.0) as usize + 100 * (y / 2.0) as usize];
+    let (headland, straight, bay) = (at(50.0, 20.0), at(90.0, 40.0), at(130.0, 60.0));
+    assert!(
+        headland > straight && straight > bay,
+        "{headland} {straight} {bay}"
+    );
+    assert_eq!(at(90.0, 90.0), 0.0, "inland, out of reach");
+    assert_eq!(at(90.0, 10.0), 1.0, "the sea itself");
+}
+
+/// A compiled scene from RON text (assets relative to `trees/`).
+fn scene_file(text: &str) -> SceneFile {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
+    let path = dir.join("test.ron");
+    SceneFile {
+        scene: parse_scene(text, &path).unwrap(),
+        path,
+        base_dir: dir,
+    }
+}
+
+/// A plateau: a box of rock 120 m wide, its top at about z = 0, 60 m deep.
+const PLATEAU: &str =
+    "Primitive(shape: Box(center: (0, 0, -32), half_size: (60, 60, 30)), falloff: 4.0)";
+
+fn plateau() -> Tree {
+    let text = format!("(version: 1, root: {PLATEAU})");
+    scene_file(&text).compile().unwrap().tree
+}
+
+/// Strata: soft (0.3) above z = −26, hard (0.95) below.
+fn strata(p: Vec3) -> f32 {
+    if p.z > -26.0 { 0.3 } else { 0.95 }
+}
+
+fn karst() -> KarstSpec {
+    ron::from_str("(sinks: [(0, 0)], radius: 3, spacing: 4, threshold: 0.6, max_spheres: 3000)")
+        .unwrap()
+}
+
+/// The base with `spheres` carved as the generators carve them.
+fn carve(base: &str, spheres: &[(Vec3, f32)], radius: f32) -> Tree {
+    let mut sf = scene_file(&format!("(version: 1, root: {base})"));
+    let carves = spheres
+        .iter()
+        .map(|(p, e)| carving_sphere(*p, radius, *e))
+        .collect();
+    let root = std::mem::replace(&mut sf.scene.root, NodeSpec::Blend(Nary::default()));
+    sf.scene.root = NodeSpec::Blend(Nary {
+        name: None,
+        children: vec![
+            root,
+            NodeSpec::Blend(Nary {
+                name: None,
+                children: carves,
+            }),
+        ],
+    });
+    sf.compile().unwrap().tree
+}
+
+#[test]
+fn karst_is_connected_from_its_sink_to_deep_passages_and_spares_hard_rock() {
+    let base = plateau();
+    let region = Aabb::new(Vec3::new(-56.0, -56.0, -60.0), Vec3::new(56.0, 56.0, 4.0));
+    let rho = strata;
+    let ground = Ground::new(&base, region, 2.0, &rho, 7).unwrap();
+    let spec = karst();
+    let net = spec.network(&ground).unwrap();
+    assert!(net.len() > 50, "{} spheres", net.len());
+    for (p, _) in &net {
+        assert!(strata(*p) < 0.6, "a sphere at {p} in hard rock");
+    }
+    let carved = carve(PLATEAU, &net, 3.0);
+    // Hard rock well below the boundary (more than a sphere's reach) is untouched.
+    let reach = 3.0 / 0.61;
+    for k in 0..2000 {
+        let p = Vec3::new(
+            -50.0 + (k % 20) as f32 * 5.0,
+            -50.0 + (k / 20 % 20) as f32 * 5.0,
+            -26.0 - reach - 1.0 - (k / 400) as f32 * 5.0,
+        );
+        assert!(carved.value(p) > ISO, "hard rock at {p} was carved");
+    }
+    // Flood the air from above the sink on a 1 m lattice: it reaches 15 m below the top.
+    let (lo, n) = (Vec3::new(-56.0, -56.0, -40.0), [113usize, 113, 46]);
+    let idx = |i: usize, j: usize, k: usize| i + n[0] * (j + n[1] * k);
+    let at = |i: usize, j: usize, k: usize| lo + Vec3::new(i as f32, j as f32, k as f32);
+    let mut seen = vec![false; n[0] * n[1] * n[2]];
+    let start = (56, 56, n[2] - 1);
+    assert!(carved.value(at(start.0, start.1, start.2)) < ISO);
+    let mut queue = VecDeque::from([start]);
+    seen[idx(start.0, start.1, start.2)] = true;
+    let mut deepest = f32::INFINITY;
+    while let Some((i, j, k)) = queue.pop_front() {
+        deepest = deepest.min(at(i, j, k).z);
+        let nbrs = [
+            (i.wrapping_sub(1), j, k),
+            (i + 1, j, k),
+            (i, j.wrapping_sub(1), k),
+            (i, j + 1, k),
+            (i, j, k.wrapping_sub(1)),
+            (i, j, k + 1),
+        ];
+        for (a, b, c) in nbrs {
+            if a >= n[0] || b >= n[1] || c >= n[2] || seen[idx(a, b, c)] {
+                continue;
+            }
+            // Inside the plateau's footprint only, so the flood cannot go round its sides.
+            let p = at(a, b, c);
+            if p.x.abs() > 50.0 || p.y.abs() > 50.0 {
+                continue;
+            }
+            seen[idx(a, b, c)] = true;
+            if carved.value(p) < ISO {
+                queue.push_back((a, b, c));
+            }
+        }
+    }
+    assert!(deepest <= -15.0, "the flood stops at z = {deepest}");
+}
+
+#[test]
+fn sea_erosion_carves_only_within_its_band() {
+    // A cliff: land (z up to 20) north of y = 0, sea floor at z = −15 to the south.
+    let cliff = "Primitive(shape: Box(center: (0, 30, -5), half_size: (40, 30, 25)), falloff: 2.0)";
+    let base = scene_file(&format!("(version: 1, root: {cliff})"))
+        .compile()
+        .unwrap()
+        .tree;
+    let region = Aabb::new(Vec3::new(-45.0, -20.0, -32.0), Vec3::new(45.0, 64.0, 24.0));
+    let rho = |_: Vec3| 0.4;
+    let ground = Ground::new(&base, region, 1.0, &rho, 3).unwrap();
+    let spec: SeaSpec =
+        ron::from_str("(sea_level: 0, band: 5, radius: 2, spacing: 2, reach: 20)").unwrap();
+    let samples = spec.samples(&ground).unwrap();
+    assert!(samples.len() > 50, "{} samples", samples.len());
+    for (p, _) in &samples {
+        assert!(p.z.abs() <= 5.0, "a sample at {p}");
+    }
+    let carved = carve(cliff, &samples, 2.0);
+    let reach = 2.0 / 0.61;
+    let mut changed = 0;
+    for k in 0..60_000 {
+        let p = Vec3::new(
+            -40.0 + (k % 40) as f32 * 2.0,
+            -1.0 + (k / 40 % 30) as f32 * 0.5,
+            -30.0 + (k / 1200) as f32,
+        );
+        if base.value(p) > ISO && carved.value(p) <= ISO {
+            changed += 1;
+            assert!(p.z.abs() <= 5.0 + reach, "carved at {p}, out of the band");
+        }
+    }
+    assert!(changed > 100, "only {changed} points carved");
+}
+
+const KARST_SCENE: &str = "(version: 1, seed: 4, root: Landform(name: \"k\", seed: 9, cell: 2, \
+     base: Primitive(shape: Box(center: (0, 0, -32), half_size: (60, 60, 30)), falloff: 4.0), \
+     region: (min: (-56, -56, -60), max: (56, 56, 4)), \
+     generator: Karst(sinks: [(0, 0), (20, -10)], radius: 3, spacing: 4, threshold: 0.6, max_spheres: 400)))";
+
+#[test]
+fn expansion_is_byte_identical_across_thread_counts() {
+    let sf = scene_file(KARST_SCENE);
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| sf.expand().unwrap().to_ron())
+    };
+    let one = run(1);
+    assert!(one.matches("Primitive").count() > 300, "{one}");
+    assert_eq!(one, run(3));
+    assert_eq!(one, run(8));
+}
+
+#[test]
+fn tree_expand_writes_a_plain_tree_that_compiles_to_the_same_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("karst.ron");
+    std::fs::write(&input, KARST_SCENE).unwrap();
+    let output = dir.path().join("plain.ron");
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_karstic"))
+        .args(["tree", "expand"])
+        .arg(&input)
+        .arg("-o")
+        .arg(&output)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let plain = std::fs::read_to_string(&output).unwrap();
+    assert!(!plain.contains("Landform"));
+    let a = karstic::scene::load(&input)
+        .unwrap()
+        .compile()
+        .unwrap()
+        .tree;
+    let b = karstic::scene::load(&output)
+        .unwrap()
+        .compile()
+        .unwrap()
+        .tree;
+    for k in 0..4000 {
+        let p = Vec3::new(
+            -50.0 + (k % 20) as f32 * 5.1,
+            -50.0 + (k / 20 % 20) as f32 * 5.1,
+            -40.0 + (k / 400) as f32 * 4.3,
+        );
+        assert_eq!(a.value(p).to_bits(), b.value(p).to_bits(), "at {p}");
+    }
+}
+
+#[test]
+fn hoodoos_stand_on_their_axioms_within_the_grammar_depth() {
+    let base = plateau();
+    let region = Aabb::new(Vec3::new(-50.0, -50.0, -60.0), Vec3::new(50.0, 50.0, 30.0));
+    let rho = |p: Vec3| (0.5 + 0.4 * (p.z * 0.7).sin()).clamp(0.0, 1.0);
+    let ground = Ground::new(&base, region, 2.0, &rho, 11).unwrap();
+    let spec: HoodooSpec =
+        ron::from_str("(spacing: 9, size: 5, max_depth: 4, slope: (-0.5, 0.5), max_area: 1e9)")
+            .unwrap();
+    let hoodoos = spec.hoodoos(&ground).unwrap();
+    assert!(hoodoos.len() > 40, "{} hoodoos", hoodoos.len());
+    assert!(hoodoos.iter().all(|h| (1..=4).contains(&h.symbols.len())));
+    assert!(
+        hoodoos.iter().any(|h| h.symbols.len() >= 3),
+        "no tall hoodoo"
+    );
+    let kinds = |t: Terminal| {
+        hoodoos
+            .iter()
+            .flat_map(|h| &h.symbols)
+            .filter(|s| s.0 == t)
+            .count()
+    };
+    assert!(kinds(Terminal::Block) > 0 && kinds(Terminal::Cone) > 0 && kinds(Terminal::Cap) > 0);
+    // The expanded tree: the terrain and the hoodoos' union.
+    let mut sf = scene_file(&format!("(version: 1, root: {PLATEAU})"));
+    let rocks = spec.generate(&ground).unwrap();
+    let root = std::mem::replace(&mut sf.scene.root, NodeSpec::Blend(Nary::default()));
+    sf.scene.root = NodeSpec::Union(Nary {
+        name: None,
+        children: vec![
+            root,
+            NodeSpec::Blend(Nary {
+                name: None,
+                children: rocks,
+            }),
+        ],
+    });
+    let tree = sf.compile().unwrap().tree;
+    for h in &hoodoos {
+        let height = h.height();
+        assert!(height > 3.0, "a hoodoo of {height} m");
+        for k in 0..=40 {
+            let p = h.axiom + Vec3::Z * (height * k as f32 / 40.0 * 0.999);
+            assert!(tree.value(p) > ISO, "a hoodoo at {} breaks at {p}", h.axiom);
+        }
+        // And it stands above the plateau's top (z ≈ 1.8).
+        assert!(h.axiom.z + height > 4.0);
+    }
+}
