@@ -724,7 +724,7 @@ mod tests {
         for _ in 0..40 {
             let region = Aabb::around(rng.point(-60.0, 60.0), 25.0 * rng.next());
             // Drop every third payload; shift the others.
-            let keep = |i: u32| (i % 3 != 0).then_some(i + 100_000);
+            let keep = |i: u32| (!i.is_multiple_of(3)).then_some(i + 100_000);
             let mut mapped = Vec::new();
             let small = bvh.restricted(&region, |i| {
                 let q = keep(i);
