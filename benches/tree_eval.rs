@@ -6,6 +6,16 @@
 //!   with the naive, unpruned per-point evaluation as the baseline in the same run;
 //! * point queries one by one (`Field::value` over rayon chunks) and batched
 //!   (`Tree::values`, parallel chunks).
+//!
+//! Issue 15's per-sample cost, on one thread: the karst scene of Paris et al. 2019's public
+//! C++ code (its 6,541 carving spheres and its terrain, exported into `benches/data`), on
+//! the C++ program's own Marching Cubes lattice (198 × 199 × 59 samples):
+//!
+//! * `karst/values_stage`: the values stage of [`polygonize`] (default options), in
+//!   samples evaluated by that stage per second;
+//! * `karst/polygonize`: the whole mesher;
+//! * `karst/grid_every_sample`: [`eval_grid`] over every sample of the lattice, as the
+//!   C++ evaluates it (no z-band pruning).
 
 #[path = "../tests/common/rng.rs"]
 #[allow(dead_code)] // the draws this bench does not use
@@ -14,9 +24,12 @@ mod rng;
 use rng::Rng;
 use std::hint::black_box;
 
+use std::time::Duration;
+
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use karstic::field::{Field, Grid, Tree, eval_grid, eval_grid_naive};
+use karstic::mesh::{GridSpec, MeshOptions, MeshStats, polygonize};
 use rayon::prelude::*;
 
 /// 100,000 spheres of radius 2 m and falloff 3 m over [0, 5000]² with centres at z ∈ [0, 20].
@@ -33,6 +46,47 @@ pub fn spheres_scene() -> Tree {
     karstic::scene::compile_scene(&scene, "spheres".as_ref(), ".".as_ref())
         .unwrap()
         .tree
+}
+
+/// Tree file text for the karst scene of `benches/data`: the C++ terrain as a heightfield
+/// leaf (falloff 15 m, its terrain node's radius) blended with the carving spheres (radius
+/// 5.1 m, energy −6.8 on the C++ scale whose surface is at 7.5, so −6.8/15 on ours).
+fn karst_scene() -> Tree {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/benches/data");
+    let centres = std::fs::read_to_string(format!("{dir}/karst_spheres.txt")).unwrap();
+    let mut text = String::from(
+        "(version: 1, root: Blend(children: [\n\
+         Heightfield(source: \"karst_terrain.asc\", falloff: 15),\n\
+         Blend(name: \"karst\", children: [\n",
+    );
+    let energy = -6.8 / 15.0;
+    for c in centres.lines().filter(|l| !l.starts_with('#')) {
+        let c: Vec<&str> = c.split_whitespace().collect();
+        text += &format!(
+            "Primitive(shape: Point(center: ({}, {}, {})), falloff: 5.1, energy: {energy}),\n",
+            c[0], c[1], c[2]
+        );
+    }
+    text += "])]))";
+    let scene = karstic::scene::parse_scene(&text, "karst".as_ref()).unwrap();
+    karstic::scene::compile_scene(&scene, "karst".as_ref(), dir.as_ref())
+        .unwrap()
+        .tree
+}
+
+/// The lattice of the C++ program's Marching Cubes on its karst scene (its `res` 200),
+/// in our frame (z up).
+fn karst_grid() -> GridSpec {
+    GridSpec::new(
+        Vec3::new(-199.359, -198.993, -34.405),
+        Vec3::new(2.02395, 2.0239, 2.04845),
+        [197, 198, 58],
+    )
+    .unwrap()
+}
+
+fn values_stage(stats: &MeshStats) -> Duration {
+    stats.stages.iter().find(|s| s.0 == "values").unwrap().1
 }
 
 fn blobs_scene() -> Tree {
@@ -99,5 +153,35 @@ fn bench(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, bench);
+fn karst(c: &mut Criterion) {
+    let tree = karst_scene();
+    let grid = karst_grid();
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let opts = MeshOptions::default();
+    let mesh = || one.install(|| polygonize(&tree, &grid, &opts).unwrap());
+    let (_, stats) = mesh();
+    eprintln!("karst, one thread:\n{stats}");
+    let mut g = c.benchmark_group("karst");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(stats.field_evaluations));
+    g.bench_function("values_stage", |b| {
+        b.iter_custom(|iters| (0..iters).map(|_| values_stage(&mesh().1)).sum())
+    });
+    g.bench_function("polygonize", |b| b.iter(mesh));
+    let every = Grid {
+        origin: grid.origin,
+        step: grid.spacing,
+        dims: grid.cells.map(|c| c + 1),
+    };
+    g.throughput(Throughput::Elements(every.len() as u64));
+    g.bench_function("grid_every_sample", |b| {
+        b.iter(|| one.install(|| black_box(eval_grid(&tree, &every, None))))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench, karst);
 criterion_main!(benches);

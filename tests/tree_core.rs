@@ -383,6 +383,17 @@ fn crowd() -> impl Strategy<Value = Shape> {
 proptest! {
     #![proptest_config(ProptestConfig { cases: 150, .. ProptestConfig::default() })]
 
+    /// Pruning a blend with a BVH (its BVH restricted to the region, not rebuilt) keeps
+    /// its values.
+    #[test]
+    fn pruning_a_crowd_preserves_values(s in crowd(), b in test_box()) {
+        let t = tree(&s);
+        let pruned = t.prune(&b).unwrap();
+        for p in points(&b, 48, 5) {
+            prop_assert!((t.value(p) - pruned.value(p)).abs() < 1e-5, "at {}", p);
+        }
+    }
+
     /// A line's values and segment bounds are the tree's along the ray, asked in the
     /// order a march asks them (mostly forward, stepping back to refine), and its bounds
     /// hold for pairs on the segment and are never looser than the tree's.

@@ -211,7 +211,7 @@ impl Tree {
         let [nx, ny, nz] = dims;
         assert!(out.len() >= nx * ny * nz, "eval_block: output too small");
         let mut scratch = Scratch::default();
-        let mut values = vec![0.0f32; BRICK_LEN];
+        let mut values = [0.0f32; BRICK_LEN];
         for k0 in (0..nz).step_by(BRICK) {
             for j0 in (0..ny).step_by(BRICK) {
                 for i0 in (0..nx).step_by(BRICK) {

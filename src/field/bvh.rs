@@ -69,6 +69,18 @@ impl Wide {
         }
     }
 
+    /// The box of slot `i`.
+    fn slot_box(&self, i: usize) -> Aabb {
+        let lane =
+            |v: &[[Vec4; GROUPS]; 3]| Vec3::from_array([0, 1, 2].map(|a| v[a][i / 4][i % 4]));
+        Aabb::new(lane(&self.lo), lane(&self.hi))
+    }
+
+    /// True when no slot holds anything (every box empty).
+    fn is_empty(&self) -> bool {
+        (0..GROUPS).all(|g| (self.lo[0][g].cmple(self.hi[0][g])).bitmask() == 0)
+    }
+
     /// Bit mask of the slots whose box contains `p`.
     #[inline(always)]
     fn containing(&self, p: &[Vec4; 3]) -> u32 {
@@ -311,6 +323,93 @@ impl ChildBvh {
         bvh.nodes = c.nodes;
         bvh.leaves = c.leaves;
         bvh
+    }
+
+    /// The BVH of the items whose boxes overlap `region`, each payload replaced by
+    /// `map(payload)` (items mapped to `None` are dropped), without a rebuild: the nodes
+    /// that meet `region` are copied with their slots in place, so a query visits the kept
+    /// items in the order this BVH visits them. `map` is called in that order.
+    pub fn restricted(&self, region: &Aabb, mut map: impl FnMut(u32) -> Option<u32>) -> Self {
+        let lo = [region.min.x, region.min.y, region.min.z].map(Vec4::splat);
+        let hi = [region.max.x, region.max.y, region.max.z].map(Vec4::splat);
+        let mut out = ChildBvh {
+            nodes: Vec::new(),
+            leaves: Vec::new(),
+            huge: Vec::new(),
+            deep: self.deep,
+        };
+        if !self.nodes.is_empty() {
+            self.restrict_node(0, &lo, &hi, &mut map, &mut out);
+        }
+        out.huge = self
+            .huge
+            .iter()
+            .filter(|(b, _)| b.overlaps(region))
+            .filter_map(|&(b, payload)| map(payload).map(|q| (b, q)))
+            .collect();
+        out
+    }
+
+    /// Copies inner node `n` restricted to `lo..hi` into `out` (depth first, the node
+    /// before its subtrees); its index there, or `None` when nothing of it is kept.
+    fn restrict_node(
+        &self,
+        n: u32,
+        lo: &[Vec4; 3],
+        hi: &[Vec4; 3],
+        map: &mut impl FnMut(u32) -> Option<u32>,
+        out: &mut ChildBvh,
+    ) -> Option<u32> {
+        let node = &self.nodes[n as usize];
+        let at = out.nodes.len();
+        out.nodes.push(Wide::EMPTY);
+        let mut kept = Wide::EMPTY;
+        let mut mask = node.overlapping(lo, hi);
+        while mask != 0 {
+            let i = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let leaf = node.leaves & (1 << i) != 0;
+            let slot = if leaf {
+                self.restrict_leaf(node.slot[i], lo, hi, map, out)
+            } else {
+                self.restrict_node(node.slot[i], lo, hi, map, out)
+            };
+            if let Some(slot) = slot {
+                kept.set(i, &node.slot_box(i), slot, leaf);
+            }
+        }
+        if kept.is_empty() {
+            out.nodes.truncate(at);
+            return None;
+        }
+        out.nodes[at] = kept;
+        Some(at as u32)
+    }
+
+    /// Copies leaf `n`'s items that overlap `lo..hi` and that `map` keeps into `out`.
+    fn restrict_leaf(
+        &self,
+        n: u32,
+        lo: &[Vec4; 3],
+        hi: &[Vec4; 3],
+        map: &mut impl FnMut(u32) -> Option<u32>,
+        out: &mut ChildBvh,
+    ) -> Option<u32> {
+        let leaf = &self.leaves[n as usize];
+        let mut kept = Wide::EMPTY;
+        let mut mask = leaf.overlapping(lo, hi);
+        while mask != 0 {
+            let i = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            if let Some(payload) = map(leaf.slot[i]) {
+                kept.set(i, &leaf.slot_box(i), payload, false);
+            }
+        }
+        if kept.is_empty() {
+            return None;
+        }
+        out.leaves.push(kept);
+        Some((out.leaves.len() - 1) as u32)
     }
 
     /// Number of inner nodes and of leaves.
@@ -608,6 +707,42 @@ mod tests {
                     .map(|i| payloads[i])
                     .collect();
                 assert_eq!(sorted(got), want, "{n} items, box {q:?}");
+            }
+        }
+    }
+
+    /// Restricted to a region, the tree answers like a linear scan of the items that
+    /// overlap the region and that the map keeps, with the mapped payloads, and it visits
+    /// them in the order the whole tree does.
+    #[test]
+    fn restricted_answers_like_the_whole_tree_in_its_region() {
+        let mut rng = Rng(11);
+        let n = 3000;
+        let boxes = boxes(n, &mut rng);
+        let payloads: Vec<u32> = (0..n as u32).collect();
+        let bvh = ChildBvh::new(&boxes, &payloads);
+        for _ in 0..40 {
+            let region = Aabb::around(rng.point(-60.0, 60.0), 25.0 * rng.next());
+            // Drop every third payload; shift the others.
+            let keep = |i: u32| (!i.is_multiple_of(3)).then_some(i + 100_000);
+            let mut mapped = Vec::new();
+            let small = bvh.restricted(&region, |i| {
+                let q = keep(i);
+                mapped.extend(q);
+                q
+            });
+            let want: Vec<u32> = (0..n)
+                .filter(|&i| boxes[i].overlaps(&region))
+                .filter_map(|i| keep(i as u32))
+                .collect();
+            assert_eq!(sorted(mapped), sorted(want));
+            for _ in 0..200 {
+                let t = Vec3::new(rng.next(), rng.next(), rng.next());
+                let p = region.min + t * (region.max - region.min);
+                let (mut got, mut whole) = (Vec::new(), Vec::new());
+                small.at_point(p, |i| got.push(i));
+                bvh.at_point(p, |i| whole.extend(keep(i)));
+                assert_eq!(got, whole, "point {p} of {region:?}");
             }
         }
     }

@@ -5,6 +5,7 @@ use std::collections::HashMap;
 
 use super::bounds::{Aabb, Interval};
 use super::box_bounds::map_box;
+use super::bvh::BVH_MIN_CHILDREN;
 use super::falloff::ISO;
 use super::node::{Node, NodeId};
 use super::tree::{Tree, TreeBuilder};
@@ -22,6 +23,14 @@ fn key(b: &Aabb) -> [u32; 6] {
 impl Pruner<'_> {
     /// The pruned copy of `id` valid in `b`; `None` when it is 0 throughout `b`.
     fn node(&mut self, id: NodeId, b: &Aabb) -> Option<NodeId> {
+        // A primitive is copied as it is: no memo (a second parent gets a second copy).
+        if let Node::Primitive(f) = &self.tree.nodes[id as usize] {
+            let info = &self.tree.info[id as usize];
+            return info
+                .support
+                .overlaps(b)
+                .then(|| self.out.primitive(f.clone(), info.name.clone()));
+        }
         let memo_key = (id, key(b));
         if let Some(r) = self.memo.get(&memo_key) {
             return *r;
@@ -42,6 +51,25 @@ impl Pruner<'_> {
             Node::Constant(v) => (*v != 0.0).then(|| self.out.constant(*v, name)),
             Node::Primitive(f) => Some(self.out.primitive(f.clone(), name)),
             Node::Leaf(f) => Some(self.out.leaf(f.clone(), name)),
+            // The BVH is restricted to the region rather than rebuilt: the kept children
+            // are summed in the order the whole blend sums them.
+            Node::Blend { bvh: Some(bvh), .. } => {
+                let mut kept = Vec::new();
+                let bvh = bvh.restricted(b, |c| {
+                    let n = self.node(c, b)?;
+                    kept.push(n);
+                    Some(n)
+                });
+                match kept.len() {
+                    0 => None,
+                    1 => Some(kept[0]),
+                    n if n < BVH_MIN_CHILDREN => Some(self.out.blend(kept, name)),
+                    _ => {
+                        kept.sort_unstable();
+                        Some(self.out.blend_with(kept, Some(bvh), name))
+                    }
+                }
+            }
             Node::Blend { children, bvh } => {
                 let mut kept = Vec::new();
                 tree.blend_children_in(children, bvh, b, |c| kept.push(c));

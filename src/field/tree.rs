@@ -92,6 +92,16 @@ impl TreeBuilder {
                 .collect();
             ChildBvh::new(&supports, &children)
         });
+        self.blend_with(children, bvh, name)
+    }
+
+    /// `Σ children`, with `bvh` over their supports (its payloads are the children's ids).
+    pub(super) fn blend_with(
+        &mut self,
+        children: Vec<NodeId>,
+        bvh: Option<ChildBvh>,
+        name: Option<String>,
+    ) -> NodeId {
         self.push(
             Node::Blend {
                 children: children.into(),
