@@ -12,6 +12,9 @@ pub(super) struct EditArgs {
     /// full size) to this PNG and exit: no window is opened.
     #[arg(long)]
     screenshot: Option<PathBuf>,
+    /// Select the node of this name (its parameters in the inspector).
+    #[arg(long)]
+    select: Option<String>,
     /// Size of the screenshot in pixels.
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [1400, 820])]
     size: Vec<u32>,
@@ -30,16 +33,21 @@ pub(super) fn run(args: EditArgs) -> anyhow::Result<()> {
                 args.timeout.is_finite() && args.timeout > 0.0,
                 "--timeout must be a positive number of seconds"
             );
-            karstic::editor::screenshot(
+            let (first, settled) = karstic::editor::screenshot(
                 &args.tree,
                 out,
-                args.size[0],
-                args.size[1],
+                (args.size[0], args.size[1]),
+                args.select.as_deref(),
                 Duration::from_secs_f64(args.timeout),
             )?;
-            eprintln!("wrote {}", out.display());
+            eprintln!(
+                "first image after {:.2} s, settled after {:.2} s → {}",
+                first.as_secs_f64(),
+                settled.as_secs_f64(),
+                out.display()
+            );
             Ok(())
         }
-        None => karstic::editor::run_window(&args.tree),
+        None => karstic::editor::run_window(&args.tree, args.select.as_deref()),
     }
 }

@@ -418,7 +418,7 @@ impl Editor {
             ((rect.width() * ppp).round() as u32).max(8),
             ((rect.height() * ppp).round() as u32).max(8),
         );
-        self.dragging_view = moved || response.dragged();
+        self.dragging_view = moved;
         self.request(size);
     }
 
@@ -428,21 +428,20 @@ impl Editor {
         let Some(orbit) = &mut self.orbit else {
             return false;
         };
-        let mut moved = false;
+        let d = r.drag_delta();
         let shift = ui.input(|i| i.modifiers.shift);
         let ctrl = ui.input(|i| i.modifiers.command);
-        let d = r.drag_delta();
-        if r.dragged_by(egui::PointerButton::Middle)
+        // A click, or a drag that paused, does not move the view.
+        let mut moved = d != egui::Vec2::ZERO && r.dragged();
+        if !moved {
+        } else if r.dragged_by(egui::PointerButton::Middle)
             || (shift && r.dragged_by(egui::PointerButton::Primary))
         {
             orbit.pan(d.x, d.y, rect.height());
-            moved = true;
-        } else if ctrl && r.dragged() {
+        } else if ctrl {
             orbit.dolly(d.y * 2.0);
-            moved = true;
-        } else if r.dragged() {
+        } else {
             orbit.turn(d.x, d.y);
-            moved = true;
         }
         if r.hovered() {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);

@@ -27,9 +27,11 @@ use std::time::{Duration, Instant};
 pub use app::{Editor, Tool};
 pub use history::{Edit, History};
 
-/// Opens the editor's window on the tree file at `path` until it is closed.
-pub fn run_window(path: &Path) -> anyhow::Result<()> {
-    let editor = Editor::open(path);
+/// Opens the editor's window on the tree file at `path` (with the node named `select`
+/// selected) until it is closed.
+pub fn run_window(path: &Path, select: Option<&str>) -> anyhow::Result<()> {
+    let mut editor = Editor::open(path);
+    editor.select(select.map(str::to_string));
     let title = format!("karstic edit {}", path.display());
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default().with_inner_size([1400.0, 820.0]),
@@ -53,15 +55,25 @@ impl eframe::App for Window {
 }
 
 /// The editor drawn headless (egui_kittest on a wgpu adapter, software ones included), a
-/// `width × height` window of it on the tree file at `path`, stepped until the viewport
-/// has settled (the full-size image of the file's scene), waiting at most `timeout`.
+/// `width × height` window of it on the tree file at `path` with the node named `select`
+/// selected, stepped until the viewport has settled (the full-size image of the file's
+/// scene), waiting at most `timeout`.
 pub fn headless(
     path: &Path,
     width: u32,
     height: u32,
+    select: Option<&str>,
     timeout: Duration,
 ) -> anyhow::Result<egui_kittest::Harness<'static, Editor>> {
-    let editor = Editor::open(path);
+    let mut editor = Editor::open(path);
+    if let Some(name) = select {
+        anyhow::ensure!(
+            editor.scene().is_some_and(|s| s.named().contains_key(name)),
+            "{}: no node named {name:?}",
+            path.display()
+        );
+        editor.select(Some(name.to_string()));
+    }
     let mut harness = egui_kittest::Harness::builder()
         .with_size(egui::vec2(width as f32, height as f32))
         .wgpu()
@@ -94,15 +106,19 @@ pub fn settle(
     }
 }
 
-/// `karstic edit TREE --screenshot OUT`: the editor's first settled frame as a PNG.
+/// `karstic edit TREE --screenshot OUT`: the editor's first settled frame as a PNG;
+/// returns the times from opening to the first image and to the settled one.
 pub fn screenshot(
     path: &Path,
     out: &Path,
-    width: u32,
-    height: u32,
+    (width, height): (u32, u32),
+    select: Option<&str>,
     timeout: Duration,
-) -> anyhow::Result<()> {
-    let mut harness = headless(path, width, height, timeout)?;
+) -> anyhow::Result<(Duration, Duration)> {
+    let start = Instant::now();
+    let mut harness = headless(path, width, height, select, timeout)?;
+    let settled = start.elapsed();
+    let first = harness.state().first_image().unwrap_or(settled);
     let image = harness
         .render()
         .map_err(|e| anyhow::anyhow!("rendering the editor: {e}"))?;
@@ -110,5 +126,5 @@ pub fn screenshot(
     image::DynamicImage::ImageRgba8(image)
         .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)?;
     crate::io::write_bytes_atomic(out, &png)?;
-    Ok(())
+    Ok((first, settled))
 }
