@@ -190,7 +190,9 @@ impl Inspector {
                                 });
                             }
                         }
-                    });
+                    })
+                    .response
+                    .labelled_by(label);
             } else {
                 let mut s = shown.unwrap_or_else(|| {
                     current

@@ -71,8 +71,8 @@ pub fn show(ed: &mut Editor, ui: &mut Ui) {
         }
     }
     if !scene.defs.is_empty() {
-        egui::ComboBox::from_id_salt("instance")
-            .selected_text("Instance of…")
+        egui::ComboBox::from_label("instance")
+            .selected_text("of…")
             .show_ui(ui, |ui| {
                 for d in scene.defs.iter().filter_map(NodeSpec::name) {
                     if ui.button(d).clicked()
