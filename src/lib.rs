@@ -10,6 +10,7 @@
 pub mod analysis;
 pub mod curves;
 pub mod dem;
+pub mod editor;
 pub mod elevation;
 pub mod erosion;
 pub mod field;

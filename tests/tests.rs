@@ -23,6 +23,7 @@ mod dem_readers;
 mod doc_commands;
 mod doc_pictures;
 mod docs;
+mod editor;
 mod elevation_trees;
 mod erosion;
 mod geology;

@@ -3,6 +3,7 @@
 mod build;
 mod curves;
 mod dem;
+mod edit;
 mod erode;
 mod eval;
 mod generate;
@@ -43,6 +44,8 @@ enum Command {
     Dem(dem::DemArgs),
     /// Validate, inspect and edit tree files.
     Tree(tree::TreeArgs),
+    /// The interactive editor: outline, inspector, live preview, placement on the terrain.
+    Edit(edit::EditArgs),
     /// Print field values and gradients at points (CSV `x,y,z` from a file or stdin).
     Eval(eval::EvalArgs),
     /// Sample a tree's field on a grid as a float32 .npy with a JSON sidecar.
@@ -117,6 +120,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Build(a) => build::run(a),
         Command::Dem(a) => dem::run(a),
         Command::Tree(a) => tree::run(a),
+        Command::Edit(a) => edit::run(a),
         Command::Eval(a) => eval::run(a),
         Command::Sample(a) => sample::run(a),
         Command::Render(a) => render::run(a),

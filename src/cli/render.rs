@@ -8,9 +8,7 @@ use glam::Vec3;
 
 use super::Budget;
 use karstic::io::progress;
-use karstic::render::material::{Materials, scene_box};
-use karstic::render::views::frame_surface;
-use karstic::render::{Camera, Device, Frame, Method, RenderSettings, Renderable, cpu};
+use karstic::render::{Device, Frame, Method, RenderSettings, Renderable, cpu};
 
 /// Arguments of `karstic render`.
 #[derive(clap::Args, Debug)]
@@ -68,28 +66,17 @@ pub(super) fn run(args: RenderArgs) -> anyhow::Result<()> {
     for n in &compiled.notices {
         eprintln!("notice: {n}");
     }
-    let job = file.scene.job.as_ref();
-    // The job's region (else the support) sets the scale of the shading: haze, occlusion,
-    // materials. The job's camera is the default view.
-    let scene = scene_box(&file.scene, &compiled.tree);
-    let materials = Materials::for_tree(&file.scene, &compiled.tree, compiled.ground);
-    let mut subject = Renderable::from_tree(compiled.tree, args.gpu);
-    subject.allow_software = args.software_gpu;
     let look = args
         .camera
         .as_deref()
-        .map(|c| (Vec3::new(c[0], c[1], c[2]), Vec3::new(c[3], c[4], c[5])))
-        .or_else(|| job.and_then(|j| j.camera).map(|c| (c.eye.0, c.target.0)));
-    let fov = args.fov.or(job.map(|j| j.fov.0)).unwrap_or(40.0);
-    let camera = match look {
-        Some((eye, target)) => Camera::look_at(eye, target, fov, w, h),
-        None => frame_surface(subject.field.as_ref(), fov, w, h),
-    }
-    .with_context(|| format!("{}: placing the camera", args.tree.display()))?;
-    let mut settings = RenderSettings {
-        materials,
-        ..RenderSettings::for_scene(&scene, &camera, args.method)
-    };
+        .map(|c| (Vec3::new(c[0], c[1], c[2]), Vec3::new(c[3], c[4], c[5])));
+    let tree = &compiled.tree;
+    let camera = cpu::scene_camera(&file.scene, tree, look, args.fov, w, h)
+        .with_context(|| format!("{}: placing the camera", args.tree.display()))?;
+    let mut settings =
+        RenderSettings::for_tree(&file.scene, tree, compiled.ground, &camera, args.method);
+    let mut subject = Renderable::from_tree(compiled.tree, args.gpu);
+    subject.allow_software = args.software_gpu;
     settings.shading.shadows = !args.no_shadows;
     let start = Instant::now();
     let tiles = w.div_ceil(cpu::TILE) * h.div_ceil(cpu::TILE);

@@ -32,12 +32,24 @@ fn edit_file(
     change(&mut scene)?;
     validate(&scene).map_err(|p| edit_error(path, format!("after the edit: {}", p.message)))?;
     compile_scene(&scene, path, &file.base_dir)?;
-    let text = scene.to_ron();
+    write_keeping_backup(path, scene.to_ron().as_bytes())
+}
+
+/// Copies the file at `path` to `FILE.bak`, then replaces it with `bytes` atomically.
+fn write_keeping_backup(path: &Path, bytes: &[u8]) -> Result<(), SceneError> {
     let original = read_regular(path, super::load::MAX_TREE_FILE).map_err(SceneError::Read)?;
     let mut bak = path.as_os_str().to_owned();
     bak.push(".bak");
     write_bytes_atomic(&PathBuf::from(bak), &original).map_err(SceneError::Write)?;
-    write_bytes_atomic(path, text.as_bytes()).map_err(SceneError::Write)
+    write_bytes_atomic(path, bytes).map_err(SceneError::Write)
+}
+
+/// Puts back `text`, an earlier version of the tree file at `path` (the editor's undo and
+/// redo), byte for byte: it is parsed and validated first, the current file is kept as
+/// `FILE.bak`, and the file is replaced atomically.
+pub fn restore(path: &Path, text: &str) -> Result<(), SceneError> {
+    super::load::parse_scene(text, path)?;
+    write_keeping_backup(path, text.as_bytes())
 }
 
 fn find_mut<'a>(node: &'a mut NodeSpec, name: &str) -> Option<&'a mut NodeSpec> {
@@ -62,40 +74,49 @@ fn scene_find_mut<'a>(scene: &'a mut Scene, name: &str) -> Option<&'a mut NodeSp
 /// file (`3.5`, `(0, 0, 10)`, `Sphere(center: (0, 0, 0), radius: 4)`). An optional
 /// parameter the node leaves out (`noise`, `base_depth`) is added.
 pub fn set_param(path: &Path, target: &str, value: &str) -> Result<(), SceneError> {
+    edit_file(path, |scene| set_in_scene(scene, path, target, value))
+}
+
+/// The change of [`set_param`] made to a scene in memory, without validating or writing it
+/// (the editor's preview while a value is dragged); `path` only names the file in errors.
+pub fn set_in_scene(
+    scene: &mut Scene,
+    path: &Path,
+    target: &str,
+    value: &str,
+) -> Result<(), SceneError> {
     let (name, param) = target
         .split_once('.')
         .ok_or_else(|| edit_error(path, format!("expected NAME.PARAM, found {target:?}")))?;
     let keys: Vec<&str> = param.split('.').collect();
-    edit_file(path, |scene| {
-        let node = scene_find_mut(scene, name)
-            .ok_or_else(|| edit_error(path, format!("no node named {name:?}")))?;
-        let kind = node.kind();
-        let no_param = |fields: &[String]| {
-            edit_error(
-                path,
-                format!(
-                    "node {name:?} ({kind}) has no parameter {param:?} (it has: {})",
-                    fields.join(", ")
-                ),
-            )
-        };
-        let text = set_field(&to_ron_text(&*node), &keys, value).map_err(|e| match e {
-            SpliceError::NoField { fields, .. } => no_param(&fields),
-            SpliceError::NotOneValue => edit_error(
-                path,
-                format!("value {value:?} for {target}: expected one value, as in a tree file"),
+    let node = scene_find_mut(scene, name)
+        .ok_or_else(|| edit_error(path, format!("no node named {name:?}")))?;
+    let kind = node.kind();
+    let no_param = |fields: &[String]| {
+        edit_error(
+            path,
+            format!(
+                "node {name:?} ({kind}) has no parameter {param:?} (it has: {})",
+                fields.join(", ")
             ),
-        })?;
-        *node = ron_options().from_str(&text).map_err(|e| match e.code {
-            ron::Error::NoSuchStructField {
-                expected, found, ..
-            } if keys.last() == Some(&found.as_str()) => {
-                no_param(&expected.iter().map(|s| s.to_string()).collect::<Vec<_>>())
-            }
-            code => edit_error(path, format!("invalid value for {target}: {code}")),
-        })?;
-        Ok(())
-    })
+        )
+    };
+    let text = set_field(&to_ron_text(&*node), &keys, value).map_err(|e| match e {
+        SpliceError::NoField { fields, .. } => no_param(&fields),
+        SpliceError::NotOneValue => edit_error(
+            path,
+            format!("value {value:?} for {target}: expected one value, as in a tree file"),
+        ),
+    })?;
+    *node = ron_options().from_str(&text).map_err(|e| match e.code {
+        ron::Error::NoSuchStructField {
+            expected, found, ..
+        } if keys.last() == Some(&found.as_str()) => {
+            no_param(&expected.iter().map(|s| s.to_string()).collect::<Vec<_>>())
+        }
+        code => edit_error(path, format!("invalid value for {target}: {code}")),
+    })?;
+    Ok(())
 }
 
 /// `karstic tree add FILE PARENT NODE_RON`: appends a node to the children (the carves of

@@ -4,7 +4,7 @@ pub mod compile;
 pub mod edit;
 pub mod load;
 pub mod spec;
-mod splice;
+pub mod splice;
 pub mod validate;
 pub mod value;
 pub mod volume;

@@ -385,6 +385,17 @@ impl NodeSpec {
         }
     }
 
+    /// Whether the node has a list a new child can be appended to (`tree add`).
+    pub fn takes_children(&self) -> bool {
+        matches!(
+            self,
+            NodeSpec::Blend(_)
+                | NodeSpec::Union(_)
+                | NodeSpec::Intersection(_)
+                | NodeSpec::Difference(_)
+        )
+    }
+
     /// Mutable access to the list a new child is appended to, if the node has one.
     pub fn child_list_mut(&mut self) -> Option<&mut Vec<NodeSpec>> {
         match self {

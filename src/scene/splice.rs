@@ -68,6 +68,23 @@ pub fn set_field(text: &str, path: &[&str], value: &str) -> Result<String, Splic
     })
 }
 
+/// The value at the start of `text` (after its attributes) as a variant name and named
+/// fields: `Sphere(center: (0, 0, 0), radius: 2)` → `("Sphere", [("center", "(0, 0, 0)"),
+/// ("radius", "2")])`; `None` when it is not a list of named fields. What the editor's
+/// inspector walks to lay out a node's parameters.
+pub fn named_fields(text: &str) -> Option<(&str, Vec<(&str, &str)>)> {
+    let start = skip_attributes(text);
+    let body = fields(text, start)?;
+    let name = text[start..ident_end(text, start)].trim();
+    Some((
+        name,
+        body.fields
+            .iter()
+            .map(|f| (f.key, &text[f.value.0..f.value.1]))
+            .collect(),
+    ))
+}
+
 /// One `key: value` entry; `value` is its byte range.
 struct Field<'t> {
     key: &'t str,
@@ -251,6 +268,22 @@ mod tests {
             set_field(NODE, &["falloff"], " NaN ").unwrap(),
             r#"Primitive(name: "a, (b)", shape: Sphere(center: (0, 0, 0), radius: 2.0), falloff: NaN)"#
         );
+    }
+
+    #[test]
+    fn lists_named_fields() {
+        let (name, fields) = named_fields(NODE).unwrap();
+        assert_eq!(name, "Primitive");
+        assert_eq!(
+            fields,
+            [
+                ("name", "\"a, (b)\""),
+                ("shape", "Sphere(center: (0, 0, 0), radius: 2.0)"),
+                ("falloff", "1.5")
+            ]
+        );
+        assert_eq!(named_fields("(1, 2, 3)"), None);
+        assert_eq!(named_fields("Bicubic"), None);
     }
 
     #[test]

@@ -1,0 +1,53 @@
+//! `karstic edit`: the interactive editor, or its first settled frame as a picture.
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// Arguments of `karstic edit`.
+#[derive(clap::Args, Debug)]
+pub(super) struct EditArgs {
+    /// The tree file (.ron) to edit.
+    tree: PathBuf,
+    /// Draw the editor headless, write its first settled frame (the viewport refined to
+    /// full size) to this PNG and exit: no window is opened.
+    #[arg(long)]
+    screenshot: Option<PathBuf>,
+    /// Select the node of this name (its parameters in the inspector).
+    #[arg(long)]
+    select: Option<String>,
+    /// Size of the screenshot in pixels.
+    #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [1400, 820])]
+    size: Vec<u32>,
+    /// Longest wait for the viewport to settle before `--screenshot` gives up, seconds.
+    #[arg(long, default_value_t = 300.0)]
+    timeout: f64,
+}
+
+/// Runs `karstic edit`.
+pub(super) fn run(args: EditArgs) -> anyhow::Result<()> {
+    karstic::scene::load(&args.tree)?;
+    match &args.screenshot {
+        Some(out) => {
+            karstic::render::camera::check_size(args.size[0], args.size[1])?;
+            anyhow::ensure!(
+                args.timeout.is_finite() && args.timeout > 0.0,
+                "--timeout must be a positive number of seconds"
+            );
+            let (first, settled) = karstic::editor::screenshot(
+                &args.tree,
+                out,
+                (args.size[0], args.size[1]),
+                args.select.as_deref(),
+                Duration::from_secs_f64(args.timeout),
+            )?;
+            eprintln!(
+                "first image after {:.2} s, settled after {:.2} s → {}",
+                first.as_secs_f64(),
+                settled.as_secs_f64(),
+                out.display()
+            );
+            Ok(())
+        }
+        None => karstic::editor::run_window(&args.tree, args.select.as_deref()),
+    }
+}

@@ -1,0 +1,562 @@
+//! The editor's state and its frame: toolbar, outline, inspector and viewport around the
+//! tree file, which stays the truth (every edit is written, then the file read back).
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{Duration, Instant, SystemTime};
+
+use egui::{Key, KeyboardShortcut, Modifiers, Rect, Sense, TextureHandle, TextureOptions, Ui};
+
+use super::history::{Edit, History};
+use super::inspector::{Change, Inspector};
+use super::placement;
+use super::preview::{Orbit, Preview, Rendered, Report, Request};
+use crate::scene::load::read_text;
+use crate::scene::{Scene, edit, parse_scene};
+
+/// What a click in the viewport does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tool {
+    /// Nothing: the view only turns, pans and zooms.
+    View,
+    /// Adds an `Anchor` (holding a sphere) at the surface point clicked.
+    Anchor,
+    /// Adds a sphere `Primitive` centred on the surface point clicked.
+    Sphere,
+}
+
+/// The interactive editor of one tree file.
+pub struct Editor {
+    path: PathBuf,
+    /// The file's text and what the loader made of it.
+    text: String,
+    scene: Option<Arc<Scene>>,
+    load_error: Option<String>,
+    stamp: Option<(SystemTime, u64)>,
+    /// Counts the scenes handed to the renderer.
+    version: u64,
+    /// The version of the file's scene (a dragged value's preview has a newer one).
+    file_version: u64,
+    preview_scene: Option<(Arc<Scene>, u64)>,
+    selected: Option<String>,
+    history: History,
+    inspector: Inspector,
+    status: String,
+    /// What a click in the viewport does.
+    pub tool: Tool,
+    /// Radius of placed spheres, metres; offset of placed anchors above the ground.
+    pub place_radius: f32,
+    /// Height of placed anchors above the ground, metres.
+    pub place_offset: f32,
+    preview: Option<Preview>,
+    orbit: Option<Orbit>,
+    shown: Option<Rendered>,
+    texture: Option<TextureHandle>,
+    render_error: Option<String>,
+    last_request: Option<(u64, Option<Orbit>, (u32, u32), bool)>,
+    viewport: Option<Rect>,
+    dragging_view: bool,
+    opened: Instant,
+    first_image: Option<Duration>,
+    /// Exports running in the background.
+    pub(super) exports: super::palette::Exports,
+}
+
+/// The file's modification time and length: a change means someone wrote it.
+fn stamp(path: &Path) -> Option<(SystemTime, u64)> {
+    let m = std::fs::metadata(path).ok()?;
+    Some((m.modified().ok()?, m.len()))
+}
+
+impl Editor {
+    /// Opens the tree file at `path`. A file the loader refuses still opens: its error is
+    /// shown, with its line and column, until the file is fixed.
+    pub fn open(path: &Path) -> Self {
+        let mut e = Editor {
+            path: path.to_path_buf(),
+            text: String::new(),
+            scene: None,
+            load_error: None,
+            stamp: None,
+            version: 0,
+            file_version: 0,
+            preview_scene: None,
+            selected: None,
+            history: History::default(),
+            inspector: Inspector::default(),
+            status: String::new(),
+            tool: Tool::View,
+            place_radius: 20.0,
+            place_offset: 0.0,
+            preview: None,
+            orbit: None,
+            shown: None,
+            texture: None,
+            render_error: None,
+            last_request: None,
+            viewport: None,
+            dragging_view: false,
+            opened: Instant::now(),
+            first_image: None,
+            exports: Default::default(),
+        };
+        e.reload();
+        e
+    }
+
+    /// Reads the file again.
+    fn reload(&mut self) {
+        self.stamp = stamp(&self.path);
+        let parsed = read_text(&self.path).and_then(|t| {
+            let s = parse_scene(&t, &self.path);
+            self.text = t;
+            s
+        });
+        match parsed {
+            Ok(s) => {
+                self.scene = Some(Arc::new(s));
+                self.load_error = None;
+                self.version += 1;
+                self.file_version = self.version;
+            }
+            Err(e) => self.load_error = Some(crate::io::chain(&e)),
+        }
+        self.preview_scene = None;
+    }
+
+    /// Reloads when the file changed outside the editor (the history is then forgotten:
+    /// the file's new text is the new start).
+    fn watch(&mut self) {
+        if stamp(&self.path) != self.stamp {
+            let before = self.text.clone();
+            self.reload();
+            if self.text != before {
+                self.history.clear();
+                self.status = "the file changed on disk: reloaded".into();
+            }
+        }
+    }
+
+    /// The file's text as last read.
+    pub fn text(&self) -> &str {
+        &self.text
+    }
+
+    /// The loader's error about the file, if it refuses it.
+    pub fn load_error(&self) -> Option<&str> {
+        self.load_error.as_deref()
+    }
+
+    /// The status line: the last edit, or why it failed.
+    pub fn status(&self) -> &str {
+        &self.status
+    }
+
+    /// The latest image of the viewport.
+    pub fn shown(&self) -> Option<&Rendered> {
+        self.shown.as_ref()
+    }
+
+    /// Where the viewport was drawn, in points.
+    pub fn viewport(&self) -> Option<Rect> {
+        self.viewport
+    }
+
+    /// Time from opening to the first image.
+    pub fn first_image(&self) -> Option<Duration> {
+        self.first_image
+    }
+
+    /// The name of the selected node.
+    pub fn selected(&self) -> Option<&str> {
+        self.selected.as_deref()
+    }
+
+    /// True when the viewport shows the file's scene refined to full size and nothing is
+    /// being dragged.
+    pub fn settled(&self) -> bool {
+        !self.dragging_view
+            && self.preview_scene.is_none()
+            && self
+                .shown
+                .as_ref()
+                .is_some_and(|s| s.settled && s.version == self.file_version)
+            && self
+                .last_request
+                .is_some_and(|r| r.0 == self.file_version && !r.3)
+    }
+
+    /// Applies `edit` to the file (recorded for undo) and reads the file back.
+    pub fn apply(&mut self, edit: Edit) -> bool {
+        let command = edit.command();
+        let done = self.history.apply(&self.path, edit);
+        self.after(done.map(|_| Some(command)))
+    }
+
+    /// Undoes the last edit.
+    pub fn undo(&mut self) -> bool {
+        let r = self.history.undo(&self.path);
+        self.after(r.map(|e| e.map(|e| format!("undid {}", e.command()))))
+    }
+
+    /// Redoes the last undone edit.
+    pub fn redo(&mut self) -> bool {
+        let r = self.history.redo(&self.path);
+        self.after(r.map(|e| e.map(|e| format!("redid {}", e.command()))))
+    }
+
+    fn after(&mut self, r: Result<Option<String>, crate::scene::SceneError>) -> bool {
+        match r {
+            Ok(what) => {
+                self.status = what.unwrap_or_default();
+                self.reload();
+                true
+            }
+            Err(e) => {
+                self.status = crate::io::chain(&e);
+                false
+            }
+        }
+    }
+
+    /// One frame of the editor.
+    pub fn ui(&mut self, ui: &mut Ui) {
+        let ctx = ui.ctx().clone();
+        if self.preview.is_none() {
+            let wake = ctx.clone();
+            self.preview = Some(Preview::start(&self.path, move || wake.request_repaint()));
+        }
+        self.watch();
+        self.receive(&ctx);
+        self.shortcuts(&ctx);
+        egui::Panel::top("toolbar").show(ui, |ui| self.toolbar(ui));
+        egui::Panel::left("outline")
+            .default_size(220.0)
+            .show(ui, |ui| {
+                ui.heading("Outline");
+                if let Some(scene) = &self.scene {
+                    super::outline::show(ui, scene, &mut self.selected);
+                }
+            });
+        egui::Panel::right("inspector")
+            .default_size(340.0)
+            .show(ui, |ui| self.inspector(ui));
+        egui::CentralPanel::default().show(ui, |ui| self.viewport_ui(ui));
+        // The file is watched for outside edits.
+        ctx.request_repaint_after(Duration::from_millis(500));
+    }
+
+    fn shortcuts(&mut self, ctx: &egui::Context) {
+        let undo = KeyboardShortcut::new(Modifiers::COMMAND, Key::Z);
+        let redo = KeyboardShortcut::new(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);
+        if ctx.input_mut(|i| i.consume_shortcut(&redo)) {
+            self.redo();
+        } else if ctx.input_mut(|i| i.consume_shortcut(&undo)) {
+            self.undo();
+        }
+    }
+
+    fn toolbar(&mut self, ui: &mut Ui) {
+        ui.horizontal_wrapped(|ui| {
+            let (can_undo, can_redo) = self.history.can();
+            if ui
+                .add_enabled(can_undo, egui::Button::new("Undo"))
+                .clicked()
+            {
+                self.undo();
+            }
+            if ui
+                .add_enabled(can_redo, egui::Button::new("Redo"))
+                .clicked()
+            {
+                self.redo();
+            }
+            ui.separator();
+            ui.label("Click places:");
+            ui.selectable_value(&mut self.tool, Tool::View, "nothing");
+            ui.selectable_value(&mut self.tool, Tool::Anchor, "anchor");
+            ui.selectable_value(&mut self.tool, Tool::Sphere, "sphere");
+            ui.add(
+                egui::DragValue::new(&mut self.place_radius)
+                    .range(0.1..=1e5)
+                    .prefix("r ")
+                    .suffix(" m"),
+            );
+            ui.add(
+                egui::DragValue::new(&mut self.place_offset)
+                    .prefix("offset ")
+                    .suffix(" m"),
+            );
+            ui.separator();
+            super::palette::show(self, ui);
+        });
+        if let Some(e) = &self.load_error {
+            ui.colored_label(ui.visuals().error_fg_color, e);
+        }
+        if !self.status.is_empty() {
+            ui.label(&self.status);
+        }
+    }
+
+    fn inspector(&mut self, ui: &mut Ui) {
+        ui.heading("Inspector");
+        let (Some(scene), Some(name)) = (self.scene.clone(), self.selected.clone()) else {
+            ui.label("Select a named node in the outline.");
+            return;
+        };
+        let named = scene.named();
+        let Some(node) = named.get(name.as_str()) else {
+            self.selected = None;
+            return;
+        };
+        let changes = egui::ScrollArea::vertical()
+            .show(ui, |ui| self.inspector.show(ui, node, &name))
+            .inner;
+        for change in changes {
+            self.change(&scene, change);
+        }
+    }
+
+    /// A parameter changed in the inspector.
+    fn change(&mut self, scene: &Scene, change: Change) {
+        match change {
+            Change::Preview { target, value } => {
+                let mut s = scene.clone();
+                if edit::set_in_scene(&mut s, &self.path, &target, &value).is_ok() {
+                    self.version += 1;
+                    self.preview_scene = Some((Arc::new(s), self.version));
+                }
+                self.inspector.drafts.insert(target, value);
+            }
+            Change::Commit { target, value } => {
+                let renamed = target
+                    .strip_suffix(".name")
+                    .is_some_and(|n| Some(n) == self.selected.as_deref());
+                let new_name = value.trim_matches('"').to_string();
+                if self.apply(Edit::Set {
+                    target: target.clone(),
+                    value,
+                }) {
+                    self.inspector.drafts.remove(&target);
+                    self.inspector.errors.remove(&target);
+                    if renamed {
+                        self.selected = Some(new_name);
+                    }
+                } else {
+                    self.inspector.errors.insert(target, self.status.clone());
+                    self.preview_scene = None;
+                }
+            }
+        }
+    }
+
+    /// Takes the renderer's reports.
+    fn receive(&mut self, ctx: &egui::Context) {
+        let Some(preview) = &self.preview else { return };
+        for report in preview.poll() {
+            match report {
+                Report::Image(r) => {
+                    if self.first_image.is_none() {
+                        self.first_image = Some(self.opened.elapsed());
+                    }
+                    if self.orbit.is_none() {
+                        // The view the scene's camera gave: asking for it again must not
+                        // restart the refinement under way.
+                        self.orbit = Some(Orbit::from_camera(&r.camera));
+                        if let Some(last) = &mut self.last_request {
+                            last.1 = self.orbit;
+                        }
+                    }
+                    let f = &r.frame;
+                    let image = egui::ColorImage::from_rgba_unmultiplied(
+                        [f.width as usize, f.height as usize],
+                        &f.rgba,
+                    );
+                    match &mut self.texture {
+                        Some(t) => t.set(image, TextureOptions::LINEAR),
+                        None => {
+                            self.texture =
+                                Some(ctx.load_texture("viewport", image, TextureOptions::LINEAR))
+                        }
+                    }
+                    self.render_error = None;
+                    self.shown = Some(r);
+                }
+                Report::Failed { message, .. } => self.render_error = Some(message),
+            }
+        }
+    }
+
+    fn viewport_ui(&mut self, ui: &mut Ui) {
+        let rect = ui.available_rect_before_wrap();
+        self.viewport = Some(rect);
+        let response = ui.allocate_rect(rect, Sense::click_and_drag());
+        let painter = ui.painter_at(rect);
+        painter.rect_filled(rect, 0.0, egui::Color32::from_gray(30));
+        if let Some(t) = &self.texture {
+            let uv = Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0));
+            painter.image(t.id(), rect, uv, egui::Color32::WHITE);
+        }
+        if let Some(e) = &self.render_error {
+            painter.text(
+                rect.left_top() + egui::vec2(8.0, 8.0),
+                egui::Align2::LEFT_TOP,
+                e,
+                egui::FontId::proportional(14.0),
+                ui.visuals().error_fg_color,
+            );
+        }
+        let moved = self.navigate(ui, &response, rect);
+        if response.clicked()
+            && self.tool != Tool::View
+            && let Some(pos) = response.interact_pointer_pos()
+        {
+            self.place(rect, pos);
+        }
+        let ppp = ui.ctx().pixels_per_point();
+        let size = (
+            ((rect.width() * ppp).round() as u32).max(8),
+            ((rect.height() * ppp).round() as u32).max(8),
+        );
+        self.dragging_view = moved;
+        self.request(size);
+    }
+
+    /// Turns (left or right drag), pans (middle, or shift and left) and zooms (wheel, or
+    /// control and drag) the view, as DCC tools do; true while the view moves.
+    fn navigate(&mut self, ui: &Ui, r: &egui::Response, rect: Rect) -> bool {
+        let Some(orbit) = &mut self.orbit else {
+            return false;
+        };
+        let d = r.drag_delta();
+        let shift = ui.input(|i| i.modifiers.shift);
+        let ctrl = ui.input(|i| i.modifiers.command);
+        // A click, or a drag that paused, does not move the view.
+        let mut moved = d != egui::Vec2::ZERO && r.dragged();
+        if !moved {
+        } else if r.dragged_by(egui::PointerButton::Middle)
+            || (shift && r.dragged_by(egui::PointerButton::Primary))
+        {
+            orbit.pan(d.x, d.y, rect.height());
+        } else if ctrl {
+            orbit.dolly(d.y * 2.0);
+        } else {
+            orbit.turn(d.x, d.y);
+        }
+        if r.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            if scroll != 0.0 {
+                orbit.dolly(scroll);
+                moved = true;
+            }
+        }
+        moved
+    }
+
+    /// Places the tool's node at the surface point under `pos`.
+    fn place(&mut self, rect: Rect, pos: egui::Pos2) {
+        let (Some(shown), Some(scene)) = (&self.shown, &self.scene) else {
+            return;
+        };
+        let f = &shown.frame;
+        let u = (pos - rect.min) / rect.size();
+        let (i, j) = (
+            (u.x * f.width as f32).floor() as u32,
+            (u.y * f.height as f32).floor() as u32,
+        );
+        let Some(p) = placement::hit(f, &shown.camera, i, j) else {
+            self.status = "nothing under the pointer to place on".into();
+            return;
+        };
+        let Some(parent) = placement::parent_for(scene, self.selected.as_deref()) else {
+            self.status = "select a Blend, Union, Intersection or Difference to add to".into();
+            return;
+        };
+        let (name, node) = match self.tool {
+            Tool::Anchor => {
+                let name = placement::fresh_name(scene, "anchor");
+                let node = placement::anchor_at(&name, p, self.place_offset, self.place_radius);
+                (name, node)
+            }
+            _ => {
+                let name = placement::fresh_name(scene, "sphere");
+                (
+                    name.clone(),
+                    placement::sphere_at(&name, p, self.place_radius),
+                )
+            }
+        };
+        if self.apply(Edit::Add { parent, node }) {
+            self.selected = Some(name);
+        }
+    }
+
+    /// Asks the renderer for the current scene and view, when either changed.
+    fn request(&mut self, size: (u32, u32)) {
+        let Some(preview) = &self.preview else { return };
+        let (scene, version, coarse) = match (&self.preview_scene, &self.scene) {
+            (Some((s, v)), _) => (s.clone(), *v, true),
+            (None, Some(s)) => (s.clone(), self.file_version, self.dragging_view),
+            (None, None) => return,
+        };
+        let key = (version, self.orbit, size, coarse);
+        if self.last_request == Some(key) {
+            return;
+        }
+        self.last_request = Some(key);
+        preview.request(Request {
+            scene,
+            version,
+            view: self.orbit,
+            size,
+            coarse,
+        });
+    }
+
+    /// The scene as last read, if the loader accepted it.
+    pub fn scene(&self) -> Option<&Scene> {
+        self.scene.as_deref()
+    }
+
+    /// Selects the node named `name`.
+    pub fn select(&mut self, name: Option<String>) {
+        self.selected = name;
+    }
+
+    /// The file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Sets the status line.
+    pub fn set_status(&mut self, status: String) {
+        self.status = status;
+    }
+
+    /// The point the view turns about (the origin before the first image).
+    pub fn view_target(&self) -> glam::Vec3 {
+        self.orbit.map_or(glam::Vec3::ZERO, |o| o.target)
+    }
+
+    /// The picture export: the current view of the file's scene at its job's image size
+    /// (960 × 540 without a job), compiled and shaded as `karstic render` does, written
+    /// as a PNG to the path it is given.
+    pub fn picture_job(&self) -> Option<PictureJob> {
+        let scene = self.scene.clone()?;
+        let orbit = self.orbit?;
+        let path = self.path.clone();
+        Some(Box::new(move |out: &Path| {
+            let (w, h) = scene.job.as_ref().map_or((960, 540), |j| j.image);
+            let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+            let compiled = crate::scene::compile_scene(&scene, &path, &base)?;
+            let camera = orbit
+                .camera(w, h)
+                .ok_or_else(|| anyhow::anyhow!("no camera for this view"))?;
+            super::preview::draw(&scene, &compiled, &camera).write_png(out)?;
+            Ok(())
+        }))
+    }
+}
+
+/// A picture export to run on another thread: renders and writes the PNG it is given.
+pub type PictureJob = Box<dyn FnOnce(&Path) -> anyhow::Result<()> + Send>;

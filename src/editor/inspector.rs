@@ -1,0 +1,244 @@
+//! The inspector: typed widgets for the parameters of the selected node, laid out from
+//! the node's tree-file text. Numbers are drag values with their units, vectors rows of
+//! them, enumerations combo boxes of the variants the loader accepts, names and paths
+//! text; anything else is edited as RON. Every change is a `tree set` of one field.
+
+use std::collections::HashMap;
+
+use egui::{ComboBox, DragValue, RichText, TextEdit, Ui};
+
+use crate::scene::NodeSpec;
+use crate::scene::load::{ron_options, to_ron_text};
+use crate::scene::splice::{named_fields, set_field};
+
+/// Fields that hold child nodes: the outline edits those.
+const CHILD_FIELDS: [&str; 5] = ["child", "children", "base", "carves", "by"];
+
+/// What the user did to a parameter.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Change {
+    /// A value being dragged: preview it, write nothing yet.
+    Preview {
+        /// `NAME.PARAM`.
+        target: String,
+        /// RON text.
+        value: String,
+    },
+    /// A value to write (`tree set`).
+    Commit {
+        /// `NAME.PARAM`.
+        target: String,
+        /// RON text.
+        value: String,
+    },
+}
+
+/// The inspector's memory between frames.
+#[derive(Default)]
+pub struct Inspector {
+    /// Text being typed or values being dragged, by target: shown instead of the file's.
+    pub drafts: HashMap<String, String>,
+    /// The loader's complaint about a value, by target.
+    pub errors: HashMap<String, String>,
+    /// The variants of enumerations, by node kind and field path.
+    variants: HashMap<String, Option<Vec<String>>>,
+}
+
+/// The unit of a parameter, by its key.
+fn unit(key: &str) -> &'static str {
+    match key {
+        "degrees" | "fov" => " °",
+        "radius" | "radii" | "falloff" | "amplitude" | "wavelength" | "offset" | "width"
+        | "height" | "voxel" | "blend" | "translate" | "center" | "at" | "min" | "max" | "eye"
+        | "target" | "a" | "b" | "from" | "to" | "thickness" | "depth" | "cell" => " m",
+        _ => "",
+    }
+}
+
+/// A number as tree-file text (`3`, `2.5`).
+fn number_text(v: f64) -> String {
+    format!("{}", v as f32)
+}
+
+/// The numbers of a tuple of numbers `(1, 2.5, -3)`.
+fn numbers(text: &str) -> Option<Vec<f64>> {
+    let inner = text.strip_prefix('(')?.strip_suffix(')')?;
+    let v: Option<Vec<f64>> = inner
+        .split(',')
+        .filter(|s| !s.trim().is_empty())
+        .map(|s| s.trim().parse().ok())
+        .collect();
+    v.filter(|v| !v.is_empty())
+}
+
+fn is_ident(text: &str) -> bool {
+    !text.is_empty()
+        && text.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+        && text.starts_with(|c: char| c.is_ascii_uppercase())
+}
+
+impl Inspector {
+    /// Shows the parameters of `node` (named `name`); returns what the user changed.
+    pub fn show(&mut self, ui: &mut Ui, node: &NodeSpec, name: &str) -> Vec<Change> {
+        let text = to_ron_text(node);
+        let mut changes = Vec::new();
+        ui.heading(format!("{} {name}", node.kind()));
+        if let Some((_, fields)) = named_fields(&text) {
+            egui::Grid::new("params").num_columns(2).show(ui, |ui| {
+                for (key, value) in fields {
+                    if CHILD_FIELDS.contains(&key) {
+                        continue;
+                    }
+                    self.field(ui, node, &text, name, &[key], value, &mut changes);
+                }
+            });
+        }
+        changes
+    }
+
+    /// The variants the loader accepts at `path` of `node`, if the value there is an
+    /// enumeration: asked of the parser with a name no enumeration has.
+    fn variants_of(&mut self, node: &NodeSpec, text: &str, path: &[&str]) -> Option<Vec<String>> {
+        let key = format!("{}.{}", node.kind(), path.join("."));
+        self.variants
+            .entry(key)
+            .or_insert_with(|| {
+                let probe = set_field(text, path, "NoSuchVariant").ok()?;
+                match ron_options().from_str::<NodeSpec>(&probe) {
+                    Err(e) => match e.code {
+                        ron::Error::NoSuchEnumVariant { expected, .. } => {
+                            Some(expected.iter().map(|s| s.to_string()).collect())
+                        }
+                        _ => None,
+                    },
+                    Ok(_) => None,
+                }
+            })
+            .clone()
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn field(
+        &mut self,
+        ui: &mut Ui,
+        node: &NodeSpec,
+        text: &str,
+        name: &str,
+        path: &[&str],
+        value: &str,
+        changes: &mut Vec<Change>,
+    ) {
+        let key = path.last().copied().unwrap_or_default();
+        let target = format!("{name}.{}", path.join("."));
+        let shown = self.drafts.get(&target).cloned();
+        let current = shown.clone().unwrap_or_else(|| value.to_string());
+        let current = current.as_str();
+        if let Some((variant, inner)) = named_fields(value) {
+            ui.label(key);
+            ui.label(RichText::new(variant).italics());
+            ui.end_row();
+            for (k, v) in inner {
+                let mut sub = path.to_vec();
+                sub.push(k);
+                self.field(ui, node, text, name, &sub, v, changes);
+            }
+            return;
+        }
+        let label = ui.label(key).id;
+        ui.vertical(|ui| {
+            let u = unit(key);
+            if let Ok(mut v) = current.parse::<f64>() {
+                let s = speed(v);
+                let r = ui.add(DragValue::new(&mut v).speed(s).suffix(u));
+                let r = r.labelled_by(label);
+                number_change(&r, &target, number_text(v), changes);
+            } else if let Some(mut vs) = numbers(current) {
+                let mut rs = Vec::new();
+                ui.horizontal(|ui| {
+                    for v in vs.iter_mut() {
+                        let s = speed(*v);
+                        rs.push(
+                            ui.add(DragValue::new(v).speed(s).suffix(u))
+                                .labelled_by(label),
+                        );
+                    }
+                });
+                let joined = vs.iter().map(|&v| number_text(v)).collect::<Vec<_>>();
+                let value = format!("({})", joined.join(", "));
+                for r in &rs {
+                    number_change(r, &target, value.clone(), changes);
+                }
+            } else if current == "true" || current == "false" {
+                let mut b = current == "true";
+                if ui.checkbox(&mut b, "").labelled_by(label).changed() {
+                    changes.push(Change::Commit {
+                        target: target.clone(),
+                        value: b.to_string(),
+                    });
+                }
+            } else if is_ident(current)
+                && let Some(options) = self.variants_of(node, text, path)
+            {
+                ComboBox::from_id_salt(&target)
+                    .selected_text(current)
+                    .show_ui(ui, |ui| {
+                        for o in options {
+                            if ui.selectable_label(o == current, &o).clicked() && o != current {
+                                changes.push(Change::Commit {
+                                    target: target.clone(),
+                                    value: o,
+                                });
+                            }
+                        }
+                    })
+                    .response
+                    .labelled_by(label);
+            } else {
+                let mut s = shown.unwrap_or_else(|| {
+                    current
+                        .strip_prefix('"')
+                        .and_then(|t| t.strip_suffix('"'))
+                        .filter(|_| value.starts_with('"'))
+                        .map_or_else(|| current.to_string(), str::to_string)
+                });
+                let r = ui
+                    .add(TextEdit::singleline(&mut s).desired_width(220.0))
+                    .labelled_by(label);
+                if r.changed() {
+                    self.drafts.insert(target.clone(), s.clone());
+                }
+                let entered = r.lost_focus() && self.drafts.contains_key(&target);
+                if entered {
+                    let written = if value.starts_with('"') && !s.starts_with('"') {
+                        format!("{s:?}")
+                    } else {
+                        s
+                    };
+                    changes.push(Change::Commit {
+                        target: target.clone(),
+                        value: written,
+                    });
+                }
+            }
+            if let Some(e) = self.errors.get(&target) {
+                ui.colored_label(ui.visuals().error_fg_color, e);
+            }
+        });
+        ui.end_row();
+    }
+}
+
+/// Drag speed for a value of magnitude `v`: about a hundredth of it per point.
+fn speed(v: f64) -> f64 {
+    (v.abs() * 0.01).max(0.01)
+}
+
+/// A number widget's change: a preview while dragged, a commit when released or typed.
+fn number_change(r: &egui::Response, target: &str, value: String, changes: &mut Vec<Change>) {
+    let target = target.to_string();
+    if r.dragged() && r.changed() {
+        changes.push(Change::Preview { target, value });
+    } else if r.drag_stopped() || (r.changed() && !r.dragged()) {
+        changes.push(Change::Commit { target, value });
+    }
+}

@@ -1,0 +1,130 @@
+//! `karstic edit`: the interactive editor of a tree file (egui, on eframe's wgpu renderer).
+//!
+//! A thin interface over the library: the file is loaded and validated by
+//! [`crate::scene`], every edit is one of `karstic tree set/add/rm`'s operations
+//! ([`crate::scene::edit`]) written to the file at once (validated, atomically, the
+//! previous version kept as `.bak`), and the viewport is the CPU tracer
+//! ([`crate::render::cpu`]) on a background thread.
+//!
+//! * [`app`]: the editor's state and frame; undo/redo; reloading on outside edits.
+//! * [`history`]: edits as `tree` operations, undo byte for byte.
+//! * [`outline`] and [`inspector`]: the tree and the selected node's typed parameters.
+//! * [`preview`]: the orbit camera and the progressive background renderer.
+//! * [`placement`]: the surface point under a pixel, and the nodes placed there.
+//! * [`palette`]: add, remove, duplicate, instance; mesh and picture exports.
+
+pub mod app;
+pub mod history;
+pub mod inspector;
+pub mod outline;
+pub mod palette;
+pub mod placement;
+pub mod preview;
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+pub use app::{Editor, Tool};
+pub use history::{Edit, History};
+
+/// Opens the editor's window on the tree file at `path` (with the node named `select`
+/// selected) until it is closed.
+pub fn run_window(path: &Path, select: Option<&str>) -> anyhow::Result<()> {
+    let mut editor = Editor::open(path);
+    editor.select(select.map(str::to_string));
+    let title = format!("karstic edit {}", path.display());
+    let options = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default().with_inner_size([1400.0, 820.0]),
+        ..Default::default()
+    };
+    eframe::run_native(
+        &title,
+        options,
+        Box::new(|_| Ok(Box::new(Window(editor)) as Box<dyn eframe::App>)),
+    )
+    .map_err(|e| anyhow::anyhow!("the editor's window: {e}"))
+}
+
+/// The editor in an eframe window.
+struct Window(Editor);
+
+impl eframe::App for Window {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        self.0.ui(ui);
+    }
+}
+
+/// The editor drawn headless (egui_kittest on a wgpu adapter, software ones included), a
+/// `width × height` window of it on the tree file at `path` with the node named `select`
+/// selected, stepped until the viewport has settled (the full-size image of the file's
+/// scene), waiting at most `timeout`.
+pub fn headless(
+    path: &Path,
+    width: u32,
+    height: u32,
+    select: Option<&str>,
+    timeout: Duration,
+) -> anyhow::Result<egui_kittest::Harness<'static, Editor>> {
+    let mut editor = Editor::open(path);
+    if let Some(name) = select {
+        anyhow::ensure!(
+            editor.scene().is_some_and(|s| s.named().contains_key(name)),
+            "{}: no node named {name:?}",
+            path.display()
+        );
+        editor.select(Some(name.to_string()));
+    }
+    let mut harness = egui_kittest::Harness::builder()
+        .with_size(egui::vec2(width as f32, height as f32))
+        .wgpu()
+        .build_ui_state(|ui, e: &mut Editor| e.ui(ui), editor);
+    settle(&mut harness, timeout)?;
+    Ok(harness)
+}
+
+/// Steps `harness` until its editor's viewport has settled, at most `timeout`.
+pub fn settle(
+    harness: &mut egui_kittest::Harness<'_, Editor>,
+    timeout: Duration,
+) -> anyhow::Result<()> {
+    let start = Instant::now();
+    loop {
+        harness.step();
+        if harness.state().settled() {
+            harness.step();
+            return Ok(());
+        }
+        if let Some(e) = harness.state().load_error() {
+            anyhow::bail!("{e}");
+        }
+        anyhow::ensure!(
+            start.elapsed() < timeout,
+            "the viewport did not settle within {:.0} s",
+            timeout.as_secs_f64()
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// `karstic edit TREE --screenshot OUT`: the editor's first settled frame as a PNG;
+/// returns the times from opening to the first image and to the settled one.
+pub fn screenshot(
+    path: &Path,
+    out: &Path,
+    (width, height): (u32, u32),
+    select: Option<&str>,
+    timeout: Duration,
+) -> anyhow::Result<(Duration, Duration)> {
+    let start = Instant::now();
+    let mut harness = headless(path, width, height, select, timeout)?;
+    let settled = start.elapsed();
+    let first = harness.state().first_image().unwrap_or(settled);
+    let image = harness
+        .render()
+        .map_err(|e| anyhow::anyhow!("rendering the editor: {e}"))?;
+    let mut png = Vec::new();
+    image::DynamicImage::ImageRgba8(image)
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)?;
+    crate::io::write_bytes_atomic(out, &png)?;
+    Ok((first, settled))
+}

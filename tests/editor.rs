@@ -1,0 +1,259 @@
+//! `karstic edit`: the editor driven headless through its accessibility tree
+//! (egui_kittest): edits are `tree set`'s, undo restores the file byte for byte, invalid
+//! values are refused with the loader's message, clicks place anchors where the tracer
+//! hit, and the viewport shows the tracer's image.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use egui::accesskit::Role;
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use karstic::editor::{Editor, Tool, settle};
+use karstic::scene::{NodeSpec, edit};
+
+use crate::common::{REQUIRE_GPU, unavailable};
+
+/// A Jacksboro crop with a carved grotto, a small job view.
+const TREE: &str = r#"(
+    version: 1,
+    name: "editor_test",
+    terrain: "dem",
+    job: (
+        region: (min: (3000, 4500, 300), max: (5000, 6000, 1100)),
+        cell: 10,
+        image: (320, 180),
+        camera: (eye: (5200, 3900, 1300), target: (4000, 5200, 600)),
+        fov: 40,
+    ),
+    root: Difference(
+        name: "root",
+        base: Heightfield(name: "dem", source: "jacksboro_crop.asc", falloff: 30.0),
+        carves: [
+            Anchor(
+                name: "grotto",
+                at: (3690, 5220),
+                offset: -12,
+                child: Primitive(
+                    name: "blob",
+                    shape: Sphere(center: (0, 0, 0), radius: 30),
+                    falloff: 8.0,
+                ),
+            ),
+        ],
+    ),
+)
+"#;
+
+/// A folder with the tree (as `name`) and its DEM.
+fn scene_dir(names: &[&str]) -> (tempfile::TempDir, Vec<PathBuf>) {
+    let dir = tempfile::tempdir().unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/data");
+    for f in ["jacksboro_crop.asc", "jacksboro_crop.prj"] {
+        std::fs::copy(data.join(f), dir.path().join(f)).unwrap();
+    }
+    let paths = names
+        .iter()
+        .map(|n| {
+            let p = dir.path().join(n);
+            std::fs::write(&p, TREE).unwrap();
+            p
+        })
+        .collect();
+    (dir, paths)
+}
+
+/// The editor on `path` without a renderer (the viewport's image is in its state).
+fn harness(path: &Path) -> Harness<'static, Editor> {
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(1000.0, 600.0))
+        .build_ui_state(|ui, e: &mut Editor| e.ui(ui), Editor::open(path));
+    h.run_steps(2);
+    h
+}
+
+fn select(h: &mut Harness<'_, Editor>, name: &str) {
+    h.get_by_label(name).click();
+    h.run_steps(2);
+    assert_eq!(h.state().selected(), Some(name));
+}
+
+#[test]
+fn editor_set_writes_what_tree_set_writes_and_undo_restores() {
+    let (_dir, paths) = scene_dir(&["a.ron", "b.ron"]);
+    let (a, b) = (&paths[0], &paths[1]);
+    let original = std::fs::read(a).unwrap();
+    let mut h = harness(a);
+    select(&mut h, "blob");
+    h.get_by_role_and_label(Role::SpinButton, "radius")
+        .set_value_accesskit(45.0);
+    h.run_steps(2);
+    edit::set_param(b, "blob.shape.radius", "45").unwrap();
+    let written = std::fs::read(a).unwrap();
+    assert_eq!(
+        String::from_utf8_lossy(&written),
+        String::from_utf8_lossy(&std::fs::read(b).unwrap())
+    );
+    assert_ne!(written, original);
+    assert!(h.state().text().contains("radius: 45"));
+    // The previous version is kept beside the file.
+    let mut bak = a.as_os_str().to_owned();
+    bak.push(".bak");
+    assert_eq!(std::fs::read(&bak).unwrap(), original);
+
+    h.get_by_label("Undo").click();
+    h.run_steps(2);
+    assert_eq!(
+        std::fs::read(a).unwrap(),
+        original,
+        "undo restores the bytes"
+    );
+    h.get_by_label("Redo").click();
+    h.run_steps(2);
+    assert_eq!(
+        std::fs::read(a).unwrap(),
+        written,
+        "redo applies the edit again"
+    );
+}
+
+#[test]
+fn editor_refuses_an_invalid_value_with_the_loaders_message() {
+    let (_dir, paths) = scene_dir(&["a.ron"]);
+    let a = &paths[0];
+    let original = std::fs::read(a).unwrap();
+    let mut h = harness(a);
+    select(&mut h, "blob");
+    h.get_by_role_and_label(Role::SpinButton, "radius")
+        .set_value_accesskit(-5.0);
+    h.run_steps(2);
+    assert_eq!(std::fs::read(a).unwrap(), original, "nothing written");
+    let message = karstic::io::chain(&edit::set_param(a, "blob.shape.radius", "-5").unwrap_err());
+    assert!(message.contains("radius"), "{message}");
+    assert!(
+        h.query_all_by_label(&message).count() > 0,
+        "{message} not shown"
+    );
+}
+
+#[test]
+fn editor_reloads_the_file_and_shows_its_errors_with_positions() {
+    let (_dir, paths) = scene_dir(&["a.ron"]);
+    let a = &paths[0];
+    let mut h = harness(a);
+    std::thread::sleep(Duration::from_millis(20));
+    std::fs::write(a, TREE.replace("radius: 30", "radius: 31, colour: 2")).unwrap();
+    h.run_steps(2);
+    let e = h
+        .state()
+        .load_error()
+        .expect("the broken file is reported")
+        .to_string();
+    let located = karstic::io::chain(&karstic::scene::load(a).unwrap_err());
+    assert_eq!(e, located);
+    assert!(e.contains("a.ron:22:66:"), "{e}");
+    std::fs::write(a, TREE.replace("radius: 30", "radius: 31")).unwrap();
+    h.run_steps(2);
+    assert!(h.state().load_error().is_none());
+    assert!(h.state().text().contains("radius: 31"));
+}
+
+/// The pixel of `frame` nearest its centre whose ray hit the surface.
+fn a_hit_pixel(frame: &karstic::render::Frame) -> (u32, u32) {
+    let (w, h) = (frame.width, frame.height);
+    (0..w * h)
+        .filter(|&k| frame.depth[k as usize].is_finite())
+        .map(|k| (k % w, k / w))
+        .min_by_key(|&(i, j)| (i as i64 - w as i64 / 2).pow(2) + (j as i64 - h as i64 / 2).pow(2))
+        .expect("the view sees the terrain")
+}
+
+#[test]
+fn editor_click_places_an_anchor_where_the_tracer_hit() {
+    let (_dir, paths) = scene_dir(&["a.ron"]);
+    let a = &paths[0];
+    let mut h = harness(a);
+    settle(&mut h, Duration::from_secs(120)).unwrap();
+    h.state_mut().tool = Tool::Anchor;
+    let shown = h.state().shown().unwrap().clone();
+    let rect = h.state().viewport().unwrap();
+    let (i, j) = a_hit_pixel(&shown.frame);
+    let pos = rect.min
+        + egui::vec2(
+            (i as f32 + 0.5) * rect.width() / shown.frame.width as f32,
+            (j as f32 + 0.5) * rect.height() / shown.frame.height as f32,
+        );
+    for pressed in [true, false] {
+        h.event(egui::Event::PointerMoved(pos));
+        h.event(egui::Event::PointerButton {
+            pos,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: egui::Modifiers::NONE,
+        });
+        h.step();
+    }
+    h.run_steps(2);
+    // The tracer's answer for that pixel: the depth of the image shown.
+    let file = karstic::scene::load(a).unwrap();
+    let cam = shown.camera;
+    let t = shown.frame.depth[(j * cam.width + i) as usize];
+    assert!(t.is_finite());
+    let p = cam.pixel_ray(i, j).at(t);
+    let named = file.scene.named();
+    let Some(NodeSpec::Anchor(anchor)) = named.get("anchor_1") else {
+        panic!("no anchor placed: {}", h.state().status());
+    };
+    let at = anchor.at.0;
+    assert!(
+        (at - p.truncate()).length() <= 1e-3,
+        "anchor at {at:?}, the tracer hit {p:?}"
+    );
+    // The toolbar's offset (0 m by default) is the anchor's.
+    assert_eq!(anchor.offset.0, 0.0);
+    assert_eq!(h.state().selected(), Some("anchor_1"));
+}
+
+#[test]
+fn editor_viewport_shows_the_tracers_image() {
+    if karstic::render::gpu::GpuContext::new().is_err() {
+        unavailable(REQUIRE_GPU, "the editor's snapshot needs a wgpu adapter");
+        return;
+    }
+    let (_dir, paths) = scene_dir(&["a.ron"]);
+    let a = &paths[0];
+    let mut h = karstic::editor::headless(a, 900, 500, None, Duration::from_secs(120)).unwrap();
+    let image = h.render().unwrap();
+    let shown = h.state().shown().unwrap().clone();
+    let rect = h.state().viewport().unwrap();
+    let f = &shown.frame;
+    assert_eq!(
+        (f.width, f.height),
+        (rect.width().round() as u32, rect.height().round() as u32)
+    );
+    // The tracer's image through the same camera, independently.
+    let file = karstic::scene::load(a).unwrap();
+    let compiled = file.compile().unwrap();
+    let reference = karstic::editor::preview::draw(&file.scene, &compiled, &shown.camera);
+    let (x0, y0) = (rect.min.x.round() as u32, rect.min.y.round() as u32);
+    let (mut total, mut far) = (0u64, 0usize);
+    for j in 0..f.height {
+        for i in 0..f.width {
+            let got = image.get_pixel(x0 + i, y0 + j).0;
+            let k = 4 * (j * f.width + i) as usize;
+            let d = (0..3)
+                .map(|c| (got[c] as i32 - reference.rgba[k + c] as i32).unsigned_abs())
+                .max()
+                .unwrap();
+            total += d as u64;
+            far += usize::from(d > 12);
+        }
+    }
+    let n = (f.width * f.height) as f64;
+    let mean = total as f64 / n;
+    assert!(mean < 2.0, "mean difference {mean:.2} levels");
+    assert!(
+        (far as f64) < 0.01 * n,
+        "{far} pixels differ by more than 12 levels"
+    );
+}
