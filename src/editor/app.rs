@@ -53,7 +53,7 @@ pub struct Editor {
     shown: Option<Rendered>,
     texture: Option<TextureHandle>,
     render_error: Option<String>,
-    last_request: Option<(u64, Option<Orbit>, (u32, u32), bool)>,
+    last_request: Option<RequestKey>,
     viewport: Option<Rect>,
     dragging_view: bool,
     opened: Instant,
@@ -61,6 +61,10 @@ pub struct Editor {
     /// Exports running in the background.
     pub(super) exports: super::palette::Exports,
 }
+
+/// What the last preview request asked for: the file's version, the view, the image size,
+/// and whether it was a coarse (dragging) request.
+type RequestKey = (u64, Option<Orbit>, (u32, u32), bool);
 
 /// The file's modification time and length: a change means someone wrote it.
 fn stamp(path: &Path) -> Option<(SystemTime, u64)> {

@@ -3,7 +3,7 @@
 //! it is a drag's preview, refined to half and full size; a newer request abandons the
 //! refinement of an older one.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
 use std::time::{Duration, Instant};
@@ -164,7 +164,7 @@ struct Ready {
     compiled: Compiled,
 }
 
-fn serve(path: &PathBuf, incoming: &Receiver<Request>, out: &Sender<Report>, wake: &dyn Fn()) {
+fn serve(path: &Path, incoming: &Receiver<Request>, out: &Sender<Report>, wake: &dyn Fn()) {
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let mut ready: Option<Ready> = None;
     let mut pending: Option<Request> = None;
