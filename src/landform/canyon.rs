@@ -17,10 +17,6 @@ fn default_beta() -> Unit {
     Unit(0.3)
 }
 
-fn default_min_effect() -> Unit {
-    Unit(0.1)
-}
-
 /// Parameters of canyon erosion.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -39,7 +35,7 @@ pub struct CanyonSpec {
     #[serde(default = "default_beta")]
     pub beta: Unit,
     /// Samples with a smaller effect make no sphere.
-    #[serde(default = "default_min_effect")]
+    #[serde(default = "super::default_min_effect")]
     pub min_effect: Unit,
 }
 

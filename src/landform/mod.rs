@@ -178,6 +178,11 @@ pub fn effect(rho: f32, sigma: f32, beta: f32) -> f32 {
     sigma * (1.0 - rho) * (1.0 - beta) + sigma * beta
 }
 
+/// The effect below which the erosion generators drop a sample (`min_effect`'s default).
+fn default_min_effect() -> crate::scene::Unit {
+    crate::scene::Unit(0.1)
+}
+
 /// The falloff radius of a carving sphere whose cavity, at full effect `e = 1`, has
 /// radius `r` inside saturated solid: a sphere `−2e·g(d/R)` carves where
 /// `1 − 2e·g > T`, i.e. `g(d/R) > 1/4` at `e = 1`, `d < 0.61 R`.

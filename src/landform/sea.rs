@@ -18,10 +18,6 @@ fn default_beta() -> Unit {
     Unit(0.5)
 }
 
-fn default_min_effect() -> Unit {
-    Unit(0.1)
-}
-
 /// Parameters of one step of sea erosion.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -40,7 +36,7 @@ pub struct SeaSpec {
     #[serde(default = "default_beta")]
     pub beta: Unit,
     /// Samples with a smaller effect make no sphere.
-    #[serde(default = "default_min_effect")]
+    #[serde(default = "super::default_min_effect")]
     pub min_effect: Unit,
 }
 
