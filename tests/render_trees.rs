@@ -47,9 +47,15 @@ fn name(path: &Path) -> String {
     rel.to_string_lossy().into_owned()
 }
 
-/// Scenes whose nodes have no GPU encoding (elevation trees, erosion by a geology):
-/// `tests/elevation_trees.rs` and `tests/geology.rs` check that the tape names the reason.
-const CPU_ONLY: &[&str] = &["elevation_valley", "strata_cliff", "strata_islands"];
+/// Scenes whose nodes have no GPU encoding (elevation trees, erosion by a geology, the
+/// hoodoos' boxes at any yaw): `tests/elevation_trees.rs` and `tests/geology.rs` check
+/// that the tape names the reason.
+const CPU_ONLY: &[&str] = &[
+    "elevation_valley",
+    "strata_cliff",
+    "strata_islands",
+    "hoodoo_field",
+];
 
 /// `(name, tree, tape)` of every scene but [`CPU_ONLY`]: each must encode (compiled once per test binary,
 /// the Feature Curve scenes run the voxel pipeline).
