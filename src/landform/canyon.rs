@@ -9,7 +9,7 @@
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::{Ground, LandformError, Poisson, Rng, carving_sphere, effect, project};
+use super::{Ground, LandformError, Poisson, Rng, carving_sphere, effect, throw_dart};
 use crate::analysis::relief::stream_power;
 use crate::scene::{NodeSpec, Positive, Unit};
 
@@ -92,18 +92,8 @@ impl CanyonSpec {
             }
             let xy = ground.sample_point(k).truncate();
             for l in 0..levels {
-                let jitter = Vec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit());
-                let dart = Vec3::new(
-                    xy.x + jitter.x * cell.x,
-                    xy.y + jitter.y * cell.y,
-                    bed + self.depth.0 * (l as f32 + jitter.z) / levels as f32,
-                );
-                let Some(p) = project(
-                    ground,
-                    dart,
-                    0.05 * self.spacing.0,
-                    2.0 * cell.max_element(),
-                ) else {
+                let z = |u: f32| bed + self.depth.0 * (l as f32 + u) / levels as f32;
+                let Some(p) = throw_dart(ground, &mut rng, xy, cell, self.spacing.0, z) else {
                     continue;
                 };
                 let above = (p.z - bed) / self.depth.0;

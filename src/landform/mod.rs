@@ -365,6 +365,26 @@ impl LandformSpec {
     }
 }
 
+/// A dart thrown in the grid cell of size `cell` centred on `xy`, at height `z(u)` for a
+/// uniform `u ∈ [0, 1)`, then moved onto the surface ([`project`], within 5% of the
+/// Poisson `spacing`): the erosion generators' surface samples.
+pub fn throw_dart(
+    ground: &Ground,
+    rng: &mut Rng,
+    xy: Vec2,
+    cell: Vec2,
+    spacing: f32,
+    z: impl Fn(f32) -> f32,
+) -> Option<Vec3> {
+    let jitter = Vec3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit());
+    let dart = Vec3::new(
+        xy.x + jitter.x * cell.x,
+        xy.y + jitter.y * cell.y,
+        z(jitter.z),
+    );
+    project(ground, dart, 0.05 * spacing, 2.0 * cell.max_element())
+}
+
 /// Newton steps that bring a dart onto the surface.
 const PROJECTION_STEPS: usize = 6;
 
