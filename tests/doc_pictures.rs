@@ -8,6 +8,10 @@
 //! KARSTIC_BLESS=1 cargo test --locked --test tests doc_pictures
 //! ```
 //!
+//! or only some of them, named (`KARSTIC_BLESS=hoodoo_field.png,sea_cliffs.png`): then only
+//! the commands writing their outputs run (a picture whose command reads another's output,
+//! as `heightmap_top.png` reads `top.tif`, needs that picture named too),
+//!
 //! which runs [`COMMANDS`] with the binary under test in a sandbox (`doc_util::Sandbox`),
 //! draws `karstic sample` sections rock / air and `karstic build` meshes' triangles, halves
 //! renders and drawings to at most [`MAX_WIDTH`] pixels (each output pixel averages 2 × 2
@@ -118,12 +122,17 @@ fn made(name: &str) -> bool {
     PICTURES
         .iter()
         .any(|&(output, file)| match output.strip_suffix("*.png") {
-            Some(prefix) => {
-                let prefix = prefix.rsplit('/').next().unwrap_or(prefix);
-                name.starts_with(prefix) && name.ends_with(".png")
-            }
+            Some(_) => made_by(output, name),
             None => file == name,
         })
+}
+
+/// Whether the output pattern `output` (ending in `*.png`) makes a picture named `name`.
+fn made_by(output: &str, name: &str) -> bool {
+    output.strip_suffix("*.png").is_some_and(|prefix| {
+        let prefix = prefix.rsplit('/').next().unwrap_or(prefix);
+        name.starts_with(prefix) && name.ends_with(".png")
+    })
 }
 
 /// Half-length across the span of the ground curve under the arch of `arch_unaware.ron`,
@@ -201,21 +210,44 @@ fn prepare(trees: &Path) {
     );
 }
 
-/// Makes every picture into `docs/img/` (emptied first).
-fn regenerate() {
+/// Whether `command` (a line of [`COMMANDS`]) writes `output` (of [`PICTURES`]): its `-o`
+/// names the output's file or folder.
+fn writes(command: &str, output: &str) -> bool {
+    let target = output.split('/').next().unwrap_or(output);
+    let words: Vec<&str> = command.split_whitespace().collect();
+    words.windows(2).any(|w| w[0] == "-o" && w[1] == target)
+}
+
+/// Makes the pictures into `docs/img/`: all of them (the folder emptied first) when `only`
+/// is `None`, else those named.
+fn regenerate(only: Option<&BTreeSet<String>>) {
+    let wanted = |&&(output, file): &&(&str, &str)| {
+        only.is_none_or(|names| {
+            names.contains(file) || (file.is_empty() && names.iter().any(|n| made_by(output, n)))
+        })
+    };
+    let pictures: Vec<&(&str, &str)> = PICTURES.iter().filter(wanted).collect();
+    assert!(
+        !pictures.is_empty(),
+        "KARSTIC_BLESS names no picture of PICTURES"
+    );
+    let commands: Vec<&str> = COMMANDS
+        .lines()
+        .filter(|c| only.is_none() || pictures.iter().any(|(output, _)| writes(c, output)))
+        .collect();
     let sandbox = Sandbox::new();
     prepare(&sandbox.repo().join("trees"));
-    let ran = sandbox.run(&format!("set -e\n{COMMANDS}"));
+    let ran = sandbox.run(&format!("set -e\n{}\n", commands.join("\n")));
     assert!(ran.ok, "the picture commands failed:\n{}", ran.output);
     let img = root().join(IMG);
-    if img.is_dir() {
+    if img.is_dir() && only.is_none() {
         for entry in std::fs::read_dir(&img).expect("docs/img") {
             let path = entry.expect("docs/img entry").path();
             std::fs::remove_file(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         }
     }
     std::fs::create_dir_all(&img).expect("docs/img");
-    for &(output, file) in PICTURES {
+    for &&(output, file) in &pictures {
         let from = sandbox.repo().join(output);
         let outputs: Vec<(std::path::PathBuf, String)> = match output.strip_suffix("*.png") {
             Some(prefix) => {
@@ -251,8 +283,14 @@ fn regenerate() {
 
 #[test]
 fn doc_pictures_are_linked_made_by_the_tool_and_small() {
-    if std::env::var_os("KARSTIC_BLESS").is_some() {
-        regenerate();
+    if let Some(bless) = std::env::var_os("KARSTIC_BLESS") {
+        let bless = bless.to_string_lossy();
+        let names: BTreeSet<String> = bless
+            .split(',')
+            .filter(|n| n.ends_with(".png"))
+            .map(str::to_string)
+            .collect();
+        regenerate((!names.is_empty()).then_some(&names));
     }
     let img = root().join(IMG);
     let mut problems = Vec::new();

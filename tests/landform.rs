@@ -315,7 +315,7 @@ fn hoodoos_stand_on_their_axioms_within_the_grammar_depth() {
             .filter(|s| s.0 == t)
             .count()
     };
-    assert!(kinds(Terminal::Block) > 0 && kinds(Terminal::Cone) > 0 && kinds(Terminal::Cap) > 0);
+    assert!(kinds(Terminal::Body) > 0 && kinds(Terminal::Cone) > 0 && kinds(Terminal::Cap) > 0);
     // The expanded tree: the terrain and the hoodoos' union.
     let mut sf = scene_file(&format!("(version: 1, root: {PLATEAU})"));
     let rocks = spec.generate(&ground).unwrap();
@@ -338,7 +338,13 @@ fn hoodoos_stand_on_their_axioms_within_the_grammar_depth() {
             let p = h.axiom + Vec3::Z * (height * k as f32 / 40.0 * 0.999);
             assert!(tree.value(p) > ISO, "a hoodoo at {} breaks at {p}", h.axiom);
         }
-        // And it stands above the plateau's top (z ≈ 1.8).
-        assert!(h.axiom.z + height > 4.0);
+        // And it stands out of the ground by 2 m at least (its axiom is a quarter of the
+        // first symbol's 5 m below the surface).
+        assert!(
+            height - 0.25 * 5.0 > 2.0,
+            "a hoodoo of {height} m at {} ({} symbols)",
+            h.axiom,
+            h.symbols.len()
+        );
     }
 }

@@ -47,15 +47,9 @@ fn name(path: &Path) -> String {
     rel.to_string_lossy().into_owned()
 }
 
-/// Scenes whose nodes have no GPU encoding (elevation trees, erosion by a geology, the
-/// hoodoos' boxes at any yaw): `tests/elevation_trees.rs` and `tests/geology.rs` check
-/// that the tape names the reason.
-const CPU_ONLY: &[&str] = &[
-    "elevation_valley",
-    "strata_cliff",
-    "strata_islands",
-    "hoodoo_field",
-];
+/// Scenes whose nodes have no GPU encoding (elevation trees, erosion by a geology):
+/// `tests/elevation_trees.rs` and `tests/geology.rs` check that the tape names the reason.
+const CPU_ONLY: &[&str] = &["elevation_valley", "strata_cliff", "strata_islands"];
 
 /// `(name, tree, tape)` of every scene but [`CPU_ONLY`]: each must encode (compiled once per test binary,
 /// the Feature Curve scenes run the voxel pipeline).
@@ -111,6 +105,13 @@ fn solid_box(tree: &Tree) -> Aabb {
 /// from `cam`: 99%, or 97% when the scene has noise finer than a pixel at the solid's
 /// distance (the main job's detailed DEM, 5 m relief under 100 m pixels): one sample a
 /// pixel of sub-pixel relief is aliasing, and hits a hair apart shade apart.
+/// Scenes whose features are narrower than a pixel of the 96 × 64 view that frames their
+/// whole solid ([`view`]), with the share of pixels whose colours must agree: the hoodoo
+/// field's columns are 1–4 m wide where a pixel spans 4 m, so the CPU and the GPU shade
+/// their silhouettes differently on 3 % of the pixels (their hit masks still agree on 99 %,
+/// and the field values in [`scenes_conform_on_the_tree_the_cpu_tape_and_the_gpu`]).
+const SUB_PIXEL: &[(&str, f64)] = &[("hoodoo_field", 0.96)];
+
 fn colour_share(tree: &Tree, tape: &Tape, cam: &Camera) -> f64 {
     let footprint = cam.pixel_angle() * cam.eye.distance(solid_box(tree).center());
     let finest = tape
@@ -199,7 +200,11 @@ fn gpu_renders_of_the_scenes_match_the_cpu() {
             b.hits()
         );
         assert!(a.hits() >= 600, "{name}: {} hits", a.hits());
-        assert_frames_match_within(name, &a, &b, colour_share(tree, tape, &cam));
+        let share = SUB_PIXEL
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map_or_else(|| colour_share(tree, tape, &cam), |&(_, share)| share);
+        assert_frames_match_within(name, &a, &b, share);
     }
 }
 

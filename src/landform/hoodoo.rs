@@ -12,11 +12,14 @@
 //!         → d(p, s)                    1 − p_C(ρ)
 //! ```
 //!
-//! with terminals `b` a block (a box), `c` a cone and `d` a flat cap box, stacked up the
-//! vertical through the axiom. The rock's resistance ρ at each symbol drives the
-//! probabilities (harder rock: taller stacks, more caps) and the sizes (softer rock:
-//! slimmer blocks); each symbol turns by a random yaw. At `max_depth` symbols the
-//! grammar ends on a terminal.
+//! with terminals `b` a body (an upright ellipsoid: stacked bodies overlap into a column
+//! with the waists and bulges of a totem), `c` a cone (a spire) and `d` a caprock (a
+//! flattened ellipsoid wider than the column it crowns), stacked up the vertical through
+//! the axiom. The rock's resistance ρ at each symbol drives the probabilities (harder
+//! rock: taller stacks, more caps) and the sizes (softer rock: slimmer bodies); each
+//! symbol's cross-section is an ellipse of random elongation. At `max_depth` symbols the
+//! grammar ends on a terminal. The primitives carry a noise displacement of a tenth of
+//! the first symbol's height, so the columns read as weathered rock, not turned solids.
 
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
@@ -24,9 +27,10 @@ use serde::{Deserialize, Serialize};
 use super::{Ground, LandformError, Poisson, Rng};
 use crate::analysis::flow::{drainage_area, fill_depressions};
 use crate::analysis::relief::slope;
+use crate::field::noise::Octaves;
 use crate::field::skeleton::Size3;
-use crate::field::{PrimitiveSpec, SkeletonSpec};
-use crate::scene::{Finite, NodeSpec, P2, P3, Positive, Unit};
+use crate::field::{NoiseSpec, PrimitiveSpec, SkeletonSpec};
+use crate::scene::{Finite, NodeSpec, NonNegative, P2, P3, Positive, Unit};
 
 fn default_lambda() -> Unit {
     Unit(0.8)
@@ -59,14 +63,17 @@ pub struct HoodooSpec {
     pub mask: Option<Vec<P2>>,
 }
 
+/// A caprock's thickness, as a fraction of its symbol's height: caps are flat slabs.
+pub const CAP: f32 = 0.4;
+
 /// A terminal symbol of the grammar.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Terminal {
-    /// A block.
-    Block,
-    /// A cone.
+    /// A body of the column (`b`).
+    Body,
+    /// A spire (`c`).
     Cone,
-    /// A flat cap.
+    /// A caprock (`d`).
     Cap,
 }
 
@@ -75,16 +82,19 @@ pub enum Terminal {
 pub struct Hoodoo {
     /// Where the axiom stands (its foot, a little into the ground).
     pub axiom: Vec3,
-    /// The terminals, bottom up: kind, base point, height, yaw (degrees), resistance.
+    /// The terminals, bottom up: kind, base point, height, elongation of the cross-section
+    /// (the ratio of its x and y radii, in `[0.75, 1.33]`), resistance.
     pub symbols: Vec<(Terminal, Vec3, f32, f32, f32)>,
 }
 
 impl Hoodoo {
-    /// Height of the top of the last symbol above the axiom.
+    /// Height of the top of the last symbol above the axiom (a caprock is [`CAP`] of its
+    /// symbol's height thick).
     pub fn height(&self) -> f32 {
-        self.symbols
-            .last()
-            .map_or(0.0, |s| s.1.z + s.2 - self.axiom.z)
+        self.symbols.last().map_or(0.0, |&(t, p, s, _, _)| {
+            let top = if t == Terminal::Cap { CAP * s } else { s };
+            p.z + top - self.axiom.z
+        })
     }
 }
 
@@ -173,7 +183,7 @@ impl HoodooSpec {
             let rho = (ground.resistance)(p + 0.5 * s * Vec3::Z);
             let last = symbols.len() + 1 >= self.max_depth as usize;
             let u = rng.unit();
-            let yaw = 90.0 * rng.unit();
+            let elongation = 0.75 + 0.58 * rng.unit();
             let (terminal, then) = match sym {
                 Symbol::B => {
                     let p_b = 0.3 + 0.6 * rho;
@@ -182,7 +192,7 @@ impl HoodooSpec {
                     } else {
                         Symbol::C
                     };
-                    (Terminal::Block, Some(then))
+                    (Terminal::Body, Some(then))
                 }
                 Symbol::C => {
                     let p_c = 1.0 - 0.5 * rho;
@@ -204,9 +214,9 @@ impl HoodooSpec {
                     }
                 }
             };
-            // A block at the depth bound leaves no room for its C: end on the block.
+            // A body at the depth bound leaves no room for its C: end on the body.
             let then = if last { None } else { then };
-            symbols.push((terminal, p, s, yaw, rho));
+            symbols.push((terminal, p, s, elongation, rho));
             p += s * Vec3::Z;
             s *= self.lambda.0.max(0.05);
             next = then;
@@ -214,38 +224,55 @@ impl HoodooSpec {
         Hoodoo { axiom, symbols }
     }
 
-    /// The primitives of the hoodoos: boxes and cones, solid to their faces.
+    /// The primitives of the hoodoos: ellipsoids and cones, solid to their faces; bodies and
+    /// caps carry a weathering noise of a fifth of their radius (too little to cut a
+    /// column through), spires none (it would shave their tips).
     pub fn generate(&self, ground: &Ground) -> Result<Vec<NodeSpec>, LandformError> {
         let falloff = 0.1 * self.size.0;
+        let weathering = |width: f32| NoiseSpec {
+            amplitude: NonNegative(0.2 * width),
+            wavelength: Positive(0.5 * self.size.0),
+            octaves: Octaves::new(2).unwrap_or_default(),
+            seed_offset: 0,
+        };
         Ok(self
             .hoodoos(ground)?
             .iter()
             .flat_map(|h| h.symbols.iter())
-            .map(|&(t, p, s, yaw, rho)| {
-                let width = s * (0.3 + 0.25 * rho);
-                let shape = match t {
-                    Terminal::Block => SkeletonSpec::Box {
-                        center: P3(p + 0.5 * s * Vec3::Z),
-                        half_size: Size3(Vec3::new(width, 0.8 * width, 0.5 * s)),
-                        yaw: Finite(yaw),
-                    },
-                    Terminal::Cap => SkeletonSpec::Box {
-                        center: P3(p + 0.5 * s * Vec3::Z),
-                        half_size: Size3(Vec3::new(1.8 * width, 1.5 * width, 0.5 * s)),
-                        yaw: Finite(yaw),
-                    },
-                    Terminal::Cone => SkeletonSpec::Cone {
-                        base: P3(p),
-                        apex: P3(p + s * Vec3::Z),
-                        radius: Positive(1.2 * width),
-                    },
+            .map(|&(t, p, s, elongation, rho)| {
+                let width = s * (0.22 + 0.16 * rho);
+                let (rx, ry) = (width * elongation.sqrt(), width / elongation.sqrt());
+                let (shape, noise) = match t {
+                    // Taller than the symbol, so a body overlaps the next one by a fifth.
+                    Terminal::Body => (
+                        SkeletonSpec::Ellipsoid {
+                            center: P3(p + 0.5 * s * Vec3::Z),
+                            radii: Size3(Vec3::new(rx, ry, 0.6 * s)),
+                        },
+                        Some(weathering(width)),
+                    ),
+                    Terminal::Cap => (
+                        SkeletonSpec::Ellipsoid {
+                            center: P3(p + 0.5 * CAP * s * Vec3::Z),
+                            radii: Size3(Vec3::new(2.0 * rx, 2.0 * ry, 0.6 * CAP * s)),
+                        },
+                        Some(weathering(width)),
+                    ),
+                    Terminal::Cone => (
+                        SkeletonSpec::Cone {
+                            base: P3(p - 0.1 * s * Vec3::Z),
+                            apex: P3(p + s * Vec3::Z),
+                            radius: Positive(1.1 * width),
+                        },
+                        None,
+                    ),
                 };
                 NodeSpec::Primitive(PrimitiveSpec {
                     name: None,
                     shape,
                     falloff: Positive(falloff),
                     energy: Finite(1.0),
-                    noise: None,
+                    noise,
                 })
             })
             .collect())
