@@ -12,7 +12,10 @@ use karstic::analysis::flow::{drainage_area, fill_depressions};
 use karstic::analysis::relief::{coastal_accessibility, sinks, slope, stream_power};
 use karstic::dem::Heightfield;
 use karstic::field::{Aabb, Field, ISO, Tree};
-use karstic::landform::{Ground, HoodooSpec, KarstSpec, SeaSpec, Terminal, carving_sphere};
+use karstic::geology::Resistance;
+use karstic::landform::{
+    GeneratorSpec, Ground, HoodooSpec, KarstSpec, LandformSpec, SeaSpec, Terminal, carving_sphere,
+};
 use karstic::scene::spec::Nary;
 use karstic::scene::{NodeSpec, SceneFile, parse_scene};
 
@@ -347,4 +350,177 @@ fn hoodoos_stand_on_their_axioms_within_the_grammar_depth() {
             h.symbols.len()
         );
     }
+}
+
+/// A scene of `trees/`, loaded.
+fn tree_scene(file: &str) -> SceneFile {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("trees")
+        .join(file);
+    karstic::scene::load(&path).unwrap_or_else(|e| panic!("{file}: {e}"))
+}
+
+/// The scene's root `Landform` node.
+fn root_landform(sf: &mut SceneFile) -> &mut LandformSpec {
+    match &mut sf.scene.root {
+        NodeSpec::Landform(l) => l,
+        other => panic!("the root is a {}, not a Landform", other.kind()),
+    }
+}
+
+/// The height of the highest solid at `xy` between `lo` and `hi` (a scan down in 4 m
+/// steps, then bisection: no ledge thinner than that is looked for), `None` when the
+/// column is air.
+fn top_at(tree: &Tree, xy: Vec2, lo: f32, hi: f32) -> Option<f32> {
+    let mut z = hi;
+    while z > lo {
+        if tree.value(xy.extend(z - 4.0)) > ISO {
+            let (mut a, mut b) = (z - 4.0, z);
+            for _ in 0..20 {
+                let m = 0.5 * (a + b);
+                if tree.value(xy.extend(m)) > ISO {
+                    a = m
+                } else {
+                    b = m
+                }
+            }
+            return Some(a);
+        }
+        z -= 4.0;
+    }
+    None
+}
+
+#[test]
+fn the_jacksboro_canyon_deepens_the_thalweg_and_leaves_the_hills() {
+    // trees/jacksboro_canyon.ron: the canyon generator on a valley of the Jacksboro DEM.
+    // Across the valley at five rows, the thalweg (the lowest point of the DEM's surface
+    // between x = 5450 and 5850) is lowered by at least 12 m, and high on the slopes
+    // (150 m above the thalweg) the field is the DEM's, bit for bit.
+    let mut sf = tree_scene("jacksboro_canyon.ron");
+    let carved = sf.compile().unwrap().tree;
+    let base_spec = (*root_landform(&mut sf).base).clone();
+    sf.scene.root = base_spec;
+    let base = sf.compile().unwrap().tree;
+    let (lo, hi) = (250.0, 1000.0);
+    let mut away = 0;
+    for y in [6350.0, 6400.0, 6450.0, 6500.0, 6550.0] {
+        let tops: Vec<(f32, f32)> = (0..=40)
+            .map(|i| {
+                let x = 5450.0 + 10.0 * i as f32;
+                (x, top_at(&base, Vec2::new(x, y), lo, hi).unwrap())
+            })
+            .collect();
+        let &(x, bed) = tops.iter().min_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+        let now = top_at(&carved, Vec2::new(x, y), lo, hi).unwrap();
+        eprintln!("thalweg at ({x}, {y}): {bed:.1} m → {now:.1} m");
+        assert!(
+            now <= bed - 12.0,
+            "the thalweg at ({x}, {y}) went from {bed} m to only {now} m"
+        );
+        for x in (0..=60).map(|i| 5000.0 + 20.0 * i as f32) {
+            let xy = Vec2::new(x, y);
+            let h = top_at(&base, xy, lo, hi).unwrap();
+            if h < bed + 150.0 {
+                continue;
+            }
+            away += 1;
+            for dz in [-4.0, 0.0, 4.0] {
+                let p = xy.extend(h + dz);
+                assert_eq!(
+                    carved.value(p).to_bits(),
+                    base.value(p).to_bits(),
+                    "the canyon changed the hillside at {p}"
+                );
+            }
+        }
+    }
+    assert!(away > 40, "only {away} hillside samples");
+}
+
+#[test]
+fn the_strata_islands_percolation_caves_open_at_their_sink_and_stay_in_soft_rock() {
+    // trees/strata_islands.ron, its karst narrowed to one sink and the box around it (the
+    // scene's percolation, cheaper): every carving sphere lies where ρ < ρ₀, and a flood
+    // from the sink's mouth through the carved air inside the island reaches passages at
+    // least 20 m below the island's top.
+    let mut sf = tree_scene("strata_islands.ron");
+    let sink = Vec2::new(410.0, 443.0);
+    let landform = root_landform(&mut sf);
+    let GeneratorSpec::Karst(karst) = &mut landform.generator else {
+        panic!("the islands' landform is a Karst")
+    };
+    assert!(karst.sinks.iter().any(|s| s.0 == sink), "the sink moved");
+    karst.sinks.retain(|s| s.0 == sink);
+    let rho0 = karst.threshold.0;
+    landform.region = Some(ron::from_str("(min: (330, 363, 20), max: (490, 523, 160))").unwrap());
+    let base_spec = (*landform.base).clone();
+    let compiled = sf.compile().unwrap();
+    let carved = compiled.tree;
+    let mut centres = Vec::new();
+    compiled.expanded.as_ref().unwrap().root.walk(&mut |n, _| {
+        if let NodeSpec::Primitive(p) = n
+            && let karstic::field::SkeletonSpec::Point { center } = &p.shape
+        {
+            centres.push(center.0);
+        }
+    });
+    assert!(centres.len() > 150, "{} spheres", centres.len());
+    for c in &centres {
+        let rho = compiled.geology.resistance(*c);
+        assert!(rho < rho0, "a sphere at {c} in rock of ρ = {rho}");
+    }
+    sf.scene.root = base_spec;
+    let base = sf.compile().unwrap().tree;
+    let top = top_at(&base, sink, 20.0, 160.0).unwrap();
+    // Flood on a 2 m lattice through carved air within the island's base solid, from the
+    // first cave cell under the sink (the mouth: the air above it is open sky).
+    let (lo, step, n) = (Vec3::new(330.0, 363.0, 20.0), 2.0, [81usize, 81, 71]);
+    let at = |i: usize, j: usize, k: usize| lo + Vec3::new(i as f32, j as f32, k as f32) * step;
+    let cave = |p: Vec3| base.value(p) > ISO && carved.value(p) < ISO;
+    let (si, sj) = (40, 40);
+    let sk = (0..n[2])
+        .rev()
+        .find(|&k| cave(at(si, sj, k)))
+        .expect("no cave under the sink");
+    let mouth = at(si, sj, sk);
+    assert!(
+        mouth.z >= top - 8.0 && (sk + 1..n[2]).all(|k| carved.value(at(si, sj, k)) < ISO),
+        "the cave under the sink at {mouth} (top {top}) does not open to the sky"
+    );
+    let idx = |i: usize, j: usize, k: usize| i + n[0] * (j + n[1] * k);
+    let mut seen = vec![false; n[0] * n[1] * n[2]];
+    seen[idx(si, sj, sk)] = true;
+    let mut queue = VecDeque::from([(si, sj, sk)]);
+    let mut deepest = f32::INFINITY;
+    while let Some((i, j, k)) = queue.pop_front() {
+        deepest = deepest.min(at(i, j, k).z);
+        if deepest <= top - 20.0 {
+            break;
+        }
+        for (a, b, c) in [
+            (i.wrapping_sub(1), j, k),
+            (i + 1, j, k),
+            (i, j.wrapping_sub(1), k),
+            (i, j + 1, k),
+            (i, j, k.wrapping_sub(1)),
+            (i, j, k + 1),
+        ] {
+            if a >= n[0] || b >= n[1] || c >= n[2] || seen[idx(a, b, c)] {
+                continue;
+            }
+            seen[idx(a, b, c)] = true;
+            if cave(at(a, b, c)) {
+                queue.push_back((a, b, c));
+            }
+        }
+    }
+    eprintln!(
+        "{} spheres; top {top:.1} m, the flood reaches {deepest:.1} m",
+        centres.len()
+    );
+    assert!(
+        deepest <= top - 20.0,
+        "the flood from the mouth stops at z = {deepest}, the top is at {top}"
+    );
 }

@@ -7,18 +7,22 @@ karst_plateau.asc a 60 m limestone plateau ending in a cliff on its south side, 
                   five closed dolines 3-6 m deep where water sinks in
                   (trees/karst_network.ron).
 
-`python3 synthetic.py --big` also writes big_plateau.asc (not committed): a 5.2 km
+`python3 trees/data/synthetic.py --big` also writes big_plateau.asc (not committed): a 5.2 km
 plateau of 20 m cells with 120 dolines, the Fig. 17-scale karst of BENCHMARKS.md.
 
-Deterministic: `python3 synthetic.py` rewrites the files byte for byte.
+The files are written beside this script, wherever it is run from. Deterministic:
+`python3 trees/data/synthetic.py` rewrites them byte for byte.
 """
 import math
+import os
 import random
 import sys
 
+HERE = os.path.dirname(os.path.abspath(__file__))
+
 
 def write(path, nx, ny, cell, f):
-    with open(path, "w") as out:
+    with open(os.path.join(HERE, path), "w") as out:
         out.write(f"ncols {nx}\nnrows {ny}\nxllcorner 0\nyllcorner 0\n")
         out.write(f"cellsize {cell}\nNODATA_value -9999\n")
         for r in range(ny):
