@@ -529,7 +529,10 @@ fn blend_point_index_sums_like_the_bvh_to_the_bit() {
         assert!((want - linear).abs() < 1e-5, "at {p}: {want} vs {linear}");
         nonzero += (want != 0.0) as usize;
     }
-    assert!(nonzero > 3000, "{nonzero} points where the blend is non-zero");
+    assert!(
+        nonzero > 3000,
+        "{nonzero} points where the blend is non-zero"
+    );
 }
 
 /// Replacing one flat field by another: the whole slope is the transition's, `|f_by −

@@ -827,7 +827,11 @@ mod tests {
             let mut bvh = ChildBvh::new(&boxes, &payloads);
             bvh.index_points(|_| None);
             let grid = bvh.grid.as_ref().expect("an index");
-            assert!(grid.bytes() <= 548 * n, "{} bytes for {n} items", grid.bytes());
+            assert!(
+                grid.bytes() <= 548 * n,
+                "{} bytes for {n} items",
+                grid.bytes()
+            );
             let mut points: Vec<Vec3> = (0..2000).map(|_| rng.point(-70.0, 70.0)).collect();
             points.extend([Vec3::splat(1e4), Vec3::NAN]);
             for b in boxes.iter().filter(|b| !b.is_empty()) {

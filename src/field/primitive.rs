@@ -369,13 +369,7 @@ impl Round {
     /// The parameters `[c.x, c.y, c.z, r, R, 1/R, E]`, for kernels packed by lanes.
     pub(super) fn params(&self) -> [f32; 7] {
         [
-            self.c.x,
-            self.c.y,
-            self.c.z,
-            self.r,
-            self.big_r,
-            self.inv_r,
-            self.e,
+            self.c.x, self.c.y, self.c.z, self.r, self.big_r, self.inv_r, self.e,
         ]
     }
 
