@@ -12,8 +12,8 @@ use glam::{Affine3A, Quat, Vec3};
 use karstic::field::falloff::{WYVILL_MAX_SLOPE, wyvill, wyvill_d, wyvill_interval, wyvill_slope};
 use karstic::field::skeleton::Point;
 use karstic::field::{
-    Aabb, Fbm, Field, Grid, ISO, Interval, Line, NodeId, Primitive, Rect, Skeleton, Transition,
-    Tree, TreeBuilder, Warp, ZBands, eval_grid, eval_grid_naive,
+    Aabb, Fbm, Field, Grid, ISO, Interval, Line, Node, NodeId, Primitive, PrimitiveSpec, Rect,
+    Skeleton, Transition, Tree, TreeBuilder, Warp, ZBands, eval_grid, eval_grid_naive,
 };
 use karstic::geology::{Erosion, Geology, GeologySpec};
 use karstic::scene::ron_options;
@@ -469,6 +469,70 @@ fn blend_bvh_answers_like_a_linear_scan() {
         let direct: f32 = balls.iter().map(|x| x.value(p)).sum();
         assert!((t.value(p) - direct).abs() < 1e-5);
     }
+}
+
+/// A blend of thousands of children answers point queries through its point index (round
+/// kernels evaluated in the index, other children through their nodes) with exactly the
+/// sum, in the BVH's order, of the children whose supports hold the point: on random
+/// points, near every child's centre (where it is non-zero, so an index that missed a
+/// child would change the value), on the supports' corners and faces, and outside them.
+#[test]
+fn blend_point_index_sums_like_the_bvh_to_the_bit() {
+    let mut rng = Rng(23);
+    let mut b = TreeBuilder::new();
+    let mut ids = Vec::new();
+    let mut centres = Vec::new();
+    for i in 0..3000 {
+        let c = Vec3::new(
+            rng.range(0.0, 400.0),
+            rng.range(0.0, 400.0),
+            rng.range(0.0, 30.0),
+        );
+        let (x, y, z) = (c.x, c.y, c.z);
+        let shape = match i % 5 {
+            0 => format!("Point(center: ({x}, {y}, {z}))"),
+            1 => format!("Segment(a: ({x}, {y}, {z}), b: ({}, {y}, {z}))", x + 3.0),
+            _ => format!("Sphere(center: ({x}, {y}, {z}), radius: 1.5)"),
+        };
+        let energy = if i % 7 == 0 { -0.4 } else { 1.0 };
+        let spec = format!("(shape: {shape}, falloff: 3, energy: {energy})");
+        let spec: PrimitiveSpec = ron::from_str(&spec).unwrap();
+        ids.push(match i % 11 {
+            // Other leaves go through their nodes.
+            3 => b.leaf(Arc::new(Ball { c, r: 4.0, e: 0.7 }), None),
+            _ => b.primitive(Primitive::from_spec(&spec, 0), None),
+        });
+        centres.push(c);
+    }
+    let root = b.blend(ids.clone(), None);
+    let t = b.build(root);
+    let Node::Blend { bvh: Some(bvh), .. } = &t.nodes()[root as usize] else {
+        panic!("a blend with a BVH");
+    };
+    let mut points: Vec<Vec3> = centres
+        .iter()
+        .map(|&c| c + Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), 0.5))
+        .collect();
+    let whole = Aabb::new(Vec3::splat(-20.0), Vec3::new(420.0, 420.0, 50.0));
+    points.extend((0..20_000).map(|_| rng.in_box(&whole)));
+    for &c in &ids {
+        let s = t.info(c).support;
+        points.extend([s.min, s.max, Vec3::new(s.min.x, s.center().y, s.max.z)]);
+    }
+    points.extend([Vec3::new(-500.0, 3.0, 3.0), Vec3::new(200.0, 200.0, 1e3)]);
+    let mut nonzero = 0;
+    for p in points {
+        let mut want = 0.0f32;
+        bvh.at_point(p, |c| want += t.subtree(c).value(p));
+        assert_eq!(t.value(p).to_bits(), want.to_bits(), "at {p}");
+        let linear: f32 = ids.iter().map(|&c| t.subtree(c).value(p)).sum();
+        assert!((want - linear).abs() < 1e-5, "at {p}: {want} vs {linear}");
+        nonzero += (want != 0.0) as usize;
+    }
+    assert!(
+        nonzero > 3000,
+        "{nonzero} points where the blend is non-zero"
+    );
 }
 
 /// Replacing one flat field by another: the whole slope is the transition's, `|f_by −

@@ -17,8 +17,7 @@ use super::bounds::{Aabb, Interval};
 use super::contract::Field;
 use super::falloff::ISO;
 use super::node::{Node, NodeId};
-use super::primitive::Primitive;
-use super::skeleton::Skeleton;
+use super::primitive::{Primitive, Round};
 use super::tree::Tree;
 
 /// Side of the cubic bricks the grid evaluator works on.
@@ -133,66 +132,6 @@ impl Scratch {
         v.clear();
         v.resize(n, 0.0);
         v
-    }
-}
-
-/// A noise-free point or sphere primitive: `E·g(max(‖p − c‖ − r, 0)/R)`, evaluated with
-/// the same operations as [`Primitive::value`], so the values are the same to the bit.
-struct Round {
-    c: Vec3,
-    r: f32,
-    big_r: f32,
-    inv_r: f32,
-    e: f32,
-}
-
-impl Round {
-    fn of(p: &Primitive) -> Option<Round> {
-        if p.noise().is_some() {
-            return None;
-        }
-        let (c, r) = match p.skeleton() {
-            Skeleton::Point(s) => (s.center, 0.0),
-            Skeleton::Sphere(s) => (s.inner().center, s.radius()),
-            _ => return None,
-        };
-        Some(Round {
-            c,
-            r,
-            big_r: p.radius(),
-            inv_r: 1.0 / p.radius(),
-            e: p.energy(),
-        })
-    }
-
-    /// Adds the values at `(x, y, z)` for `x` in `xs` to `out`.
-    #[inline]
-    fn add_row(&self, xs: &[f32], y: f32, z: f32, out: &mut [f32]) {
-        let (dyy, dzz) = (
-            (y - self.c.y) * (y - self.c.y),
-            (z - self.c.z) * (z - self.c.z),
-        );
-        for (o, &x) in out.iter_mut().zip(xs) {
-            let dx = x - self.c.x;
-            let len = (dx * dx + dyy + dzz).sqrt();
-            let d = (len - self.r).max(0.0);
-            let t = if d >= self.big_r { 1.0 } else { d * self.inv_r };
-            let s = 1.0 - t * t;
-            let g = if t >= 1.0 { 0.0 } else { s * s * s };
-            *o += self.e * g;
-        }
-    }
-
-    /// The x-interval outside which the row at `(y, z)` is 0, or `None` when all of it is;
-    /// widened by a relative margin far above the rounding of the value's computation.
-    fn row_extent(&self, y: f32, z: f32) -> Option<(f32, f32)> {
-        let reach = (self.r + self.big_r) * (1.0 + 1e-4);
-        let (dy, dz) = (y - self.c.y, z - self.c.z);
-        let rest = reach * reach - (dy * dy + dz * dz);
-        (rest >= 0.0).then(|| {
-            let h = rest.sqrt() * (1.0 + 1e-4) + reach * 1e-4;
-            (self.c.x - h, self.c.x + h)
-        })
     }
 }
 

@@ -19,6 +19,8 @@ use glam::{Vec3, Vec3A, Vec4};
 use obvhs::{BvhBuildParams, aabb::Aabb as BvhAabb, bvh2::Bvh2, bvh2::builder::build_bvh2};
 
 use super::bounds::Aabb;
+use super::point_grid::PointGrid;
+use super::primitive::Round;
 
 /// Blends with at least this many children get a BVH; below it a linear scan of the
 /// children's supports is faster.
@@ -76,9 +78,16 @@ impl Wide {
         Aabb::new(lane(&self.lo), lane(&self.hi))
     }
 
+    /// Bit mask of the slots that hold something (a non-empty box).
+    fn used(&self) -> u32 {
+        (0..GROUPS).fold(0, |m, g| {
+            m | (self.lo[0][g].cmple(self.hi[0][g])).bitmask() << (4 * g)
+        })
+    }
+
     /// True when no slot holds anything (every box empty).
     fn is_empty(&self) -> bool {
-        (0..GROUPS).all(|g| (self.lo[0][g].cmple(self.hi[0][g])).bitmask() == 0)
+        self.used() == 0
     }
 
     /// Bit mask of the slots whose box contains `p`.
@@ -188,6 +197,8 @@ pub struct ChildBvh {
     huge: Vec<(Aabb, u32)>,
     /// Whether a traversal can need more than [`STACK`] entries.
     deep: bool,
+    /// The index of point queries, when [`ChildBvh::index_points`] built one.
+    grid: Option<PointGrid>,
 }
 
 struct Boxed(BvhAabb);
@@ -295,6 +306,7 @@ impl ChildBvh {
             leaves: Vec::new(),
             huge: huge_items,
             deep: false,
+            grid: None,
         };
         if kept_boxes.is_empty() {
             return bvh;
@@ -325,10 +337,22 @@ impl ChildBvh {
         bvh
     }
 
+    /// Adds a grid index for [`ChildBvh::sum_at`] (see [`PointGrid`]), `round(payload)`
+    /// being the round kernel of an item that is one; none is kept when the items' sizes
+    /// would make it larger than its bound or slow.
+    pub(super) fn index_points(&mut self, round: impl Fn(u32) -> Option<Round>) {
+        let mut items = Vec::new();
+        self.traverse(Wide::used, |leaf, i| {
+            items.push((leaf.slot_box(i), leaf.slot[i]));
+        });
+        self.grid = PointGrid::new(&items, round);
+    }
+
     /// The BVH of the items whose boxes overlap `region`, each payload replaced by
     /// `map(payload)` (items mapped to `None` are dropped), without a rebuild: the nodes
     /// that meet `region` are copied with their slots in place, so a query visits the kept
-    /// items in the order this BVH visits them. `map` is called in that order.
+    /// items in the order this BVH visits them. `map` is called in that order. The point
+    /// index is not kept.
     pub fn restricted(&self, region: &Aabb, mut map: impl FnMut(u32) -> Option<u32>) -> Self {
         let lo = [region.min.x, region.min.y, region.min.z].map(Vec4::splat);
         let hi = [region.max.x, region.max.y, region.max.z].map(Vec4::splat);
@@ -337,6 +361,7 @@ impl ChildBvh {
             leaves: Vec::new(),
             huge: Vec::new(),
             deep: self.deep,
+            grid: None,
         };
         if !self.nodes.is_empty() {
             self.restrict_node(0, &lo, &hi, &mut map, &mut out);
@@ -417,9 +442,10 @@ impl ChildBvh {
         (self.nodes.len(), self.leaves.len())
     }
 
-    /// Depth-first traversal: `hit(node)` gives the mask of slots to follow.
+    /// Depth-first traversal: `hit(node)` gives the mask of slots to follow;
+    /// `visit(leaf, slot)` is called for each item found.
     #[inline(always)]
-    fn traverse(&self, hit: impl Fn(&Wide) -> u32, mut visit: impl FnMut(u32)) {
+    fn traverse(&self, hit: impl Fn(&Wide) -> u32, mut visit: impl FnMut(&Wide, usize)) {
         if self.nodes.is_empty() {
             return;
         }
@@ -434,7 +460,7 @@ impl ChildBvh {
                 let leaf = &self.leaves[node.slot[leaves.trailing_zeros() as usize] as usize];
                 let mut items = hit(leaf);
                 while items != 0 {
-                    visit(leaf.slot[items.trailing_zeros() as usize]);
+                    visit(leaf, items.trailing_zeros() as usize);
                     items &= items - 1;
                 }
                 leaves &= leaves - 1;
@@ -451,11 +477,18 @@ impl ChildBvh {
         }
     }
 
+    /// Calls `visit(payload)` for every item of the tree (not the huge ones) whose box
+    /// contains `p`.
+    #[inline(always)]
+    fn at_tree_point(&self, p: Vec3, mut visit: impl FnMut(u32)) {
+        let q = [Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)];
+        self.traverse(|n| n.containing(&q), |leaf, i| visit(leaf.slot[i]));
+    }
+
     /// Calls `visit(payload)` for every item whose box contains `p`.
     #[inline]
     pub fn at_point(&self, p: Vec3, mut visit: impl FnMut(u32)) {
-        let q = [Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)];
-        self.traverse(|n| n.containing(&q), &mut visit);
+        self.at_tree_point(p, &mut visit);
         for (b, payload) in &self.huge {
             if b.contains(p) {
                 visit(*payload);
@@ -463,11 +496,45 @@ impl ChildBvh {
         }
     }
 
+    /// `Σ value(payload)` over the items whose boxes contain `p`, summed in the order
+    /// [`ChildBvh::at_point`] visits them (so to the bit), through the point index when
+    /// there is one: there an item that is a round kernel adds its own value (0 where
+    /// its box does not contain `p`) and `value` is not called for it.
+    #[inline]
+    pub(super) fn sum_at(&self, p: Vec3, mut value: impl FnMut(u32) -> f32) -> f32 {
+        let mut sum = match &self.grid {
+            Some(grid) => grid.sum_at(p, &mut value),
+            None => {
+                let mut sum = 0.0;
+                self.at_tree_point(p, |c| sum += value(c));
+                sum
+            }
+        };
+        for (b, payload) in &self.huge {
+            if b.contains(p) {
+                sum += value(*payload);
+            }
+        }
+        sum
+    }
+
+    /// Asks the cache for what [`ChildBvh::sum_at`] will read at `p` through the point
+    /// index: `early` the cell's range (call it some queries ahead), else its entries
+    /// (call it nearer, after the early call). Nothing without an index.
+    #[inline(always)]
+    pub(super) fn prefetch(&self, p: Vec3, early: bool) {
+        match &self.grid {
+            Some(g) if early => g.prefetch_cell(p),
+            Some(g) => g.prefetch_groups(p),
+            None => {}
+        }
+    }
+
     /// Calls `visit(payload)` for every item whose box overlaps `b`.
     pub fn overlapping(&self, b: &Aabb, mut visit: impl FnMut(u32)) {
         let lo = [b.min.x, b.min.y, b.min.z].map(Vec4::splat);
         let hi = [b.max.x, b.max.y, b.max.z].map(Vec4::splat);
-        self.traverse(|n| n.overlapping(&lo, &hi), &mut visit);
+        self.traverse(|n| n.overlapping(&lo, &hi), |leaf, i| visit(leaf.slot[i]));
         for (h, payload) in &self.huge {
             if h.overlaps(b) {
                 visit(*payload);
@@ -743,6 +810,52 @@ mod tests {
                 small.at_point(p, |i| got.push(i));
                 bvh.at_point(p, |i| whole.extend(keep(i)));
                 assert_eq!(got, whole, "point {p} of {region:?}");
+            }
+        }
+    }
+
+    /// Through its point index, the tree sums exactly the items its traversal visits, in
+    /// the traversal's order (so the sums are the same to the bit): for random points, for
+    /// points on the boxes' corners and faces and just outside them, and outside them all.
+    /// An index that missed an item, listed one twice or out of order would fail here.
+    #[test]
+    fn point_index_sums_in_the_traversal_order() {
+        let mut rng = Rng(17);
+        for n in [16, 100, 3000] {
+            let boxes = boxes(n, &mut rng);
+            let payloads: Vec<u32> = (0..n as u32).map(|i| i * 3 + 2).collect();
+            let mut bvh = ChildBvh::new(&boxes, &payloads);
+            bvh.index_points(|_| None);
+            let grid = bvh.grid.as_ref().expect("an index");
+            assert!(
+                grid.bytes() <= 548 * n,
+                "{} bytes for {n} items",
+                grid.bytes()
+            );
+            let mut points: Vec<Vec3> = (0..2000).map(|_| rng.point(-70.0, 70.0)).collect();
+            points.extend([Vec3::splat(1e4), Vec3::NAN]);
+            for b in boxes.iter().filter(|b| !b.is_empty()) {
+                let c = b.center();
+                let just = |v: Vec3, up: bool| -> Vec3 {
+                    v.to_array()
+                        .map(|x| if up { x.next_up() } else { x.next_down() })
+                        .into()
+                };
+                points.extend([b.min, b.max, c, Vec3::new(b.min.x, c.y, b.max.z)]);
+                points.extend([just(b.min, false), just(b.max, true)]);
+            }
+            let weight = |c: u32| 1.0 / (c as f32 + 0.37);
+            for p in points {
+                let mut want = Vec::new();
+                bvh.at_point(p, |c| want.push(c));
+                let mut got = Vec::new();
+                let sum = bvh.sum_at(p, |c| {
+                    got.push(c);
+                    weight(c)
+                });
+                assert_eq!(got, want, "{n} items, point {p}");
+                let want_sum = want.iter().fold(0.0f32, |s, &c| s + weight(c));
+                assert_eq!(sum.to_bits(), want_sum.to_bits(), "{n} items, point {p}");
             }
         }
     }

@@ -78,9 +78,14 @@ impl Candidates for Anywhere {
         p: Vec3,
         mut value: impl FnMut(NodeId) -> f32,
     ) -> f32 {
-        let mut sum = 0.0;
-        self.each_containing(tree, id, children, bvh, p, |c| sum += value(c));
-        sum
+        match bvh {
+            Some(bvh) => bvh.sum_at(p, value),
+            None => {
+                let mut sum = 0.0;
+                self.each_containing(tree, id, children, bvh, p, |c| sum += value(c));
+                sum
+            }
+        }
     }
 
     #[inline(always)]

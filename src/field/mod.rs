@@ -16,6 +16,7 @@ pub mod grid;
 mod line;
 pub mod node;
 pub mod noise;
+mod point_grid;
 pub mod primitive;
 mod profile;
 mod prune;

@@ -322,6 +322,83 @@ impl Primitive {
     }
 }
 
+/// A noise-free point or sphere primitive: `E·g(max(‖p − c‖ − r, 0)/R)`, evaluated with
+/// the same operations as [`Primitive::value`], so the values are the same to the bit. The
+/// grid evaluator and the blends' point index evaluate these kernels without the node.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Round {
+    c: Vec3,
+    r: f32,
+    big_r: f32,
+    inv_r: f32,
+    e: f32,
+}
+
+impl Round {
+    /// The kernel of `p`, when it is a noise-free point or sphere.
+    pub(super) fn of(p: &Primitive) -> Option<Round> {
+        if p.noise().is_some() {
+            return None;
+        }
+        let (c, r) = match p.skeleton() {
+            Skeleton::Point(s) => (s.center, 0.0),
+            Skeleton::Sphere(s) => (s.inner().center, s.radius()),
+            _ => return None,
+        };
+        Some(Round {
+            c,
+            r,
+            big_r: p.radius(),
+            inv_r: 1.0 / p.radius(),
+            e: p.energy(),
+        })
+    }
+
+    /// The value at squared distance `len2` from the centre (`dx² + dy² + dz²`, summed in
+    /// that order as `Vec3::length` does).
+    #[inline(always)]
+    fn at_squared(&self, len2: f32) -> f32 {
+        let len = len2.sqrt();
+        let d = (len - self.r).max(0.0);
+        let t = if d >= self.big_r { 1.0 } else { d * self.inv_r };
+        let s = 1.0 - t * t;
+        let g = if t >= 1.0 { 0.0 } else { s * s * s };
+        self.e * g
+    }
+
+    /// The parameters `[c.x, c.y, c.z, r, R, 1/R, E]`, for kernels packed by lanes.
+    pub(super) fn params(&self) -> [f32; 7] {
+        [
+            self.c.x, self.c.y, self.c.z, self.r, self.big_r, self.inv_r, self.e,
+        ]
+    }
+
+    /// Adds the values at `(x, y, z)` for `x` in `xs` to `out`.
+    #[inline]
+    pub(super) fn add_row(&self, xs: &[f32], y: f32, z: f32, out: &mut [f32]) {
+        let (dyy, dzz) = (
+            (y - self.c.y) * (y - self.c.y),
+            (z - self.c.z) * (z - self.c.z),
+        );
+        for (o, &x) in out.iter_mut().zip(xs) {
+            let dx = x - self.c.x;
+            *o += self.at_squared(dx * dx + dyy + dzz);
+        }
+    }
+
+    /// The x-interval outside which the row at `(y, z)` is 0, or `None` when all of it is;
+    /// widened by a relative margin far above the rounding of the value's computation.
+    pub(super) fn row_extent(&self, y: f32, z: f32) -> Option<(f32, f32)> {
+        let reach = (self.r + self.big_r) * (1.0 + 1e-4);
+        let (dy, dz) = (y - self.c.y, z - self.c.z);
+        let rest = reach * reach - (dy * dy + dz * dz);
+        (rest >= 0.0).then(|| {
+            let h = rest.sqrt() * (1.0 + 1e-4) + reach * 1e-4;
+            (self.c.x - h, self.c.x + h)
+        })
+    }
+}
+
 /// See [`Primitive::local`].
 struct Local {
     xs: Interval,

@@ -9,7 +9,7 @@ use super::bvh::{BVH_MIN_CHILDREN, ChildBvh};
 use super::contract::{Elevation, Field};
 use super::falloff::ISO;
 use super::node::{Node, NodeId, spectral_norm};
-use super::primitive::Primitive;
+use super::primitive::{Primitive, Round};
 use super::replace::{Transition, gap};
 use super::slope_grid::blend_lipschitz;
 use super::warp::Warp;
@@ -90,7 +90,12 @@ impl TreeBuilder {
                 .iter()
                 .map(|&c| self.info[c as usize].support)
                 .collect();
-            ChildBvh::new(&supports, &children)
+            let mut bvh = ChildBvh::new(&supports, &children);
+            bvh.index_points(|c| match &self.nodes[c as usize] {
+                Node::Primitive(p) => Round::of(p),
+                _ => None,
+            });
+            bvh
         });
         self.blend_with(children, bvh, name)
     }
