@@ -2,9 +2,11 @@
 //! points into known triangles and legalising the edges around them by flips (Lawson's
 //! incremental algorithm, as Garland & Heckbert 1995 use it).
 //!
-//! Triangle `t` owns half-edges `3t`, `3t + 1` and `3t + 2`, counter-clockwise; a
+//! Triangle `t` owns half-edges `4t`, `4t + 1` and `4t + 2`, counter-clockwise; a
 //! half-edge has an origin vertex and a twin (the same edge in the neighbouring triangle,
-//! [`NONE`] on the boundary). Triangles are never deleted: an insertion rewrites the
+//! [`NONE`] on the boundary). A triangle's corners, twins and its owner's two words of
+//! data fill one 32-byte record: an insertion's reads of a triangle and its neighbours
+//! take a cache line each. Triangles are never deleted: an insertion rewrites the
 //! triangle it lands in (and, on an edge, the neighbour across) and appends the rest, and
 //! a flip rewrites its two triangles in place, so every slot is a live triangle.
 
@@ -13,7 +15,28 @@ const NONE: u32 = u32::MAX;
 
 /// The next half-edge of the same triangle.
 fn next(e: u32) -> u32 {
-    if e % 3 == 2 { e - 2 } else { e + 1 }
+    if e & 3 == 2 { e - 2 } else { e + 1 }
+}
+
+/// A triangle: its half-edges' origins and twins, and two words of the owner's.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+pub struct Tri {
+    start: [u32; 3],
+    /// The owner's word (the greedy insertion: the worst grid point's index).
+    pub a: u32,
+    twin: [u32; 3],
+    /// The owner's other word (the greedy insertion: the worst error's queue key).
+    pub b: u32,
+}
+
+impl Tri {
+    const EMPTY: Tri = Tri {
+        start: [NONE; 3],
+        a: 0,
+        twin: [NONE; 3],
+        b: 0,
+    };
 }
 
 /// A vertex: a grid point and its height, together so that the scans of the triangles
@@ -40,10 +63,8 @@ impl Vertex {
 pub struct Triangulation {
     /// The vertices, in insertion order.
     pub vertices: Vec<Vertex>,
-    /// Each half-edge's origin vertex.
-    start: Vec<u32>,
-    /// Each half-edge's twin, or [`NONE`].
-    twin: Vec<u32>,
+    /// The triangles.
+    pub tris: Vec<Tri>,
     /// Whether the incircle determinant is exact in f64 (coordinates below 4096).
     exact_f64: bool,
     /// Half-edges to legalise: each is a triangle's first half-edge, the one facing the
@@ -57,8 +78,7 @@ impl Triangulation {
     pub fn rectangle(w: i32, h: i32, z: [f32; 4]) -> Triangulation {
         let mut t = Triangulation {
             vertices: Vec::new(),
-            start: Vec::new(),
-            twin: Vec::new(),
+            tris: Vec::new(),
             exact_f64: w.max(h) < 4096,
             stack: Vec::new(),
         };
@@ -69,28 +89,58 @@ impl Triangulation {
             z: z[k],
         }));
         // (0, 1, 2) and (0, 2, 3), sharing the diagonal 2 → 0 / 0 → 2.
-        t.start.extend([0, 1, 2, 0, 2, 3]);
-        t.twin.extend([NONE, NONE, 3, 2, NONE, NONE]);
+        t.tris.extend([
+            Tri {
+                start: [0, 1, 2],
+                twin: [NONE, NONE, 4],
+                ..Tri::EMPTY
+            },
+            Tri {
+                start: [0, 2, 3],
+                twin: [2, NONE, NONE],
+                ..Tri::EMPTY
+            },
+        ]);
         t
     }
 
     /// Number of triangles.
     pub fn len(&self) -> usize {
-        self.start.len() / 3
+        self.tris.len()
+    }
+
+    /// Half-edge `e`'s origin.
+    fn start(&self, e: u32) -> u32 {
+        self.tris[(e >> 2) as usize].start[(e & 3) as usize]
+    }
+
+    /// Half-edge `e`'s twin.
+    fn twin(&self, e: u32) -> u32 {
+        self.tris[(e >> 2) as usize].twin[(e & 3) as usize]
+    }
+
+    /// Sets half-edge `e`'s origin.
+    fn set_start(&mut self, e: u32, v: u32) {
+        self.tris[(e >> 2) as usize].start[(e & 3) as usize] = v;
+    }
+
+    /// Sets half-edge `e`'s twin.
+    fn set_twin(&mut self, e: u32, f: u32) {
+        self.tris[(e >> 2) as usize].twin[(e & 3) as usize] = f;
     }
 
     /// The vertices of triangle `t`, counter-clockwise.
     pub fn triangle(&self, t: usize) -> [u32; 3] {
-        [
-            self.start[3 * t],
-            self.start[3 * t + 1],
-            self.start[3 * t + 2],
-        ]
+        self.tris[t].start
     }
 
     /// The corners of triangle `t`, counter-clockwise.
     pub fn corners(&self, t: usize) -> [Vertex; 3] {
-        self.triangle(t).map(|v| self.vertices[v as usize])
+        // Written out: `array::map` is not always inlined, and its result then goes
+        // through memory (a store-forwarding stall).
+        let [a, b, c] = self.triangle(t);
+        let v = &self.vertices;
+        [v[a as usize], v[b as usize], v[c as usize]]
     }
 
     /// Inserts vertex `p`, whose grid point lies in triangle `t` (inside it or on one of its
@@ -100,10 +150,11 @@ impl Triangulation {
         let v = self.vertices.len() as u32;
         self.vertices.push(p);
         let p = p.ij();
-        let e0 = 3 * t;
-        let es = [e0, e0 + 1, e0 + 2];
-        let vs = es.map(|e| self.start[e as usize]);
-        let outer = es.map(|e| self.twin[e as usize]);
+        let Tri {
+            start: vs,
+            twin: outer,
+            ..
+        } = self.tris[t as usize];
         let c = vs.map(|u| self.vertices[u as usize].ij());
         let new = self.len() as u32;
         // The edge p lies on, if any: orient(c[k], c[k+1], p) = 0.
@@ -124,9 +175,9 @@ impl Triangulation {
                     // On an inner edge a → b, whose twin b → a has d across:
                     // (b, c, p), (c, a, p), (a, d, p), (d, b, p).
                     let (m1, m2) = (next(f), next(next(f)));
-                    let d = self.start[m2 as usize];
-                    let (q1, q2) = (self.twin[m1 as usize], self.twin[m2 as usize]);
-                    let u = f / 3;
+                    let d = self.start(m2);
+                    let (q1, q2) = (self.twin(m1), self.twin(m2));
+                    let u = f >> 2;
                     self.fan(
                         v,
                         &[t, new, u, new + 1],
@@ -155,25 +206,22 @@ impl Triangulation {
         changed: &mut Vec<u32>,
     ) {
         let n = slots.len();
-        let grow = slots.iter().map(|&s| s as usize + 1).max().unwrap_or(0) * 3;
-        if grow > self.start.len() {
-            self.start.resize(grow, NONE);
-            self.twin.resize(grow, NONE);
+        let grow = slots.iter().map(|&s| s as usize + 1).max().unwrap_or(0);
+        if grow > self.tris.len() {
+            self.tris.resize(grow, Tri::EMPTY);
         }
         for i in 0..n {
-            let e = 3 * slots[i];
+            let e = 4 * slots[i];
             let (x, y) = (ring[i], ring[(i + 1) % ring.len()]);
-            self.start[e as usize] = x;
-            self.start[e as usize + 1] = y;
-            self.start[e as usize + 2] = v;
+            self.tris[slots[i] as usize].start = [x, y, v];
             self.link(e, outer[i]);
             if i + 1 < n {
-                self.link(e + 1, 3 * slots[i + 1] + 2);
+                self.link(e + 1, 4 * slots[i + 1] + 2);
             } else if closed {
-                self.link(e + 1, 3 * slots[0] + 2);
+                self.link(e + 1, 4 * slots[0] + 2);
             } else {
-                self.twin[e as usize + 1] = NONE;
-                self.twin[3 * slots[0] as usize + 2] = NONE;
+                self.set_twin(e + 1, NONE);
+                self.set_twin(4 * slots[0] + 2, NONE);
             }
             self.stack.push(e);
             changed.push(slots[i]);
@@ -182,9 +230,9 @@ impl Triangulation {
 
     /// Makes `e` and `f` twins (`f` may be [`NONE`]).
     fn link(&mut self, e: u32, f: u32) {
-        self.twin[e as usize] = f;
+        self.set_twin(e, f);
         if f != NONE {
-            self.twin[f as usize] = e;
+            self.set_twin(f, e);
         }
     }
 
@@ -192,37 +240,31 @@ impl Triangulation {
     /// triangle, queueing the edges a flip exposes, until none is left.
     fn legalise(&mut self, changed: &mut Vec<u32>) {
         while let Some(e) = self.stack.pop() {
-            let f = self.twin[e as usize];
+            let f = self.twin(e);
             if f == NONE {
                 continue;
             }
             // Triangle (a, b, p) with e = a → b; across it (b, a, d).
-            let (n1, n2) = (e + 1, e + 2);
+            let n1 = e + 1;
             let (m1, m2) = (next(f), next(next(f)));
-            let [a, b, p] = [e, n1, n2].map(|h| self.start[h as usize]);
-            let d = self.start[m2 as usize];
+            let [a, b, p] = self.tris[(e >> 2) as usize].start;
+            let d = self.start(m2);
             let [pa, pb, pp, pd] = [a, b, p, d].map(|u| self.vertices[u as usize].ij());
             if !self.in_circle(pa, pb, pp, pd) {
                 continue;
             }
             // The edge becomes p–d: (a, d, p) in e's triangle (its p → a is kept), (d, b, p)
             // in f's.
-            let (ad, db, bp) = (
-                self.twin[m1 as usize],
-                self.twin[m2 as usize],
-                self.twin[n1 as usize],
-            );
-            let u = 3 * (f / 3);
-            self.start[e as usize + 1] = d;
-            self.start[u as usize] = d;
-            self.start[u as usize + 1] = b;
-            self.start[u as usize + 2] = p;
+            let (ad, db, bp) = (self.twin(m1), self.twin(m2), self.twin(n1));
+            let u = f & !3;
+            self.set_start(n1, d);
+            self.tris[(f >> 2) as usize].start = [d, b, p];
             self.link(e, ad);
             self.link(u, db);
             self.link(u + 1, bp);
             self.link(n1, u + 2);
             self.stack.extend([e, u]);
-            changed.push(f / 3);
+            changed.push(f >> 2);
         }
     }
 
@@ -265,11 +307,11 @@ mod tests {
     /// inner edge is locally Delaunay.
     fn check(t: &Triangulation, w: i64, h: i64) {
         let mut area2 = 0;
-        for e in 0..t.start.len() as u32 {
-            let f = t.twin[e as usize];
+        for e in (0..4 * t.len() as u32).filter(|e| e & 3 != 3) {
+            let f = t.twin(e);
             if f == NONE {
                 // Boundary half-edges lie on the rectangle's sides.
-                let [p, q] = [e, next(e)].map(|k| t.vertices[t.start[k as usize] as usize].ij());
+                let [p, q] = [e, next(e)].map(|k| t.vertices[t.start(k) as usize].ij());
                 assert!(
                     (p[0] == q[0] && (p[0] == 0 || p[0] == w))
                         || (p[1] == q[1] && (p[1] == 0 || p[1] == h)),
@@ -277,12 +319,12 @@ mod tests {
                 );
                 continue;
             }
-            assert_eq!(t.twin[f as usize], e);
-            assert_eq!(t.start[f as usize], t.start[next(e) as usize]);
-            assert_eq!(t.start[next(f) as usize], t.start[e as usize]);
+            assert_eq!(t.twin(f), e);
+            assert_eq!(t.start(f), t.start(next(e)));
+            assert_eq!(t.start(next(f)), t.start(e));
             // The far vertex of f's triangle is not inside e's circumcircle.
             let [a, b, c, d] = [e, next(e), next(next(e)), next(next(f))]
-                .map(|k| t.vertices[t.start[k as usize] as usize].ij());
+                .map(|k| t.vertices[t.start(k) as usize].ij());
             assert!(
                 !t.in_circle(a, b, c, d),
                 "{a:?} {b:?} {c:?} has {d:?} inside"

@@ -22,7 +22,7 @@ use super::Mesh;
 use crate::dem::Heightfield;
 use delaunay::{Triangulation, Vertex};
 use queue::Queue;
-use raster::{Worst, worst_point};
+use raster::Scanner;
 
 /// Errors of [`greedy`].
 #[derive(Debug, thiserror::Error)]
@@ -44,8 +44,8 @@ pub enum TinError {
 }
 
 /// Bytes the triangulation may take per grid point when every point becomes a vertex:
-/// the vertex (16), two triangles' six half-edges (48) and worst points (32), queue
-/// entries (8 each, a few per triangle), and room for the vectors' growth.
+/// the vertex (12), two triangles' records (64) and errors (16), queue entries (8 each, a
+/// few per triangle), and room for the vectors' growth.
 const BYTES_PER_VERTEX: u64 = 256;
 
 /// A triangulated irregular network over a heightfield's grid points.
@@ -115,6 +115,7 @@ pub fn greedy(hf: &Heightfield, max_error: f64, budget: u64) -> Result<Tin, TinE
         max_error,
         worst: Vec::new(),
         queue: Queue::default(),
+        scanner: Scanner::default(),
     };
     g.run();
     Ok(g.into_tin(hf))
@@ -134,10 +135,13 @@ struct Greedy<'h> {
     h: &'h [f32],
     nx: usize,
     max_error: f64,
-    /// Each triangle's worst grid point, by triangle index.
-    worst: Vec<Worst>,
+    /// Each triangle's largest error, by triangle index (its worst grid point and the
+    /// error's queue key are in the triangle's record, `Tri::a` and `Tri::b`).
+    worst: Vec<f64>,
     /// The triangles worse than the bound, by error: [`key`]s.
     queue: Queue,
+    /// The scans' rows.
+    scanner: Scanner,
 }
 
 impl Greedy<'_> {
@@ -151,14 +155,15 @@ impl Greedy<'_> {
             }
             let Some(top) = self.queue.pop() else { break };
             let t = top as u32 as usize;
-            let w = self.worst[t];
-            if key(w.error, t) != top {
+            let tri = self.dt.tris[t];
+            if u64::from(tri.b) != top >> 32 {
                 continue; // the triangle changed since it was queued
             }
+            let at = tri.a as usize;
             let p = Vertex {
-                i: (w.at as usize % self.nx) as i32,
-                j: (w.at as usize / self.nx) as i32,
-                z: w.z,
+                i: (at % self.nx) as i32,
+                j: (at / self.nx) as i32,
+                z: self.h[at],
             };
             self.dt.insert(t as u32, p, &mut changed);
         }
@@ -167,18 +172,21 @@ impl Greedy<'_> {
     /// Finds the worst grid point of triangle `t` and queues it if over the bound.
     fn scan(&mut self, t: usize) {
         let corners = self.dt.corners(t);
-        let w = worst_point(
+        let w = self.scanner.worst_point(
             corners.map(Vertex::ij),
             corners.map(|v| f64::from(v.z)),
             self.h,
             self.nx,
         );
         if self.worst.len() <= t {
-            self.worst.resize(t + 1, Worst::default());
+            self.worst.resize(t + 1, 0.0);
         }
-        self.worst[t] = w;
+        self.worst[t] = w.error;
+        let k = key(w.error, t);
+        self.dt.tris[t].a = w.at;
+        self.dt.tris[t].b = (k >> 32) as u32;
         if w.error > self.max_error {
-            self.queue.push(key(w.error, t));
+            self.queue.push(k);
         }
     }
 
@@ -195,7 +203,7 @@ impl Greedy<'_> {
             })
             .collect();
         let triangles = (0..self.dt.len()).map(|t| self.dt.triangle(t)).collect();
-        let max_error = self.worst.iter().map(|w| w.error).fold(0.0, f64::max);
+        let max_error = self.worst.iter().copied().fold(0.0, f64::max);
         Tin {
             positions,
             triangles,

@@ -1,6 +1,10 @@
 //! The grid points of one TIN triangle and the worst of them: a scan of the triangle's
 //! rows, each row's span (from the edges' `x` at that row, stepped exactly in integers:
-//! vertices sit on grid points) compared with the triangle's plane.
+//! vertices sit on grid points) compared with the triangle's plane. Two passes: every
+//! row's largest error in f32 (four lanes at once) with a bound of its rounding, then the
+//! exact errors in f64 only in the rows that may hold the largest — about one a triangle.
+
+use glam::Vec4;
 
 /// The grid point of a triangle farthest (vertically) from the triangle's plane.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -9,171 +13,192 @@ pub struct Worst {
     pub error: f64,
     /// Its grid index `i + nx·j`.
     pub at: u32,
-    /// Its height, metres (kept here: the sample is long out of cache when the point is
-    /// inserted).
-    pub z: f32,
 }
 
-/// Rows whose spans are found (and first samples touched) before they are scanned.
-const ROWS: usize = 32;
+/// Rows ahead of the scan whose first samples are prefetched.
+const AHEAD: usize = 16;
 
-/// An edge's `x` at successive rows, exactly: `x + r/dy` with `0 ≤ r < dy`, stepped by
-/// `dx/dy` (a digital differential analyser on integers).
-struct Edge {
-    x: i64,
-    r: i64,
-    q: i64,
-    rs: i64,
-    dy: i64,
+/// The rows of a triangle scan, kept from scan to scan.
+#[derive(Default)]
+pub struct Scanner {
+    /// Each row's first grid column, its corner left out.
+    lo: Vec<i64>,
+    /// Each row's last grid column, its corner left out.
+    hi: Vec<i64>,
+    /// Each row's largest errors from the f32 pass, lane by lane (−1 for an empty row).
+    most: Vec<Vec4>,
 }
 
-impl Edge {
-    /// The edge from grid point `p` up to `q` (`q` not below `p`), at `p`'s row.
-    fn new(p: [i64; 2], q: [i64; 2]) -> Edge {
-        let (dx, dy) = (q[0] - p[0], (q[1] - p[1]).max(1));
-        Edge {
-            x: p[0],
-            r: 0,
-            q: dx.div_euclid(dy),
-            rs: dx.rem_euclid(dy),
-            dy,
+/// Writes the `x` of the edge from grid point `p` up to `q` at successive rows from `p`'s
+/// into `out`, rounded up to a grid column when `up`, down otherwise — exactly, by a
+/// digital differential analyser on integers: `x + r/dy` with `0 ≤ r < dy`, stepped by
+/// `dx/dy`, where rounding up is rounding down `x + (r + dy − 1)/dy`.
+fn trace(p: [i64; 2], q: [i64; 2], up: bool, out: &mut [i64]) {
+    let (dx, dy) = (q[0] - p[0], (q[1] - p[1]).max(1));
+    let (step, rs) = (dx.div_euclid(dy), dx.rem_euclid(dy));
+    let (mut x, mut r) = (p[0], if up { dy - 1 } else { 0 });
+    for o in out {
+        *o = x;
+        r += rs;
+        let carry = i64::from(r >= dy);
+        x += step + carry;
+        r -= carry * dy;
+    }
+}
+
+impl Scanner {
+    /// The grid point of the triangle with grid corners `t` (any orientation) over the
+    /// samples `h` (row-major, `nx` per row, fewer than 2³² in all) farthest from the
+    /// plane through `z`, its corners excluded.
+    pub fn worst_point(&mut self, t: [[i64; 2]; 3], z: [f64; 3], h: &[f32], nx: usize) -> Worst {
+        let [a, mut b, mut c] = t;
+        let [za, mut zb, mut zc] = z;
+        let cross = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        if cross == 0 {
+            return Worst::default();
         }
-    }
-
-    /// Moves to the next row.
-    fn step(&mut self) {
-        self.x += self.q;
-        self.r += self.rs;
-        if self.r >= self.dy {
-            self.x += 1;
-            self.r -= self.dy;
+        if cross < 0 {
+            std::mem::swap(&mut b, &mut c);
+            std::mem::swap(&mut zb, &mut zc);
         }
-    }
+        let det = cross.abs() as f64;
+        // The plane z = za + gx·(x − ax) + gy·(y − ay).
+        let (ux, uy, vx, vy) = (
+            (b[0] - a[0]) as f64,
+            (b[1] - a[1]) as f64,
+            (c[0] - a[0]) as f64,
+            (c[1] - a[1]) as f64,
+        );
+        let (dzb, dzc) = (zb - za, zc - za);
+        let gx = (dzb * vy - dzc * uy) / det;
+        let gy = (dzc * ux - dzb * vx) / det;
 
-    /// The smallest grid column at or right of the edge.
-    fn ceil(&self) -> i64 {
-        self.x + i64::from(self.r > 0)
-    }
-
-    /// The largest grid column at or left of the edge.
-    fn floor(&self) -> i64 {
-        self.x
-    }
-}
-
-/// The grid point of the triangle with grid corners `t` (any orientation) over the
-/// samples `h` (row-major, `nx` per row, fewer than 2³² in all) farthest from the plane
-/// through `z`, its corners excluded.
-pub fn worst_point(t: [[i64; 2]; 3], z: [f64; 3], h: &[f32], nx: usize) -> Worst {
-    let [a, mut b, mut c] = t;
-    let [za, mut zb, mut zc] = z;
-    let cross = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-    if cross == 0 {
-        return Worst::default();
-    }
-    if cross < 0 {
-        std::mem::swap(&mut b, &mut c);
-        std::mem::swap(&mut zb, &mut zc);
-    }
-    let det = cross.abs() as f64;
-    // The plane z = za + gx·(x − ax) + gy·(y − ay).
-    let (ux, uy, vx, vy) = (
-        (b[0] - a[0]) as f64,
-        (b[1] - a[1]) as f64,
-        (c[0] - a[0]) as f64,
-        (c[1] - a[1]) as f64,
-    );
-    let (dzb, dzc) = (zb - za, zc - za);
-    let gx = (dzb * vy - dzc * uy) / det;
-    let gy = (dzc * ux - dzb * vx) / det;
-
-    // The rows from the lowest corner v0 to the highest v2: the long edge v0 → v2 bounds
-    // every row on one side, v0 → v1 then v1 → v2 on the other.
-    let mut v = [a, b, c];
-    v.sort_unstable_by_key(|p| p[1]);
-    let [v0, v1, v2] = v;
-    let long_left = (v2[0] - v0[0]) * (v1[1] - v0[1]) - (v2[1] - v0[1]) * (v1[0] - v0[0]) < 0;
-    let mut long = Edge::new(v0, v2);
-    let mut short = Edge::new(v0, v1);
-    let mut worst = Worst::default();
-    let mut spans = [(0i64, 0i64); ROWS];
-    let mut y = v0[1];
-    while y <= v2[1] {
-        // A batch of rows' spans, each row's first samples touched so that the rows'
-        // cache misses overlap instead of stalling the scan one after the other.
-        let rows = ((v2[1] - y + 1) as usize).min(ROWS);
-        for (k, span) in spans[..rows].iter_mut().enumerate() {
-            let yk = y + k as i64;
-            if yk == v1[1] {
-                short = Edge::new(v1, v2);
-            }
-            *span = if long_left {
-                (long.ceil(), short.floor())
-            } else {
-                (short.ceil(), long.floor())
-            };
-            long.step();
-            short.step();
-            if span.0 <= span.1 {
-                std::hint::black_box(h[yk as usize * nx + span.0 as usize]);
+        // The rows from the lowest corner v0 to the highest v2: the long edge v0 → v2
+        // bounds every row on one side, v0 → v1 then v1 → v2 on the other.
+        let mut v = [a, b, c];
+        v.sort_unstable_by_key(|p| p[1]);
+        let [v0, v1, v2] = v;
+        let long_left = (v2[0] - v0[0]) * (v1[1] - v0[1]) - (v2[1] - v0[1]) * (v1[0] - v0[0]) < 0;
+        let rows = (v2[1] - v0[1] + 1) as usize;
+        let mid = (v1[1] - v0[1]) as usize;
+        if self.lo.len() < rows {
+            self.lo.resize(rows, 0);
+            self.hi.resize(rows, 0);
+            self.most.resize(rows, Vec4::ZERO);
+        }
+        let (lo, hi) = (&mut self.lo[..rows], &mut self.hi[..rows]);
+        let (long, short) = if long_left {
+            (&mut *lo, &mut *hi)
+        } else {
+            (&mut *hi, &mut *lo)
+        };
+        trace(v0, v2, long_left, long);
+        trace(v0, v1, !long_left, &mut short[..mid]);
+        trace(v1, v2, !long_left, &mut short[mid..]);
+        // A corner is always at one end of its row's span.
+        for p in [v0, v1, v2] {
+            let k = (p[1] - v0[1]) as usize;
+            if lo[k] == p[0] {
+                lo[k] += 1;
+            } else if hi[k] == p[0] {
+                hi[k] -= 1;
             }
         }
-        for (k, &(lo, hi)) in spans[..rows].iter().enumerate() {
-            if lo > hi {
+        // The f32 pass: each row's largest errors, lane by lane; the rows' first samples
+        // prefetched ahead so that their cache misses overlap.
+        let first = |k: usize| (v0[1] as usize + k) * nx + lo[k] as usize;
+        for k in 0..rows.min(AHEAD) {
+            prefetch(h, first(k));
+        }
+        let mut top = Vec4::ZERO;
+        for k in 0..rows {
+            if k + AHEAD < rows {
+                prefetch(h, first(k + AHEAD));
+            }
+            if lo[k] > hi[k] {
+                self.most[k] = Vec4::NEG_ONE;
                 continue;
             }
-            let y = y + k as i64;
-            let fy = y as f64;
-            let (lo, hi) = (lo as usize, hi as usize);
-            let row = y as usize * nx;
-            let base = za + gx * (lo as f64 - a[0] as f64) + gy * (fy - a[1] as f64);
-            let span = &h[row + lo..=row + hi];
-            // First the row's largest error in f32 (four lanes, vectorised), then — only
-            // where that can beat the worst so far — exact errors in f64 and where they are.
-            if row_max_f32(base, gx, span) <= worst.error {
+            let y = (v0[1] + k as i64) as f64;
+            let base = za + gx * (lo[k] as f64 - a[0] as f64) + gy * (y - a[1] as f64);
+            let m = row_max_f32(base, gx, h, first(k), (hi[k] - lo[k] + 1) as usize);
+            self.most[k] = m;
+            top = top.max(m);
+        }
+        // Each of the plane's roundings (its base and slope to f32, the product, the sum)
+        // and the difference's is at most ε times the magnitudes involved — the plane's
+        // value at a grid point of the triangle is at most its largest corner's, and `k` at
+        // most the triangle's width —, so every f32 error is within `slack` of the f64 one.
+        let top = f64::from(top.max_element());
+        let high = za.abs().max(zb.abs()).max(zc.abs());
+        let wide = (v0[0].max(v1[0]).max(v2[0]) - v0[0].min(v1[0]).min(v2[0]) + 1) as f64;
+        let slack = 8.0 * f64::from(f32::EPSILON) * (high + gx.abs() * wide + top);
+        // The exact pass, in f64, only over rows that may hold the largest error: none
+        // whose f32 errors are all more than twice the slack below the largest (a third
+        // slack covers the threshold's own rounding to f32), nor any whose largest is
+        // within the slack of the worst so far.
+        let floor = Vec4::splat((top - 3.0 * slack) as f32);
+        let mut worst = Worst::default();
+        for k in 0..rows {
+            let m = self.most[k];
+            if !m.cmpge(floor).any() || f64::from(m.max_element()) + slack <= worst.error {
                 continue;
             }
-            let err = |k: usize, s: f32| (base + gx * k as f64 - f64::from(s)).abs();
-            let corner_row = y == a[1] || y == b[1] || y == c[1];
-            for (k, &s) in span.iter().enumerate() {
-                let e = err(k, s);
-                if e > worst.error && !(corner_row && [a, b, c].contains(&[(lo + k) as i64, y])) {
+            let y = (v0[1] + k as i64) as f64;
+            let base = za + gx * (lo[k] as f64 - a[0] as f64) + gy * (y - a[1] as f64);
+            let at = first(k);
+            for (i, &s) in h[at..=at + (hi[k] - lo[k]) as usize].iter().enumerate() {
+                let e = (base + gx * i as f64 - f64::from(s)).abs();
+                if e > worst.error {
                     worst = Worst {
                         error: e,
-                        at: (row + lo + k) as u32,
-                        z: s,
+                        at: (at + i) as u32,
                     };
                 }
             }
         }
-        y += rows as i64;
+        worst
     }
-    worst
 }
 
-/// An upper bound of `max_k |base + gx·k − span[k]|`, computed in f32: the f32 maximum
-/// plus a bound of its rounding error.
-fn row_max_f32(base: f64, gx: f64, span: &[f32]) -> f64 {
-    let (b, g) = (base as f32, gx as f32);
-    let mut m = [0.0f32; 4];
-    let chunks = span.chunks_exact(4);
-    let rest = chunks.remainder();
-    for (c, q) in chunks.enumerate() {
-        for l in 0..4 {
-            let e = (b + g * (4 * c + l) as f32 - q[l]).abs();
-            m[l] = if e > m[l] { e } else { m[l] };
+/// Touches the cache line of `h[at]` (a load whose value is not used), so that its miss
+/// overlaps the work before the scan reaches it.
+fn prefetch(h: &[f32], at: usize) {
+    if let Some(&s) = h.get(at) {
+        std::hint::black_box(s);
+    }
+}
+
+/// `|base + gx·k − h[at + k]|` for `k < len`, computed in f32, the largest of each lane.
+fn row_max_f32(base: f64, gx: f64, h: &[f32], at: usize, len: usize) -> Vec4 {
+    let (b, g) = (Vec4::splat(base as f32), Vec4::splat(gx as f32));
+    let err = |k: usize| {
+        let q = Vec4::from_slice(&h[at + k..at + k + 4]);
+        (b + g * (Vec4::new(0.0, 1.0, 2.0, 3.0) + Vec4::splat(k as f32)) - q).abs()
+    };
+    if len >= 4 {
+        // Chunks of four, the last one ending at the span's end (overlapping the one
+        // before: the maximum does not mind).
+        let mut m = err(len - 4);
+        let mut k = 0;
+        while k + 4 < len {
+            m = m.max(err(k));
+            k += 4;
         }
+        m
+    } else if at + 4 <= h.len() {
+        // One chunk, the lanes past the span masked.
+        let inside = Vec4::new(0.0, 1.0, 2.0, 3.0).cmplt(Vec4::splat(len as f32));
+        Vec4::select(inside, err(0), Vec4::ZERO)
+    } else {
+        let e = |k: usize| (base as f32 + gx as f32 * k as f32 - h[at + k]).abs();
+        Vec4::new(
+            e(0),
+            if len > 1 { e(1) } else { 0.0 },
+            if len > 2 { e(2) } else { 0.0 },
+            0.0,
+        )
     }
-    let at = span.len() - rest.len();
-    for (l, &s) in rest.iter().enumerate() {
-        let e = (b + g * (at + l) as f32 - s).abs();
-        m[l] = if e > m[l] { e } else { m[l] };
-    }
-    let most = f64::from(m[0].max(m[1]).max(m[2]).max(m[3]));
-    // Each of the plane's roundings (its base and slope to f32, the product, the sum) and
-    // the difference's is at most ε times the magnitudes involved.
-    let scale = base.abs() + gx.abs() * span.len() as f64 + most;
-    most + 8.0 * f64::from(f32::EPSILON) * scale
 }
 
 #[cfg(test)]
@@ -218,7 +243,7 @@ mod tests {
         for t in tris {
             for t in [t, [t[0], t[2], t[1]]] {
                 let z = t.map(|p| f64::from(h[p[0] as usize + n * p[1] as usize]));
-                let w = worst_point(t, z, &h, n);
+                let w = Scanner::default().worst_point(t, z, &h, n);
                 // The same maximum by brute force, corners excluded.
                 let det = {
                     let [a, b, c] = t;
@@ -242,7 +267,6 @@ mod tests {
                     "{t:?}: {} vs {best}",
                     w.error
                 );
-                assert!(best == 0.0 || w.z == h[w.at as usize]);
                 assert!(
                     best == 0.0
                         || inside(t, n as i64)
