@@ -264,34 +264,52 @@ impl SField {
     /// from the surface.
     #[inline(always)]
     fn s_eval<const GRAD: bool>(&self, p: Vec3, far: f32) -> (f32, Vec3, f32) {
+        self.s_eval_with::<GRAD, true>(p, far, 0.0)
+    }
+
+    /// [`Self::s_eval`]; without `CUBIC` the finest level is read trilinearly, `cubic_err`
+    /// being a bound of the blend's departure from that at `p`
+    /// ([`CubicBounds::value_error`]): the third member then bounds `|S'(p) − answer|`.
+    #[inline(always)]
+    fn s_eval_with<const GRAD: bool, const CUBIC: bool>(
+        &self,
+        p: Vec3,
+        far: f32,
+        cubic_err: f32,
+    ) -> (f32, Vec3, f32) {
         let q = self.params.domain.clamp(p);
         let Some((l, idx, f)) = locate(&self.vol.levels, q) else {
             return (f32::INFINITY, Vec3::ZERO, 0.0);
         };
         let h = self.vol.levels[l].geom.h;
         let mut lin = trilinear_grad(&self.vol.s[l], &idx, f, h);
+        let mut err = 0.0;
         if let Some(c) = &self.cubic
             && l + 1 == self.vol.levels.len()
         {
-            lin = c.eval::<GRAD>(&self.vol.levels[l], &self.vol.s[l], &idx, f, lin);
+            if CUBIC {
+                lin = c.eval::<GRAD>(&self.vol.levels[l], &self.vol.s[l], &idx, f, lin);
+            } else {
+                err = cubic_err;
+            }
         }
         let (s, gs) = lin;
         if self.noise_amp == 0.0 {
-            return (s, gs, 0.0);
+            return (s, gs, err);
         }
         let (a, ga) = trilinear_grad(&self.vol.alpha[l], &idx, f, h);
-        let margin = a * FBM_AMPLITUDE;
+        let margin = a * FBM_AMPLITUDE + err;
         if s.abs() >= far + margin {
             return (s, gs, margin);
         }
         let (b, gb) = trilinear_grad(&self.vol.beta[l], &idx, f, h);
         let o = q - self.params.domain.min;
         if !GRAD {
-            return (s - a * self.params.fbm.value(o * b), Vec3::ZERO, 0.0);
+            return (s - a * self.params.fbm.value(o * b), Vec3::ZERO, err);
         }
         let (n, gn) = self.params.fbm.value_grad(o * b);
         let gd = ga * n + (gn * b + gb * gn.dot(o)) * a;
-        (s - a * n, gs - gd, 0.0)
+        (s - a * n, gs - gd, err)
     }
 
     /// `±S'` by orientation.
@@ -334,7 +352,9 @@ impl SField {
 
     /// Bounds over the bricks whose nodes the field can read inside `b` (clamped to the
     /// domain), across all levels; with the tricubic blend, over its stencils too, widened.
-    fn box_bounds(&self, b: &Aabb) -> BrickBounds {
+    /// Also returns the tricubic blend's `E` over those stencils
+    /// ([`CubicBounds::value_error`]; 0 without the blend): `|S − L| ≤ E` in `b`.
+    fn box_bounds(&self, b: &Aabb) -> (BrickBounds, f32) {
         let mut acc = EMPTY_BOUNDS;
         let mut cubic = CubicBounds::EMPTY;
         let finest = self.vol.levels.len().saturating_sub(1);
@@ -379,8 +399,10 @@ impl SField {
             }
         }
         match self.vol.levels.last() {
-            Some(f) if self.cubic.is_some() => cubic.widen(&acc, f.geom.h),
-            _ => acc,
+            Some(f) if self.cubic.is_some() => {
+                (cubic.widen(&acc, f.geom.h), cubic.value_error(f.geom.h))
+            }
+            _ => (acc, 0.0),
         }
     }
 
@@ -405,7 +427,7 @@ impl SField {
     /// widened by the noise, intersected with the Lipschitz bound around the centre
     /// (tighter on small boxes); both are sound, so is their intersection.
     fn s_box(&self, bc: &Aabb) -> SBox {
-        let bb = self.box_bounds(bc);
+        let (bb, cubic_err) = self.box_bounds(bc);
         let (amp, lip_noise) = if self.noise_amp > 0.0 {
             let reach = bc
                 .corners()
@@ -422,7 +444,14 @@ impl SField {
         let lip = bb.grad_s.length() + lip_noise;
         let bricks = Interval::new(bb.s[0], bb.s[1]).dilate(amp);
         let reach = lip * bc.radius();
-        let (sc, _, margin) = self.s_eval::<false>(bc.center(), self.params.transition + reach);
+        // The trilinear value at the centre, within `E` of the blend: the tricubic stencil
+        // (64 nodes) is the dearest part of an evaluation, and bounds are asked as often
+        // as values.
+        let (sc, _, margin) = self.s_eval_with::<false, false>(
+            bc.center(),
+            self.params.transition + reach,
+            cubic_err,
+        );
         let around = Interval::point(sc).dilate(reach + margin);
         let mut s = bricks.intersect(around);
         if s.is_empty() {

@@ -74,6 +74,17 @@ impl CubicBounds {
         }
     }
 
+    /// `E`: a bound of `|S − L|`, the blend's departure from the trilinear interpolant, at
+    /// points whose stencils these bounds cover (0 where the blend weight is 0 throughout).
+    /// `h`: the finest level's voxel.
+    pub fn value_error(&self, h: f32) -> f32 {
+        if !(self.w[1] > 0.0) {
+            return 0.0;
+        }
+        let c = self.curv;
+        h * (25.0 / 16.0 * c.x + 1.25 * c.y + c.z) / 8.0
+    }
+
     /// `b` (trilinear bounds of S over the same nodes) widened to bound the blended field:
     /// the value range by `E`, the slopes by the tricubic's and the blend's terms (see the
     /// module's documentation). `h`: the finest level's voxel.
@@ -82,7 +93,7 @@ impl CubicBounds {
             return *b;
         }
         let c = self.curv;
-        let e = h * (25.0 / 16.0 * c.x + 1.25 * c.y + c.z) / 8.0;
+        let e = self.value_error(h);
         let cross = |a: f32, o1: f32, o2: f32| a / 2.0 + 15.0 / 32.0 * o1 + 3.0 / 8.0 * o2;
         let mut grad = b.grad_s
             + Vec3::new(
