@@ -9,8 +9,10 @@
 //! * [`app`]: the editor's state and frame; undo/redo; reloading on outside edits.
 //! * [`history`]: edits as `tree` operations, undo byte for byte.
 //! * [`outline`] and [`inspector`]: the tree and the selected node's typed parameters.
-//! * [`preview`]: the orbit camera and the progressive background renderer.
+//! * [`preview`]: the orbit camera and the progressive background renderer (fast pass,
+//!   then the full image band by band; cost and normal views).
 //! * [`placement`]: the surface point under a pixel, and the nodes placed there.
+//! * [`points`]: Feature Curve control points shown and dragged in the viewport.
 //! * [`palette`]: add, remove, duplicate, instance; mesh and picture exports.
 
 pub mod app;
@@ -19,6 +21,7 @@ pub mod inspector;
 pub mod outline;
 pub mod palette;
 pub mod placement;
+pub mod points;
 pub mod preview;
 
 use std::path::Path;
