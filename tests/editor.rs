@@ -234,7 +234,12 @@ fn editor_viewport_shows_the_tracers_image() {
     // The tracer's image through the same camera, independently.
     let file = karstic::scene::load(a).unwrap();
     let compiled = file.compile().unwrap();
-    let reference = karstic::editor::preview::draw(&file.scene, &compiled, &shown.camera);
+    let reference = karstic::editor::preview::draw(
+        &file.scene,
+        &compiled,
+        &shown.camera,
+        karstic::editor::preview::Quality::Full,
+    );
     let (x0, y0) = (rect.min.x.round() as u32, rect.min.y.round() as u32);
     let (mut total, mut far) = (0u64, 0usize);
     for j in 0..f.height {
@@ -256,4 +261,238 @@ fn editor_viewport_shows_the_tracers_image() {
         (far as f64) < 0.01 * n,
         "{far} pixels differ by more than 12 levels"
     );
+}
+
+/// The editor's tree with a Feature Volume carving a tunnel whose ends are on the
+/// ground: two `Ground` control points.
+fn tunnel_tree() -> String {
+    TREE.replace(
+        "        carves: [\n",
+        r#"        carves: [
+            FeatureVolume(
+                name: "cave",
+                curves: Inline(tunnels: [(
+                    path: [Ground(3600, 5100, -5), Ground(3800, 5150, -5)],
+                    width: Const(30),
+                    height: Const(20),
+                )]),
+                domain: ((3450, 4950, 300), (3950, 5300, 1100)),
+                voxel: 20,
+            ),
+"#,
+    )
+}
+
+/// Presses the primary button at `from`, moves to `to` in steps and releases there.
+fn drag(h: &mut Harness<'_, Editor>, from: egui::Pos2, to: egui::Pos2) {
+    let button = |pos, pressed| egui::Event::PointerButton {
+        pos,
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers: egui::Modifiers::NONE,
+    };
+    h.event(egui::Event::PointerMoved(from));
+    h.step();
+    h.event(button(from, true));
+    h.step();
+    for k in 1..=8 {
+        h.event(egui::Event::PointerMoved(
+            from + (to - from) * (k as f32 / 8.0),
+        ));
+        h.step();
+    }
+    h.step();
+    h.event(button(to, false));
+    h.step();
+    h.run_steps(2);
+}
+
+#[test]
+fn editor_drags_a_feature_curve_point_along_the_surface_as_one_edit() {
+    let (dir, _) = scene_dir(&[]);
+    let a = dir.path().join("a.ron");
+    std::fs::write(&a, tunnel_tree()).unwrap();
+    let original = std::fs::read(&a).unwrap();
+    let mut h = harness(&a);
+    settle(&mut h, Duration::from_secs(300)).unwrap();
+    let shown = h.state().shown().unwrap().clone();
+    let rect = h.state().viewport().unwrap();
+    let f = &shown.frame;
+    let cam = shown.camera;
+    let to_screen = |(x, y): (f32, f32)| {
+        rect.min
+            + egui::vec2(
+                x * rect.width() / f.width as f32,
+                y * rect.height() / f.height as f32,
+            )
+    };
+    // The tunnel's first point, where the viewport shows it.
+    let handle = shown
+        .handles
+        .iter()
+        .find(|h| h.volume == "cave" && h.slot == karstic::editor::points::Slot::Tunnel(0, 0))
+        .expect("the tunnel's first point is a handle")
+        .clone();
+    let from = to_screen(karstic::editor::points::project(&cam, handle.world).unwrap());
+    assert!(rect.contains(from), "the point is in view");
+    // Dragged to the surface at a pixel well away from it.
+    let (i, j) = a_hit_pixel(f);
+    let to = to_screen((i as f32 + 0.5, j as f32 + 0.5));
+    assert!(from.distance(to) > 30.0, "{from:?} → {to:?}");
+    drag(&mut h, from, to);
+    let p = cam.pixel_ray(i, j).at(f.depth[(j * f.width + i) as usize]);
+    let file = karstic::scene::load(&a).unwrap();
+    let named = file.scene.named();
+    let Some(NodeSpec::FeatureVolume(v)) = named.get("cave") else {
+        panic!("no cave: {}", h.state().status());
+    };
+    let karstic::curves::spec::CurveSource::Inline(set) = &v.curves else {
+        panic!("the curves stay inline");
+    };
+    let karstic::curves::spec::Point::Ground(x, y, off) = set.tunnels[0].path[0] else {
+        panic!(
+            "the point stays on the ground: {:?}",
+            set.tunnels[0].path[0]
+        );
+    };
+    assert!(
+        (glam::Vec2::new(x.0, y.0) - p.truncate()).length() < 1e-2,
+        "moved to ({}, {}), the surface under the pointer is {p:?} ({})",
+        x.0,
+        y.0,
+        h.state().status()
+    );
+    assert_eq!(off.0, -5.0, "the offset is kept");
+    assert_eq!(
+        set.tunnels[0].path[1],
+        karstic::curves::spec::Point::Ground(
+            karstic::scene::Finite(3800.0),
+            karstic::scene::Finite(5150.0),
+            karstic::scene::Finite(-5.0)
+        ),
+        "the other point stays"
+    );
+    assert_eq!(h.state().selected(), Some("cave"));
+    // One edit: one undo puts the file back byte for byte.
+    h.get_by_label("Undo").click();
+    h.run_steps(2);
+    assert_eq!(std::fs::read(&a).unwrap(), original);
+}
+
+#[test]
+fn editor_drops_absolute_points_in_the_plane_parallel_to_the_image() {
+    use karstic::editor::points::{Handle, Slot, drop_at, project};
+    let cam = karstic::render::Camera::look_at(
+        glam::Vec3::new(0.0, -100.0, 50.0),
+        glam::Vec3::ZERO,
+        40.0,
+        200,
+        100,
+    )
+    .unwrap();
+    let world = glam::Vec3::new(10.0, 5.0, 3.0);
+    let handle = Handle {
+        volume: "v".into(),
+        slot: Slot::Curve(0, 1),
+        point: karstic::curves::spec::Point::Abs(
+            karstic::scene::Finite(10.0),
+            karstic::scene::Finite(5.0),
+            karstic::scene::Finite(3.0),
+        ),
+        world,
+    };
+    let frame = karstic::render::Frame::new(1, 1, vec![0; 4], vec![f32::INFINITY], vec![0]);
+    let (x, y) = project(&cam, world).unwrap();
+    let forward = (cam.target - cam.eye).normalize();
+    for (dx, dy) in [(0.0, 0.0), (25.0, -10.0), (-40.0, 30.0)] {
+        let q = drop_at(&handle, &frame, &cam, x + dx, y + dy).unwrap();
+        // In the plane through the point, parallel to the image…
+        assert!(((q - world).dot(forward)).abs() < 1e-3, "{q:?}");
+        // …and under the pointer.
+        let (qx, qy) = project(&cam, q).unwrap();
+        assert!(
+            (qx - x - dx).abs() < 1e-2 && (qy - y - dy).abs() < 1e-2,
+            "{qx}, {qy}"
+        );
+    }
+}
+
+#[test]
+fn editor_duplicates_a_node_with_named_children_under_fresh_names() {
+    let (_dir, paths) = scene_dir(&["a.ron"]);
+    let a = &paths[0];
+    let mut h = harness(a);
+    select(&mut h, "grotto");
+    h.get_by_label("Duplicate").click();
+    h.run_steps(2);
+    let file = karstic::scene::load(a).unwrap_or_else(|e| panic!("{e}"));
+    let named = file.scene.named();
+    let Some(NodeSpec::Anchor(copy)) = named.get("grotto_1") else {
+        panic!("no copy: {}", h.state().status());
+    };
+    assert_eq!(copy.child.name(), Some("blob_1"), "the child renamed too");
+    assert!(named.contains_key("grotto") && named.contains_key("blob"));
+    assert_eq!(h.state().selected(), Some("grotto_1"));
+    // Again: the next free suffix.
+    h.get_by_label("Duplicate").click();
+    h.run_steps(2);
+    let file = karstic::scene::load(a).unwrap();
+    let named = file.scene.named();
+    let mut names: Vec<&str> = named.keys().copied().collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            "blob",
+            "blob_1",
+            "blob_1_1",
+            "dem",
+            "grotto",
+            "grotto_1",
+            "grotto_1_1",
+            "root"
+        ]
+    );
+}
+
+#[test]
+fn editor_shows_the_normals_and_the_cost_of_its_image() {
+    let (_dir, paths) = scene_dir(&["a.ron"]);
+    let a = &paths[0];
+    let mut h = harness(a);
+    h.get_by_label("normals").click();
+    h.run_steps(2);
+    settle(&mut h, Duration::from_secs(120)).unwrap();
+    let shown = h.state().shown().unwrap().clone();
+    let f = &shown.frame;
+    let normals = shown.normals.as_ref().expect("the normals were asked for");
+    assert_eq!(h.state().shown_colours().as_ref(), Some(normals));
+    let file = karstic::scene::load(a).unwrap();
+    let compiled = file.compile().unwrap();
+    let (mut hits, mut misses) = (0, 0);
+    for k in (0..f.width * f.height).step_by(97) {
+        let (i, j) = (k % f.width, k / f.width);
+        let t = f.depth[k as usize];
+        let got = &normals[4 * k as usize..4 * k as usize + 3];
+        if t.is_finite() {
+            let n =
+                karstic::render::trace::normal(&compiled.tree, shown.camera.pixel_ray(i, j).at(t));
+            for c in 0..3 {
+                let want = (n[c] + 1.0) * 127.5;
+                assert!(
+                    (got[c] as f32 - want).abs() <= 1.0,
+                    "pixel {i},{j}: {got:?} for {n:?}"
+                );
+            }
+            hits += 1;
+        } else {
+            assert_eq!(got, [0, 0, 0], "the sky is black");
+            misses += 1;
+        }
+    }
+    assert!(hits > 20, "{hits} hits, {misses} misses");
+    h.get_by_label("cost").click();
+    h.run_steps(2);
+    assert_eq!(h.state().shown_colours(), Some(f.cost_rgba()));
+    assert_ne!(f.cost_rgba(), f.rgba);
 }

@@ -33,7 +33,7 @@ pub(super) fn run(args: EditArgs) -> anyhow::Result<()> {
                 args.timeout.is_finite() && args.timeout > 0.0,
                 "--timeout must be a positive number of seconds"
             );
-            let (first, settled) = karstic::editor::screenshot(
+            let t = karstic::editor::screenshot(
                 &args.tree,
                 out,
                 (args.size[0], args.size[1]),
@@ -41,9 +41,11 @@ pub(super) fn run(args: EditArgs) -> anyhow::Result<()> {
                 Duration::from_secs_f64(args.timeout),
             )?;
             eprintln!(
-                "first image after {:.2} s, settled after {:.2} s → {}",
-                first.as_secs_f64(),
-                settled.as_secs_f64(),
+                "first image after {:.2} s, settled after {:.2} s (viewport {} × {}) → {}",
+                t.first.as_secs_f64(),
+                t.settled.as_secs_f64(),
+                t.size.0,
+                t.size.1,
                 out.display()
             );
             Ok(())

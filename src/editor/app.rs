@@ -10,9 +10,13 @@ use egui::{Key, KeyboardShortcut, Modifiers, Rect, Sense, TextureHandle, Texture
 use super::history::{Edit, History};
 use super::inspector::{Change, Inspector};
 use super::placement;
-use super::preview::{Orbit, Preview, Rendered, Report, Request};
+use super::points::{self, Handle};
+use super::preview::{Look, Orbit, Preview, Quality, Rendered, Report, Request};
 use crate::scene::load::read_text;
 use crate::scene::{Scene, edit, parse_scene};
+
+/// How far from a control point (points) a drag picks it.
+pub const HANDLE_REACH: f32 = 8.0;
 
 /// What a click in the viewport does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,6 +52,12 @@ pub struct Editor {
     pub place_radius: f32,
     /// Height of placed anchors above the ground, metres.
     pub place_offset: f32,
+    /// What the viewport shows of its images.
+    pub look: Look,
+    /// The control point being dragged and where it is now.
+    point_drag: Option<(Handle, glam::Vec3)>,
+    /// The texture shows the latest image in this look.
+    texture_look: Option<Look>,
     preview: Option<Preview>,
     orbit: Option<Orbit>,
     shown: Option<Rendered>,
@@ -63,8 +73,8 @@ pub struct Editor {
 }
 
 /// What the last preview request asked for: the file's version, the view, the image size,
-/// and whether it was a coarse (dragging) request.
-type RequestKey = (u64, Option<Orbit>, (u32, u32), bool);
+/// whether it was a coarse (dragging) request, and whether it asked for normals.
+type RequestKey = (u64, Option<Orbit>, (u32, u32), bool, bool);
 
 /// The file's modification time and length: a change means someone wrote it.
 fn stamp(path: &Path) -> Option<(SystemTime, u64)> {
@@ -92,6 +102,9 @@ impl Editor {
             tool: Tool::View,
             place_radius: 20.0,
             place_offset: 0.0,
+            look: Look::Shaded,
+            point_drag: None,
+            texture_look: None,
             preview: None,
             orbit: None,
             shown: None,
@@ -180,6 +193,7 @@ impl Editor {
     /// being dragged.
     pub fn settled(&self) -> bool {
         !self.dragging_view
+            && self.point_drag.is_none()
             && self.preview_scene.is_none()
             && self
                 .shown
@@ -292,6 +306,11 @@ impl Editor {
                     .suffix(" m"),
             );
             ui.separator();
+            ui.label("View:");
+            ui.selectable_value(&mut self.look, Look::Shaded, "shaded");
+            ui.selectable_value(&mut self.look, Look::Cost, "cost");
+            ui.selectable_value(&mut self.look, Look::Normals, "normals");
+            ui.separator();
             super::palette::show(self, ui);
         });
         if let Some(e) = &self.load_error {
@@ -371,24 +390,37 @@ impl Editor {
                             last.1 = self.orbit;
                         }
                     }
-                    let f = &r.frame;
-                    let image = egui::ColorImage::from_rgba_unmultiplied(
-                        [f.width as usize, f.height as usize],
-                        &f.rgba,
-                    );
-                    match &mut self.texture {
-                        Some(t) => t.set(image, TextureOptions::LINEAR),
-                        None => {
-                            self.texture =
-                                Some(ctx.load_texture("viewport", image, TextureOptions::LINEAR))
-                        }
-                    }
                     self.render_error = None;
-                    self.shown = Some(r);
+                    self.shown = Some(*r);
+                    self.texture_look = None;
                 }
                 Report::Failed { message, .. } => self.render_error = Some(message),
             }
         }
+        if self.texture_look != Some(self.look)
+            && let (Some(r), Some(colours)) = (&self.shown, self.shown_colours())
+        {
+            let size = [r.frame.width as usize, r.frame.height as usize];
+            let image = egui::ColorImage::from_rgba_unmultiplied(size, &colours);
+            match &mut self.texture {
+                Some(t) => t.set(image, TextureOptions::LINEAR),
+                None => {
+                    self.texture = Some(ctx.load_texture("viewport", image, TextureOptions::LINEAR))
+                }
+            }
+            self.texture_look = Some(self.look);
+        }
+    }
+
+    /// The colours the viewport shows now (RGBA8, the latest image's size), in the
+    /// current look: what its texture holds.
+    pub fn shown_colours(&self) -> Option<Vec<u8>> {
+        let r = self.shown.as_ref()?;
+        Some(match (self.look, &r.normals) {
+            (Look::Cost, _) => r.frame.cost_rgba(),
+            (Look::Normals, Some(n)) => n.clone(),
+            _ => r.frame.rgba.clone(),
+        })
     }
 
     fn viewport_ui(&mut self, ui: &mut Ui) {
@@ -410,7 +442,9 @@ impl Editor {
                 ui.visuals().error_fg_color,
             );
         }
-        let moved = self.navigate(ui, &response, rect);
+        let dragging_point = self.drag_point(&response, rect);
+        self.draw_handles(&painter, rect);
+        let moved = !dragging_point && self.navigate(ui, &response, rect);
         if response.clicked()
             && self.tool != Tool::View
             && let Some(pos) = response.interact_pointer_pos()
@@ -424,6 +458,94 @@ impl Editor {
         );
         self.dragging_view = moved;
         self.request(size);
+    }
+
+    /// Where the viewport point `pos` is in the latest image, in its pixels.
+    fn image_xy(&self, rect: Rect, pos: egui::Pos2) -> Option<(f32, f32)> {
+        let f = &self.shown.as_ref()?.frame;
+        let u = (pos - rect.min) / rect.size();
+        Some((u.x * f.width as f32, u.y * f.height as f32))
+    }
+
+    /// Where the world point `p` is in the viewport, in points.
+    fn screen_pos(&self, rect: Rect, p: glam::Vec3) -> Option<egui::Pos2> {
+        let r = self.shown.as_ref()?;
+        let (x, y) = points::project(&r.camera, p)?;
+        let (w, h) = (r.frame.width as f32, r.frame.height as f32);
+        Some(rect.min + egui::vec2(x / w * rect.width(), y / h * rect.height()))
+    }
+
+    /// The control point within reach of the viewport point `pos`, the nearest.
+    fn handle_at(&self, rect: Rect, pos: egui::Pos2) -> Option<Handle> {
+        let r = self.shown.as_ref()?;
+        r.handles
+            .iter()
+            .filter_map(|h| Some((h, self.screen_pos(rect, h.world)?.distance(pos))))
+            .filter(|(_, d)| *d <= HANDLE_REACH)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(h, _)| h.clone())
+    }
+
+    /// Drags Feature Curve control points: a primary drag that starts on one moves it
+    /// (along the surface for a `Ground` point, parallel to the image for an `Abs` one),
+    /// and its release writes the volume's curves with the point moved, one edit. True
+    /// while a point is dragged.
+    fn drag_point(&mut self, r: &egui::Response, rect: Rect) -> bool {
+        if r.drag_started_by(egui::PointerButton::Primary)
+            && let Some(pos) = r.ctx.input(|i| i.pointer.press_origin())
+            && let Some(h) = self.handle_at(rect, pos)
+        {
+            let at = h.world;
+            self.point_drag = Some((h, at));
+        }
+        let Some((handle, at)) = self.point_drag.clone() else {
+            return false;
+        };
+        let pos = r.interact_pointer_pos();
+        let dropped = pos
+            .and_then(|p| self.image_xy(rect, p))
+            .zip(self.shown.as_ref())
+            .and_then(|((x, y), s)| points::drop_at(&handle, &s.frame, &s.camera, x, y));
+        let at = dropped.unwrap_or(at);
+        if r.drag_stopped() {
+            self.point_drag = None;
+            if at != handle.world
+                && let Some(scene) = self.scene.clone()
+                && let Some(edit) = points::edit(&scene, &handle, points::moved(&handle, at))
+                && self.apply(edit)
+            {
+                self.selected = Some(handle.volume.clone());
+            }
+        } else {
+            self.point_drag = Some((handle, at));
+        }
+        true
+    }
+
+    /// The control points over the image; the dragged one where it is now.
+    fn draw_handles(&self, painter: &egui::Painter, rect: Rect) {
+        let Some(r) = &self.shown else { return };
+        let dragged = self.point_drag.as_ref();
+        for h in r.handles.iter() {
+            let moving = dragged.filter(|(d, _)| d.volume == h.volume && d.slot == h.slot);
+            let world = moving.map_or(h.world, |(_, at)| *at);
+            let Some(p) = self.screen_pos(rect, world) else {
+                continue;
+            };
+            let (fill, radius) = match moving {
+                Some(_) => (egui::Color32::from_rgb(255, 200, 40), 6.0),
+                None if Some(h.volume.as_str()) == self.selected.as_deref() => {
+                    (egui::Color32::from_rgb(255, 120, 40), 5.0)
+                }
+                None => (egui::Color32::from_rgb(240, 240, 240), 4.0),
+            };
+            painter.circle(
+                p,
+                radius,
+                fill,
+                egui::Stroke::new(1.0, egui::Color32::BLACK),
+            );
+        }
     }
 
     /// Turns (left or right drag), pans (middle, or shift and left) and zooms (wheel, or
@@ -503,7 +625,8 @@ impl Editor {
             (None, Some(s)) => (s.clone(), self.file_version, self.dragging_view),
             (None, None) => return,
         };
-        let key = (version, self.orbit, size, coarse);
+        let normals = self.look == Look::Normals;
+        let key = (version, self.orbit, size, coarse, normals);
         if self.last_request == Some(key) {
             return;
         }
@@ -514,6 +637,7 @@ impl Editor {
             view: self.orbit,
             size,
             coarse,
+            normals,
         });
     }
 
@@ -556,7 +680,7 @@ impl Editor {
             let camera = orbit
                 .camera(w, h)
                 .ok_or_else(|| anyhow::anyhow!("no camera for this view"))?;
-            super::preview::draw(&scene, &compiled, &camera).write_png(out)?;
+            super::preview::draw(&scene, &compiled, &camera, Quality::Full).write_png(out)?;
             Ok(())
         }))
     }

@@ -9,8 +9,10 @@
 //! * [`app`]: the editor's state and frame; undo/redo; reloading on outside edits.
 //! * [`history`]: edits as `tree` operations, undo byte for byte.
 //! * [`outline`] and [`inspector`]: the tree and the selected node's typed parameters.
-//! * [`preview`]: the orbit camera and the progressive background renderer.
+//! * [`preview`]: the orbit camera and the progressive background renderer (fast pass,
+//!   then the full image band by band; cost and normal views).
 //! * [`placement`]: the surface point under a pixel, and the nodes placed there.
+//! * [`points`]: Feature Curve control points shown and dragged in the viewport.
 //! * [`palette`]: add, remove, duplicate, instance; mesh and picture exports.
 
 pub mod app;
@@ -19,6 +21,7 @@ pub mod inspector;
 pub mod outline;
 pub mod palette;
 pub mod placement;
+pub mod points;
 pub mod preview;
 
 use std::path::Path;
@@ -106,19 +109,34 @@ pub fn settle(
     }
 }
 
-/// `karstic edit TREE --screenshot OUT`: the editor's first settled frame as a PNG;
-/// returns the times from opening to the first image and to the settled one.
+/// What `karstic edit --screenshot` measured.
+#[derive(Clone, Copy, Debug)]
+pub struct Timings {
+    /// From opening to the first image.
+    pub first: Duration,
+    /// From opening to the settled image.
+    pub settled: Duration,
+    /// The viewport's image size, pixels.
+    pub size: (u32, u32),
+}
+
+/// `karstic edit TREE --screenshot OUT`: the editor's first settled frame as a PNG, and
+/// how long it took.
 pub fn screenshot(
     path: &Path,
     out: &Path,
     (width, height): (u32, u32),
     select: Option<&str>,
     timeout: Duration,
-) -> anyhow::Result<(Duration, Duration)> {
+) -> anyhow::Result<Timings> {
     let start = Instant::now();
     let mut harness = headless(path, width, height, select, timeout)?;
     let settled = start.elapsed();
     let first = harness.state().first_image().unwrap_or(settled);
+    let size = harness
+        .state()
+        .shown()
+        .map_or((0, 0), |s| (s.frame.width, s.frame.height));
     let image = harness
         .render()
         .map_err(|e| anyhow::anyhow!("rendering the editor: {e}"))?;
@@ -126,5 +144,9 @@ pub fn screenshot(
     image::DynamicImage::ImageRgba8(image)
         .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)?;
     crate::io::write_bytes_atomic(out, &png)?;
-    Ok((first, settled))
+    Ok(Timings {
+        first,
+        settled,
+        size,
+    })
 }

@@ -8,7 +8,7 @@ use egui::Ui;
 
 use super::app::Editor;
 use super::history::Edit;
-use super::placement::{fresh_name, parent_for, renamed, sphere_at};
+use super::placement::{duplicate, fresh_name, parent_for, sphere_at};
 use crate::scene::NodeSpec;
 
 /// Exports running in the background.
@@ -94,12 +94,11 @@ pub fn show(ed: &mut Editor, ui: &mut Ui) {
         .clicked()
         && let (Some(node), Some(name)) = (node, selected.as_deref())
     {
-        let copy = fresh_name(&scene, name);
         let into = parent_of(&scene.root, name)
             .and_then(NodeSpec::name)
             .map(str::to_string)
             .or(parent.clone());
-        if let (Some(text), Some(into)) = (renamed(node, &copy), into)
+        if let (Some((copy, text)), Some(into)) = (duplicate(&scene, node), into)
             && ed.apply(Edit::Add {
                 parent: into,
                 node: text,

@@ -61,8 +61,35 @@ pub fn sphere_at(name: &str, p: Vec3, radius: f32) -> String {
     )
 }
 
-/// `node`'s text with its name replaced by `name` (a duplicate of it).
-pub fn renamed(node: &NodeSpec, name: &str) -> Option<String> {
-    let text = crate::scene::load::to_ron_text(node);
-    crate::scene::splice::set_field(&text, &["name"], &format!("{name:?}")).ok()
+/// A copy of `node` for `scene`, as DCC tools duplicate: every named node of it renamed
+/// `name_k` with the smallest `k` that keeps all names of the scene unique, and the
+/// instances inside it that referred to a node of it referring to that node's copy.
+/// Returns the copy's name and its text.
+pub fn duplicate(scene: &Scene, node: &NodeSpec) -> Option<(String, String)> {
+    let named = scene.named();
+    let mut names = Vec::new();
+    node.walk(&mut |n, _| names.extend(n.name()));
+    let k = (1..).find(|k| {
+        names
+            .iter()
+            .all(|n| !named.contains_key(format!("{n}_{k}").as_str()))
+    })?;
+    fn rename(n: &mut NodeSpec, names: &[&str], k: usize) {
+        let fresh = |s: &str| names.contains(&s).then(|| format!("{s}_{k}"));
+        if let Some(new) = n.name().and_then(fresh) {
+            *n.name_mut() = Some(new);
+        }
+        if let NodeSpec::Instance(i) = n
+            && let Some(new) = fresh(&i.of)
+        {
+            i.of = new;
+        }
+        for c in n.children_mut() {
+            rename(c, names, k);
+        }
+    }
+    let mut copy = node.clone();
+    rename(&mut copy, &names, k);
+    let name = copy.name()?.to_string();
+    Some((name, crate::scene::load::to_ron_text(&copy)))
 }

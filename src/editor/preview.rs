@@ -1,22 +1,41 @@
 //! The viewport's renderer: the CPU tracer on a background thread, so the interface never
-//! waits for it. Each request is drawn coarse first (a quarter of the size) and, unless
-//! it is a drag's preview, refined to half and full size; a newer request abandons the
-//! refinement of an older one.
+//! waits for it.
+//!
+//! Each request is drawn first as a *fast pass*: at most an eighth of the size, without
+//! shadow rays or occlusion samples (a few hundredths of the full image's work), shown at
+//! once. While the view or a value is dragged, only fast passes are drawn, at the size
+//! that the last ones' cost per pixel says fits in [`DRAG_BUDGET`]. Otherwise the full
+//! image follows, shaded as `karstic render` shades it, band by band over the enlarged
+//! fast pass (so the refinement costs what the command line's render costs, plus the
+//! fast pass). A newer request stops the work under way before its next tile.
+//!
+//! The scene is compiled once per version and the compiled tree kept for every image of
+//! that version (views and sizes change nothing of it).
 
 use std::path::Path;
 use std::sync::Arc;
-use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::mpsc::{Receiver, Sender, channel};
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use indicatif::ProgressBar;
+use rayon::prelude::*;
 
-use crate::render::cpu::scene_camera;
+use super::points::{Handle, handles};
+use crate::render::cpu::{Bands, render_bands, scene_camera};
+use crate::render::trace::normal;
 use crate::render::{Camera, Frame, Method, RenderSettings, cpu};
 use crate::scene::{Compiled, Scene, compile_scene};
 
-/// Divisors of the image size drawn in turn: coarse, then refined.
-const STAGES: [u32; 3] = [4, 2, 1];
+/// The fast pass is at most this fraction of the image's side.
+pub const FAST_DIVISOR: u32 = 8;
+
+/// Time one preview may take while something is dragged: ten previews a second.
+pub const DRAG_BUDGET: Duration = Duration::from_millis(80);
+
+/// Shortest time between two partial images of a refinement sent to the interface.
+const PARTIAL_EVERY: Duration = Duration::from_millis(150);
 
 /// An orbit camera in the convention of DCC tools: it turns about a target point.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -82,6 +101,27 @@ impl Orbit {
     }
 }
 
+/// What the viewport shows of an image.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Look {
+    /// Shaded as `karstic render` shades it.
+    #[default]
+    Shaded,
+    /// Field evaluations per primary ray (`karstic render --cost`'s ramp).
+    Cost,
+    /// The surface's outward normal as a colour: `(n + 1) / 2` in RGB.
+    Normals,
+}
+
+/// How much of the shading an image gets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quality {
+    /// No shadow rays and no occlusion samples: the fast pass and the drag previews.
+    Fast,
+    /// As `karstic render`.
+    Full,
+}
+
 /// What to draw.
 #[derive(Clone, Debug)]
 pub struct Request {
@@ -93,8 +133,10 @@ pub struct Request {
     pub view: Option<Orbit>,
     /// Full image size, pixels.
     pub size: (u32, u32),
-    /// Only the coarse stage (while a value or the view is being dragged).
+    /// Only the fast pass (while a value or the view is being dragged).
     pub coarse: bool,
+    /// Whether the images should carry their normals' colours ([`Rendered::normals`]).
+    pub normals: bool,
 }
 
 /// A drawn image.
@@ -106,17 +148,24 @@ pub struct Rendered {
     pub camera: Camera,
     /// Of which request (its scene version).
     pub version: u64,
-    /// The last stage of its request: nothing more will come for it.
+    /// The last image of its request, complete: nothing more will come for it.
     pub settled: bool,
+    /// How it was shaded.
+    pub quality: Quality,
     /// Time from the request to this image.
     pub latency: Duration,
+    /// With [`Request::normals`]: the colours of the surface normals (RGBA8, the sky
+    /// black), for the rows drawn so far.
+    pub normals: Option<Vec<u8>>,
+    /// The Feature Curve control points of the scene, where they are in the world.
+    pub handles: Arc<Vec<Handle>>,
 }
 
 /// What the renderer reports.
 #[derive(Debug)]
 pub enum Report {
     /// An image.
-    Image(Rendered),
+    Image(Box<Rendered>),
     /// The scene could not be compiled, or no camera placed.
     Failed {
         /// Of which scene version.
@@ -128,28 +177,43 @@ pub enum Report {
 
 /// The background renderer.
 pub struct Preview {
-    requests: Sender<Request>,
+    requests: Sender<(u64, Request)>,
     reports: Receiver<Report>,
+    /// Counts the requests: the thread stops an image whose request is not the latest.
+    latest: Arc<AtomicU64>,
 }
 
 impl Preview {
     /// Starts the render thread for scenes of the tree file at `path` (asset paths are
     /// relative to its folder); `wake` is called after each report (a repaint request).
     pub fn start(path: &Path, wake: impl Fn() + Send + 'static) -> Self {
-        let (requests, incoming) = channel::<Request>();
+        let (requests, incoming) = channel();
         let (outgoing, reports) = channel();
-        let path = path.to_path_buf();
+        let latest = Arc::new(AtomicU64::new(0));
+        let server = Server {
+            path: path.to_path_buf(),
+            latest: latest.clone(),
+            out: outgoing,
+            wake: Box::new(wake),
+            ready: None,
+            per_pixel: Default::default(),
+        };
         std::thread::Builder::new()
             .name("karstic-preview".into())
-            .spawn(move || serve(&path, &incoming, &outgoing, &wake))
+            .spawn(move || server.serve(&incoming))
             .expect("spawning the preview thread");
-        Preview { requests, reports }
+        Preview {
+            requests,
+            reports,
+            latest,
+        }
     }
 
-    /// Asks for an image; older requests still queued are dropped.
+    /// Asks for an image; the work on older requests stops.
     pub fn request(&self, request: Request) {
+        let id = self.latest.fetch_add(1, Ordering::SeqCst) + 1;
         // The thread ends only with this handle, so the send cannot fail while it lives.
-        let _ = self.requests.send(request);
+        let _ = self.requests.send((id, request));
     }
 
     /// The reports that arrived since the last call.
@@ -158,90 +222,235 @@ impl Preview {
     }
 }
 
-/// The scene compiled for a version.
+/// The scene compiled for a version, with its control points.
 struct Ready {
     version: u64,
     compiled: Compiled,
+    handles: Arc<Vec<Handle>>,
 }
 
-fn serve(path: &Path, incoming: &Receiver<Request>, out: &Sender<Report>, wake: &dyn Fn()) {
-    let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mut ready: Option<Ready> = None;
-    let mut pending: Option<Request> = None;
-    loop {
-        let Some(mut req) = pending.take().or_else(|| incoming.recv().ok()) else {
-            return;
-        };
-        while let Ok(newer) = incoming.try_recv() {
-            req = newer;
+/// The render thread's state.
+struct Server {
+    path: std::path::PathBuf,
+    latest: Arc<AtomicU64>,
+    out: Sender<Report>,
+    wake: Box<dyn Fn() + Send>,
+    ready: Option<Ready>,
+    /// Seconds per pixel of the last fast pass.
+    per_pixel: std::cell::Cell<Option<f64>>,
+}
+
+/// The image size that fits `per_pixel` seconds per pixel in `budget`, for a `size`
+/// view: an integer fraction of it, at most [`FAST_DIVISOR`] of its side, at least one
+/// pixel.
+pub fn fast_size(size: (u32, u32), per_pixel: Option<f64>, budget: Duration) -> (u32, u32) {
+    let pixels = size.0 as f64 * size.1 as f64;
+    let want = per_pixel.map_or(1.0, |c| (pixels * c / budget.as_secs_f64()).sqrt());
+    let div = (want.ceil() as u32).max(FAST_DIVISOR);
+    ((size.0 / div).max(1), (size.1 / div).max(1))
+}
+
+impl Server {
+    fn serve(mut self, incoming: &Receiver<(u64, Request)>) {
+        while let Ok(mut next) = incoming.recv() {
+            while let Ok(newer) = incoming.try_recv() {
+                next = newer;
+            }
+            let (id, req) = next;
+            self.draw_request(id, &req);
         }
-        let asked = Instant::now();
-        if ready.as_ref().map(|r| r.version) != Some(req.version) {
-            ready = None;
-            match compile_scene(&req.scene, path, &base) {
-                Ok(compiled) => {
-                    ready = Some(Ready {
-                        version: req.version,
-                        compiled,
-                    })
-                }
-                Err(e) => {
-                    let message = crate::io::chain(&e);
-                    let _ = out.send(Report::Failed {
-                        version: req.version,
-                        message,
-                    });
-                    wake();
-                    continue;
-                }
+    }
+
+    fn send(&self, report: Report) {
+        let _ = self.out.send(report);
+        (self.wake)();
+    }
+
+    fn fail(&self, version: u64, message: String) {
+        self.send(Report::Failed { version, message });
+    }
+
+    /// The compiled scene of `req`'s version, compiled now if it is not yet.
+    fn compile(&mut self, req: &Request) -> bool {
+        if self.ready.as_ref().map(|r| r.version) == Some(req.version) {
+            return true;
+        }
+        self.ready = None;
+        let base = self
+            .path
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
+        match compile_scene(&req.scene, &self.path, &base) {
+            Ok(compiled) => {
+                let handles = Arc::new(handles(&req.scene, compiled.ground.as_deref()));
+                self.ready = Some(Ready {
+                    version: req.version,
+                    compiled,
+                    handles,
+                });
+                true
+            }
+            Err(e) => {
+                self.fail(req.version, crate::io::chain(&e));
+                false
             }
         }
-        let Some(r) = &ready else { continue };
-        let stages: &[u32] = if req.coarse { &STAGES[..1] } else { &STAGES };
-        for (k, div) in stages.iter().enumerate() {
-            let (w, h) = ((req.size.0 / div).max(1), (req.size.1 / div).max(1));
-            let camera = match req.view {
-                Some(o) => o.camera(w, h),
-                None => scene_camera(&req.scene, &r.compiled.tree, None, None, w, h).ok(),
-            };
-            let Some(camera) = camera else {
-                let _ = out.send(Report::Failed {
-                    version: req.version,
-                    message: "no camera can be placed for this view".into(),
-                });
-                wake();
-                break;
-            };
-            let frame = draw(&req.scene, &r.compiled, &camera);
-            let settled = k + 1 == stages.len();
-            let _ = out.send(Report::Image(Rendered {
+    }
+
+    fn draw_request(&mut self, id: u64, req: &Request) {
+        let asked = Instant::now();
+        if !self.compile(req) {
+            return;
+        }
+        let Some(r) = &self.ready else { return };
+        let stale = || self.latest.load(Ordering::SeqCst) != id;
+        let camera = |(w, h): (u32, u32)| match req.view {
+            Some(o) => o.camera(w, h),
+            None => scene_camera(&req.scene, &r.compiled.tree, None, None, w, h).ok(),
+        };
+        let (Some(small), Some(full)) = (
+            camera(fast_size(req.size, self.per_pixel.get(), DRAG_BUDGET)),
+            camera(req.size),
+        ) else {
+            self.fail(req.version, "no camera can be placed for this view".into());
+            return;
+        };
+        let image = |frame, camera, settled, quality, normals| {
+            Report::Image(Box::new(Rendered {
                 frame,
                 camera,
                 version: req.version,
                 settled,
+                quality,
                 latency: asked.elapsed(),
-            }));
-            wake();
-            match incoming.try_recv() {
-                Ok(newer) => {
-                    pending = Some(newer);
-                    break;
+                normals,
+                handles: r.handles.clone(),
+            }))
+        };
+        let started = Instant::now();
+        let fast = draw(&req.scene, &r.compiled, &small, Quality::Fast);
+        let pixels = small.width as f64 * small.height as f64;
+        self.per_pixel
+            .set(Some(started.elapsed().as_secs_f64() / pixels));
+        let mut frame = enlarge(&fast, full.width, full.height);
+        let fast_normals = req.normals.then(|| {
+            let mut n = vec![0u8; fast.rgba.len()];
+            normal_colours(&r.compiled.tree, &fast, &small, 0..fast.height, &mut n);
+            n
+        });
+        self.send(image(fast, small, false, Quality::Fast, fast_normals));
+        if req.coarse || stale() {
+            return;
+        }
+        let mut normals = req.normals.then(|| vec![0u8; frame.rgba.len()]);
+        let settings = settings(&req.scene, &r.compiled, &full, Quality::Full);
+        let bands = Bands {
+            rows: 1,
+            progress: &ProgressBar::hidden(),
+            stop: &stale,
+        };
+        let (mut sent, mut done) = (Instant::now(), 0);
+        let complete = render_bands(
+            &r.compiled.tree,
+            &full,
+            &settings,
+            &mut frame,
+            &bands,
+            &mut |f, rows| {
+                if let Some(n) = &mut normals {
+                    normal_colours(&r.compiled.tree, f, &full, done..rows, n);
                 }
-                Err(TryRecvError::Disconnected) => return,
-                Err(TryRecvError::Empty) => {}
-            }
+                done = rows;
+                if rows < f.height && sent.elapsed() >= PARTIAL_EVERY {
+                    sent = Instant::now();
+                    self.send(image(
+                        f.clone(),
+                        full,
+                        false,
+                        Quality::Full,
+                        normals.clone(),
+                    ));
+                }
+            },
+        );
+        if complete {
+            self.send(image(frame, full, true, Quality::Full, normals));
         }
     }
 }
 
-/// One image of the scene, shaded as `karstic render` shades it.
-pub fn draw(scene: &Scene, compiled: &Compiled, camera: &Camera) -> Frame {
-    let settings = RenderSettings::for_tree(
+/// `frame` enlarged to `width × height` by repeating its pixels.
+fn enlarge(frame: &Frame, width: u32, height: u32) -> Frame {
+    let n = width as usize * height as usize;
+    let (mut rgba, mut depth, mut steps) = (Vec::with_capacity(4 * n), vec![0.0; n], vec![0; n]);
+    rgba.resize(4 * n, 0);
+    for j in 0..height {
+        let sj = (j as u64 * frame.height as u64 / height as u64) as u32;
+        for i in 0..width {
+            let si = (i as u64 * frame.width as u64 / width as u64) as u32;
+            let (to, from) = ((j * width + i) as usize, (sj * frame.width + si) as usize);
+            rgba[4 * to..4 * to + 4].copy_from_slice(&frame.rgba[4 * from..4 * from + 4]);
+            depth[to] = frame.depth[from];
+            steps[to] = frame.steps[from];
+        }
+    }
+    Frame::new(width, height, rgba, depth, steps)
+}
+
+/// Writes into `out` (RGBA8, `frame`'s size) the colours `(n + 1) / 2` of the outward
+/// normals of `field` at the surface points of `frame`'s rows `rows` (drawn through
+/// `camera`); black where the rays missed.
+pub fn normal_colours(
+    field: &dyn crate::field::Field,
+    frame: &Frame,
+    camera: &Camera,
+    rows: std::ops::Range<u32>,
+    out: &mut [u8],
+) {
+    let w = frame.width as usize;
+    let (a, b) = (rows.start as usize * w, rows.end as usize * w);
+    out[4 * a..4 * b]
+        .par_chunks_mut(4)
+        .enumerate()
+        .for_each(|(k, px)| {
+            let at = a + k;
+            let t = frame.depth[at];
+            let c = if t.is_finite() {
+                let ray = camera.pixel_ray((at % w) as u32, (at / w) as u32);
+                let n = normal(field, ray.at(t));
+                let q = |x: f32| ((x + 1.0) * 127.5).round().clamp(0.0, 255.0) as u8;
+                [q(n.x), q(n.y), q(n.z), 255]
+            } else {
+                [0, 0, 0, 255]
+            };
+            px.copy_from_slice(&c);
+        });
+}
+
+/// The settings of an image of `quality` of the scene through `camera`.
+pub fn settings(
+    scene: &Scene,
+    compiled: &Compiled,
+    camera: &Camera,
+    quality: Quality,
+) -> RenderSettings {
+    let mut s = RenderSettings::for_tree(
         scene,
         &compiled.tree,
         compiled.ground.clone(),
         camera,
         Method::Segment,
     );
-    cpu::render(&compiled.tree, camera, &settings, &ProgressBar::hidden())
+    if quality == Quality::Fast {
+        s.shading.shadows = false;
+        s.shading.ao_radius = 0.0;
+    }
+    s
+}
+
+/// One image of the scene: with [`Quality::Full`], shaded as `karstic render` shades it.
+pub fn draw(scene: &Scene, compiled: &Compiled, camera: &Camera, quality: Quality) -> Frame {
+    let s = settings(scene, compiled, camera, quality);
+    cpu::render(&compiled.tree, camera, &s, &ProgressBar::hidden())
 }

@@ -106,41 +106,89 @@ pub fn render(
     settings: &RenderSettings,
     progress: &ProgressBar,
 ) -> Frame {
+    let n = camera.width as usize * camera.height as usize;
+    let mut frame = Frame::new(
+        camera.width,
+        camera.height,
+        vec![0u8; 4 * n],
+        vec![0f32; n],
+        vec![0u32; n],
+    );
+    let bands = Bands {
+        rows: camera.height.div_ceil(TILE),
+        progress,
+        stop: &|| false,
+    };
+    render_bands(field, camera, settings, &mut frame, &bands, &mut |_, _| {});
+    progress.finish_and_clear();
+    frame
+}
+
+/// How [`render_bands`] goes through the image: bands of `rows` rows of tiles, top to
+/// bottom; `progress` advances by one per tile; `stop` is asked before each tile (true:
+/// the rest of the image is not wanted).
+pub struct Bands<'a> {
+    /// Rows of tiles per band (at least 1).
+    pub rows: u32,
+    /// Advanced by one per tile.
+    pub progress: &'a ProgressBar,
+    /// True when the image is no longer wanted.
+    pub stop: &'a (dyn Fn() -> bool + Sync),
+}
+
+/// Renders `field` through `camera` into `frame` (of the camera's size) band by band, as
+/// [`render`] does, calling `band_done(frame, rows)` after each band with the image rows
+/// filled so far (`rows` from the top; the rows below keep what `frame` held, e.g. an
+/// enlarged coarse image). Returns false when `bands.stop` ended it early.
+pub fn render_bands(
+    field: &dyn Field,
+    camera: &Camera,
+    settings: &RenderSettings,
+    frame: &mut Frame,
+    bands: &Bands<'_>,
+    band_done: &mut dyn FnMut(&Frame, u32),
+) -> bool {
     let (w, h) = (camera.width, camera.height);
+    debug_assert_eq!((frame.width, frame.height), (w, h));
     let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
     let support = field.support();
-    let tiles: Vec<Vec<Pixel>> = (0..tx * ty)
-        .into_par_iter()
-        .map(|k| {
+    let per_band = bands.rows.max(1);
+    for band in (0..ty).step_by(per_band as usize) {
+        let rows = band..(band + per_band).min(ty);
+        let tiles: Vec<Option<Vec<Pixel>>> = (rows.start * tx..rows.end * tx)
+            .into_par_iter()
+            .map(|k| {
+                if (bands.stop)() {
+                    return None;
+                }
+                let (x0, y0) = ((k % tx) * TILE, (k / tx) * TILE);
+                let rays: Vec<PixelRay> = (y0..(y0 + TILE).min(h))
+                    .flat_map(|j| (x0..(x0 + TILE).min(w)).map(move |i| (i, j)))
+                    .map(|(i, j)| {
+                        let ray = camera.pixel_ray(i, j);
+                        (ray, ray.clip(&support), (i, j))
+                    })
+                    .collect();
+                let out = tile(field, &support, &rays, settings);
+                bands.progress.inc(1);
+                Some(out)
+            })
+            .collect();
+        for (k, tile) in (rows.start * tx..).zip(&tiles) {
+            let Some(tile) = tile else { return false };
             let (x0, y0) = ((k % tx) * TILE, (k / tx) * TILE);
-            let rays: Vec<PixelRay> = (y0..(y0 + TILE).min(h))
-                .flat_map(|j| (x0..(x0 + TILE).min(w)).map(move |i| (i, j)))
-                .map(|(i, j)| {
-                    let ray = camera.pixel_ray(i, j);
-                    (ray, ray.clip(&support), (i, j))
-                })
-                .collect();
-            let out = tile(field, &support, &rays, settings);
-            progress.inc(1);
-            out
-        })
-        .collect();
-    let n = w as usize * h as usize;
-    let (mut rgba, mut depth, mut steps) = (vec![0u8; 4 * n], vec![0f32; n], vec![0u32; n]);
-    for (k, tile) in tiles.iter().enumerate() {
-        let k = k as u32;
-        let (x0, y0) = ((k % tx) * TILE, (k / tx) * TILE);
-        let tw = (x0 + TILE).min(w) - x0;
-        for (q, px) in tile.iter().enumerate() {
-            let (i, j) = (x0 + q as u32 % tw, y0 + q as u32 / tw);
-            let at = (i + j * w) as usize;
-            rgba[4 * at..4 * at + 4].copy_from_slice(&px.rgba);
-            depth[at] = px.trace.t;
-            steps[at] = px.trace.steps;
+            let tw = (x0 + TILE).min(w) - x0;
+            for (q, px) in tile.iter().enumerate() {
+                let (i, j) = (x0 + q as u32 % tw, y0 + q as u32 / tw);
+                let at = (i + j * w) as usize;
+                frame.rgba[4 * at..4 * at + 4].copy_from_slice(&px.rgba);
+                frame.depth[at] = px.trace.t;
+                frame.steps[at] = px.trace.steps;
+            }
         }
+        band_done(frame, (rows.end * TILE).min(h));
     }
-    progress.finish_and_clear();
-    Frame::new(w, h, rgba, depth, steps)
+    true
 }
 
 /// The box of the segments `ray(t0)..ray(t1)` (each segment is the hull of its ends),

@@ -364,6 +364,25 @@ impl NodeSpec {
         }
     }
 
+    /// Mutable access to the node's name.
+    pub fn name_mut(&mut self) -> &mut Option<String> {
+        match self {
+            NodeSpec::Primitive(n) => &mut n.name,
+            NodeSpec::Heightfield(n) => &mut n.name,
+            NodeSpec::Elevation(n) => &mut n.name,
+            NodeSpec::FeatureVolume(n) => &mut n.name,
+            NodeSpec::Anchor(n) => &mut n.name,
+            NodeSpec::Blend(n) | NodeSpec::Union(n) | NodeSpec::Intersection(n) => &mut n.name,
+            NodeSpec::Difference(n) => &mut n.name,
+            NodeSpec::Transform(n) => &mut n.name,
+            NodeSpec::Instance(n) => &mut n.name,
+            NodeSpec::Warp(n) => &mut n.name,
+            NodeSpec::Replace(n) => &mut n.name,
+            NodeSpec::Landform(n) => &mut n.name,
+            NodeSpec::Erode(n) => &mut n.name,
+        }
+    }
+
     /// Children, in order (the base of a difference first).
     pub fn children(&self) -> Vec<&NodeSpec> {
         match self {

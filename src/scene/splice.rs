@@ -133,6 +133,12 @@ fn fields(text: &str, at: usize) -> Option<Body<'_>> {
     }
 }
 
+/// `text` without the `#![enable(…)]` attributes that open it: the value alone, as it
+/// is written inside a tree file.
+pub fn without_attributes(text: &str) -> &str {
+    &text[skip_attributes(text)..]
+}
+
 /// The start of the value after the `#![enable(…)]` attributes that open a RON text.
 fn skip_attributes(text: &str) -> usize {
     let mut i = skip_blank(text, 0);
