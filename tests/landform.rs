@@ -142,6 +142,47 @@ fn carve(base: &str, spheres: &[(Vec3, f32)], radius: f32) -> Tree {
     sf.compile().unwrap().tree
 }
 
+/// Floods the lattice `lo + step·(i, j, k)`, `n` points a side, through its `open` points
+/// (6-connected) from `start`, and returns the lowest z reached, stopping once at `until`.
+fn flood_deepest(
+    lo: Vec3,
+    step: f32,
+    n: [usize; 3],
+    start: [usize; 3],
+    open: impl Fn(Vec3) -> bool,
+    until: f32,
+) -> f32 {
+    let idx = |i: usize, j: usize, k: usize| i + n[0] * (j + n[1] * k);
+    let at = |i: usize, j: usize, k: usize| lo + Vec3::new(i as f32, j as f32, k as f32) * step;
+    let mut seen = vec![false; n[0] * n[1] * n[2]];
+    seen[idx(start[0], start[1], start[2])] = true;
+    let mut queue = VecDeque::from([(start[0], start[1], start[2])]);
+    let mut deepest = f32::INFINITY;
+    while let Some((i, j, k)) = queue.pop_front() {
+        deepest = deepest.min(at(i, j, k).z);
+        if deepest <= until {
+            break;
+        }
+        for (a, b, c) in [
+            (i.wrapping_sub(1), j, k),
+            (i + 1, j, k),
+            (i, j.wrapping_sub(1), k),
+            (i, j + 1, k),
+            (i, j, k.wrapping_sub(1)),
+            (i, j, k + 1),
+        ] {
+            if a >= n[0] || b >= n[1] || c >= n[2] || seen[idx(a, b, c)] {
+                continue;
+            }
+            seen[idx(a, b, c)] = true;
+            if open(at(a, b, c)) {
+                queue.push_back((a, b, c));
+            }
+        }
+    }
+    deepest
+}
+
 #[test]
 fn karst_is_connected_from_its_sink_to_deep_passages_and_spares_hard_rock() {
     let base = plateau();
@@ -167,39 +208,12 @@ fn karst_is_connected_from_its_sink_to_deep_passages_and_spares_hard_rock() {
     }
     // Flood the air from above the sink on a 1 m lattice: it reaches 15 m below the top.
     let (lo, n) = (Vec3::new(-56.0, -56.0, -40.0), [113usize, 113, 46]);
-    let idx = |i: usize, j: usize, k: usize| i + n[0] * (j + n[1] * k);
     let at = |i: usize, j: usize, k: usize| lo + Vec3::new(i as f32, j as f32, k as f32);
-    let mut seen = vec![false; n[0] * n[1] * n[2]];
-    let start = (56, 56, n[2] - 1);
-    assert!(carved.value(at(start.0, start.1, start.2)) < ISO);
-    let mut queue = VecDeque::from([start]);
-    seen[idx(start.0, start.1, start.2)] = true;
-    let mut deepest = f32::INFINITY;
-    while let Some((i, j, k)) = queue.pop_front() {
-        deepest = deepest.min(at(i, j, k).z);
-        let nbrs = [
-            (i.wrapping_sub(1), j, k),
-            (i + 1, j, k),
-            (i, j.wrapping_sub(1), k),
-            (i, j + 1, k),
-            (i, j, k.wrapping_sub(1)),
-            (i, j, k + 1),
-        ];
-        for (a, b, c) in nbrs {
-            if a >= n[0] || b >= n[1] || c >= n[2] || seen[idx(a, b, c)] {
-                continue;
-            }
-            // Inside the plateau's footprint only, so the flood cannot go round its sides.
-            let p = at(a, b, c);
-            if p.x.abs() > 50.0 || p.y.abs() > 50.0 {
-                continue;
-            }
-            seen[idx(a, b, c)] = true;
-            if carved.value(p) < ISO {
-                queue.push_back((a, b, c));
-            }
-        }
-    }
+    let start = [56, 56, n[2] - 1];
+    assert!(carved.value(at(start[0], start[1], start[2])) < ISO);
+    // Inside the plateau's footprint only, so the flood cannot go round its sides.
+    let open = |p: Vec3| p.x.abs() <= 50.0 && p.y.abs() <= 50.0 && carved.value(p) < ISO;
+    let deepest = flood_deepest(lo, 1.0, n, start, open, -15.0);
     assert!(deepest <= -15.0, "the flood stops at z = {deepest}");
 }
 
@@ -488,33 +502,7 @@ fn the_strata_islands_percolation_caves_open_at_their_sink_and_stay_in_soft_rock
         mouth.z >= top - 8.0 && (sk + 1..n[2]).all(|k| carved.value(at(si, sj, k)) < ISO),
         "the cave under the sink at {mouth} (top {top}) does not open to the sky"
     );
-    let idx = |i: usize, j: usize, k: usize| i + n[0] * (j + n[1] * k);
-    let mut seen = vec![false; n[0] * n[1] * n[2]];
-    seen[idx(si, sj, sk)] = true;
-    let mut queue = VecDeque::from([(si, sj, sk)]);
-    let mut deepest = f32::INFINITY;
-    while let Some((i, j, k)) = queue.pop_front() {
-        deepest = deepest.min(at(i, j, k).z);
-        if deepest <= top - 20.0 {
-            break;
-        }
-        for (a, b, c) in [
-            (i.wrapping_sub(1), j, k),
-            (i + 1, j, k),
-            (i, j.wrapping_sub(1), k),
-            (i, j + 1, k),
-            (i, j, k.wrapping_sub(1)),
-            (i, j, k + 1),
-        ] {
-            if a >= n[0] || b >= n[1] || c >= n[2] || seen[idx(a, b, c)] {
-                continue;
-            }
-            seen[idx(a, b, c)] = true;
-            if cave(at(a, b, c)) {
-                queue.push_back((a, b, c));
-            }
-        }
-    }
+    let deepest = flood_deepest(lo, step, n, [si, sj, sk], cave, top - 20.0);
     eprintln!(
         "{} spheres; top {top:.1} m, the flood reaches {deepest:.1} m",
         centres.len()
