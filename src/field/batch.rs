@@ -60,13 +60,8 @@ mod tests {
     fn batch_values_equal_point_values() {
         let mut b = TreeBuilder::new();
         let mut kids = Vec::new();
-        let mut s = 1u32;
-        let mut rnd = || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            s as f32 / u32::MAX as f32
-        };
+        let mut rng = crate::landform::Rng::new(1);
+        let mut rnd = || rng.unit();
         for _ in 0..64 {
             let c = Vec3::new(rnd() * 40.0, rnd() * 40.0, rnd() * 10.0);
             let spec: PrimitiveSpec = ron::from_str(&format!(

@@ -362,13 +362,8 @@ mod tests {
         for (lane, p) in prims.iter().enumerate() {
             g.set(lane, Round::of(p).expect("a round kernel").params());
         }
-        let mut s = 7u32;
-        let mut rnd = || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            s as f32 / u32::MAX as f32
-        };
+        let mut rng = crate::landform::Rng::new(7);
+        let mut rnd = || rng.unit();
         let mut points = vec![Vec3::new(1.5, -2.0, 7.0), Vec3::new(0.25, 0.5, -1.0)];
         points.push(Vec3::new(1.5, -2.0, 7.0 + 4.5));
         points.push(Vec3::new(0.25 + 5.1, 0.5, -1.0));
