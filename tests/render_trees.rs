@@ -300,3 +300,55 @@ fn nodes_without_an_encoding_are_named_errors() {
         "square cells",
     );
 }
+
+/// A render prunes its tree per tile ([`Field::prune`]); the pruned tree must hit the
+/// surfaces the whole tree hits. The job views of the tunnel and main-job scenes, traced
+/// with the render's own parameters through the whole tree (`cpu::depth`), agree with the
+/// render's depths: the same pixels hit, at the same distance within the tolerance.
+#[test]
+fn pruned_tiles_hit_where_the_whole_tree_does() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
+    for file in ["ridge_tunnel.ron", "jacksboro_caves.ron"] {
+        let path = dir.join(file);
+        let loaded = karstic::scene::load(&path).unwrap();
+        let compiled = loaded.compile().unwrap();
+        let tree = &compiled.tree;
+        let cam =
+            karstic::render::cpu::scene_camera(&loaded.scene, tree, None, None, 128, 72).unwrap();
+        let settings = RenderSettings::for_tree(
+            &loaded.scene,
+            tree,
+            compiled.ground.clone(),
+            &cam,
+            Method::Segment,
+        );
+        let frame = cpu::render(tree, &cam, &settings, &ProgressBar::hidden());
+        let (depth, _) = cpu::depth(tree, &cam, &settings.trace);
+        let mut worst = (0.0f32, 0u32);
+        let mut off = 0;
+        for (k, (&a, &b)) in frame.depth.iter().zip(&depth).enumerate() {
+            let tol = 4.0 * (settings.trace.epsilon + settings.trace.cone * a.min(b));
+            let d = if a.is_finite() && b.is_finite() {
+                (a - b).abs()
+            } else if a.is_finite() || b.is_finite() {
+                f32::INFINITY
+            } else {
+                0.0
+            };
+            if d > tol {
+                off += 1;
+            }
+            if d > worst.0 {
+                worst = (d, k as u32);
+            }
+        }
+        let k = worst.1 as usize;
+        assert!(
+            off == 0,
+            "{file}: {off} pixels off; worst at pixel {k}: render {} m, whole tree {} m",
+            frame.depth[k],
+            depth[k]
+        );
+        assert!(frame.depth.iter().filter(|t| t.is_finite()).count() > depth.len() / 2);
+    }
+}
