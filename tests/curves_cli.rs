@@ -168,3 +168,41 @@ fn meshes_tree_files_and_bare_volumes() {
         .unwrap();
     assert!(String::from_utf8_lossy(&out.stderr).contains("unknown output type"));
 }
+
+/// The pipeline's volume is kept in the disk cache (`KARSTIC_CACHE`) and read back by the
+/// next run bit for bit; a damaged cache file is a miss: recomputed and rewritten.
+#[test]
+fn volumes_are_cached_on_disk_and_read_back_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let cache = dir.path().join("cache");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/curves/cliff.ron");
+    let build = |out: &str| {
+        let npy = dir.path().join(out);
+        stdout_of(
+            karstic()
+                .env("KARSTIC_CACHE", &cache)
+                .args(["curves", "build"])
+                .arg(&scene)
+                .arg("-o")
+                .arg(&npy),
+        );
+        std::fs::read(npy).unwrap()
+    };
+    let files = || -> Vec<std::path::PathBuf> {
+        std::fs::read_dir(&cache)
+            .map(|d| d.map(|e| e.unwrap().path()).collect())
+            .unwrap_or_default()
+    };
+    let first = build("a.npy");
+    let stored = files();
+    assert_eq!(stored.len(), 1, "{stored:?}");
+    assert!(stored[0].extension().is_some_and(|x| x == "kvol"));
+    let size = std::fs::metadata(&stored[0]).unwrap().len();
+    assert!(first == build("b.npy"), "the cached volume differs");
+    std::fs::write(&stored[0], b"karstic-volume1\ntruncated").unwrap();
+    assert!(first == build("c.npy"), "the recomputed volume differs");
+    assert_eq!(files(), stored);
+    // Rewritten whole (the stage times in its statistics may print a digit more or less).
+    let again = std::fs::metadata(&stored[0]).unwrap().len();
+    assert!(again.abs_diff(size) < 64, "{again} bytes, first {size}");
+}

@@ -2,6 +2,7 @@
 //! primitive it produces ([`SField`]).
 
 pub mod diffuse;
+pub mod disk_cache;
 pub mod expand;
 pub mod extract;
 pub mod pipeline;

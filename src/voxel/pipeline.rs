@@ -17,8 +17,10 @@ use std::time::{Duration, Instant};
 
 use glam::{IVec3, Vec2, Vec3};
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 use super::diffuse::{Sweeps, diffuse_bitangents, diffuse_noise, diffuse_normals};
+use super::disk_cache;
 use super::propagate::{relax, streamlines, waves};
 use super::smooth::smooth;
 use super::sparse::{BRICK, BRICK_NODES, Bricks, LevelGeom, local, prolong};
@@ -71,7 +73,7 @@ const GUIDE_VOXELS: f32 = 1.5;
 const TUNNEL_VOXELS: f32 = 3.0;
 
 /// What happened on one level.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct LevelStats {
     /// Level number (0 = finest).
     pub level: u32,
@@ -104,7 +106,7 @@ pub struct LevelStats {
 }
 
 /// Wall-clock time per stage, summed over levels (the thesis's Table 7.2 rows).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct StageTimes {
     /// Proxy meshes of the primitives.
     pub proxy: Duration,
@@ -139,7 +141,7 @@ impl StageTimes {
 }
 
 /// Statistics of a run.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Stats {
     /// Per level, coarsest first.
     pub levels: Vec<LevelStats>,
@@ -157,7 +159,8 @@ pub struct Stats {
 }
 
 /// Per-brick bounds of the stored channels, for intervals and Lipschitz bounds.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub struct BrickBounds {
     /// `[min, max]` of S.
     pub s: [f32; 2],
@@ -700,8 +703,9 @@ type Cache = Mutex<Vec<(u64, Arc<Volume>)>>;
 static CACHE: Cache = Mutex::new(Vec::new());
 const CACHE_ENTRIES: usize = 8;
 
-/// [`run`], memoised in-process by the content hash of the primitives and the
-/// parameters. Returns the volume and whether it came from the cache.
+/// [`run`], memoised by the content hash of the primitives and the parameters: in-process,
+/// then on disk ([`super::disk_cache`]). Returns the volume and whether it came from a
+/// cache.
 pub fn run_cached(features: &Features, p: &Params) -> Result<(Arc<Volume>, bool), CurveError> {
     let key = run_key(features, p);
     if let Some((_, v)) = CACHE
@@ -712,11 +716,19 @@ pub fn run_cached(features: &Features, p: &Params) -> Result<(Arc<Volume>, bool)
     {
         return Ok((v.clone(), true));
     }
-    let v = Arc::new(run(features, p)?);
+    let disk = disk_cache::key(key);
+    let (v, cached) = match disk_cache::load(disk, p.max_memory) {
+        Some(v) => (Arc::new(v), true),
+        None => {
+            let v = run(features, p)?;
+            disk_cache::store(disk, &v);
+            (Arc::new(v), false)
+        }
+    };
     let mut c = CACHE.lock().expect("cache lock");
     if c.len() >= CACHE_ENTRIES {
         c.remove(0);
     }
     c.push((key, v.clone()));
-    Ok((v, false))
+    Ok((v, cached))
 }
