@@ -2,7 +2,7 @@
 //! tree file, which stays the truth (every edit is written, then the file read back).
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 use std::time::{Duration, Instant, SystemTime};
 
 use egui::{Key, KeyboardShortcut, Modifiers, Rect, Sense, TextureHandle, TextureOptions, Ui};
@@ -58,7 +58,9 @@ pub struct Editor {
     point_drag: Option<(Handle, glam::Vec3)>,
     /// The texture shows the latest image in this look.
     texture_look: Option<Look>,
-    preview: Option<Preview>,
+    preview: Preview,
+    /// The context the preview thread wakes (known from the first frame on).
+    wake: Arc<OnceLock<egui::Context>>,
     orbit: Option<Orbit>,
     shown: Option<Rendered>,
     texture: Option<TextureHandle>,
@@ -86,6 +88,14 @@ impl Editor {
     /// Opens the tree file at `path`. A file the loader refuses still opens: its error is
     /// shown, with its line and column, until the file is fixed.
     pub fn open(path: &Path) -> Self {
+        // The render thread starts now and compiles the scene while the window opens.
+        let wake: Arc<OnceLock<egui::Context>> = Arc::default();
+        let woken = wake.clone();
+        let preview = Preview::start(path, move || {
+            if let Some(ctx) = woken.get() {
+                ctx.request_repaint();
+            }
+        });
         let mut e = Editor {
             path: path.to_path_buf(),
             text: String::new(),
@@ -105,7 +115,8 @@ impl Editor {
             look: Look::Shaded,
             point_drag: None,
             texture_look: None,
-            preview: None,
+            preview,
+            wake,
             orbit: None,
             shown: None,
             texture: None,
@@ -131,10 +142,12 @@ impl Editor {
         });
         match parsed {
             Ok(s) => {
-                self.scene = Some(Arc::new(s));
+                let s = Arc::new(s);
+                self.scene = Some(s.clone());
                 self.load_error = None;
                 self.version += 1;
                 self.file_version = self.version;
+                self.preview.prepare(s, self.version);
             }
             Err(e) => self.load_error = Some(crate::io::chain(&e)),
         }
@@ -240,10 +253,7 @@ impl Editor {
     /// One frame of the editor.
     pub fn ui(&mut self, ui: &mut Ui) {
         let ctx = ui.ctx().clone();
-        if self.preview.is_none() {
-            let wake = ctx.clone();
-            self.preview = Some(Preview::start(&self.path, move || wake.request_repaint()));
-        }
+        let _ = self.wake.set(ctx.clone());
         self.watch();
         self.receive(&ctx);
         self.shortcuts(&ctx);
@@ -375,7 +385,7 @@ impl Editor {
 
     /// Takes the renderer's reports.
     fn receive(&mut self, ctx: &egui::Context) {
-        let Some(preview) = &self.preview else { return };
+        let preview = &self.preview;
         for report in preview.poll() {
             match report {
                 Report::Image(r) => {
@@ -619,7 +629,7 @@ impl Editor {
 
     /// Asks the renderer for the current scene and view, when either changed.
     fn request(&mut self, size: (u32, u32)) {
-        let Some(preview) = &self.preview else { return };
+        let preview = &self.preview;
         let (scene, version, coarse) = match (&self.preview_scene, &self.scene) {
             (Some((s, v)), _) => (s.clone(), *v, true),
             (None, Some(s)) => (s.clone(), self.file_version, self.dragging_view),

@@ -175,9 +175,18 @@ pub enum Report {
     },
 }
 
+/// What the render thread is asked for.
+enum Job {
+    /// Compile a scene version ahead of its first image (the file just opened or
+    /// reloaded: the window's first frame need not wait for it).
+    Compile(Arc<Scene>, u64),
+    /// Draw, as request number `.0`.
+    Draw(u64, Request),
+}
+
 /// The background renderer.
 pub struct Preview {
-    requests: Sender<(u64, Request)>,
+    requests: Sender<Job>,
     reports: Receiver<Report>,
     /// Counts the requests: the thread stops an image whose request is not the latest.
     latest: Arc<AtomicU64>,
@@ -213,7 +222,14 @@ impl Preview {
     pub fn request(&self, request: Request) {
         let id = self.latest.fetch_add(1, Ordering::SeqCst) + 1;
         // The thread ends only with this handle, so the send cannot fail while it lives.
-        let _ = self.requests.send((id, request));
+        let _ = self.requests.send(Job::Draw(id, request));
+    }
+
+    /// Compiles `scene` (as `version`) now, so that its first image only traces: the
+    /// editor calls it as soon as a file is read, before its window shows a frame. A
+    /// compilation error is reported as for a drawing.
+    pub fn prepare(&self, scene: Arc<Scene>, version: u64) {
+        let _ = self.requests.send(Job::Compile(scene, version));
     }
 
     /// The reports that arrived since the last call.
@@ -251,13 +267,17 @@ pub fn fast_size(size: (u32, u32), per_pixel: Option<f64>, budget: Duration) -> 
 }
 
 impl Server {
-    fn serve(mut self, incoming: &Receiver<(u64, Request)>) {
+    fn serve(mut self, incoming: &Receiver<Job>) {
         while let Ok(mut next) = incoming.recv() {
             while let Ok(newer) = incoming.try_recv() {
                 next = newer;
             }
-            let (id, req) = next;
-            self.draw_request(id, &req);
+            match next {
+                Job::Compile(scene, version) => {
+                    self.compile(&scene, version);
+                }
+                Job::Draw(id, req) => self.draw_request(id, &req),
+            }
         }
     }
 
@@ -270,9 +290,9 @@ impl Server {
         self.send(Report::Failed { version, message });
     }
 
-    /// The compiled scene of `req`'s version, compiled now if it is not yet.
-    fn compile(&mut self, req: &Request) -> bool {
-        if self.ready.as_ref().map(|r| r.version) == Some(req.version) {
+    /// The compiled scene of `version`, compiled now if it is not yet.
+    fn compile(&mut self, scene: &Scene, version: u64) -> bool {
+        if self.ready.as_ref().map(|r| r.version) == Some(version) {
             return true;
         }
         self.ready = None;
@@ -281,18 +301,18 @@ impl Server {
             .parent()
             .map(Path::to_path_buf)
             .unwrap_or_default();
-        match compile_scene(&req.scene, &self.path, &base) {
+        match compile_scene(scene, &self.path, &base) {
             Ok(compiled) => {
-                let handles = Arc::new(handles(&req.scene, compiled.ground.as_deref()));
+                let handles = Arc::new(handles(scene, compiled.ground.as_deref()));
                 self.ready = Some(Ready {
-                    version: req.version,
+                    version,
                     compiled,
                     handles,
                 });
                 true
             }
             Err(e) => {
-                self.fail(req.version, crate::io::chain(&e));
+                self.fail(version, crate::io::chain(&e));
                 false
             }
         }
@@ -300,7 +320,7 @@ impl Server {
 
     fn draw_request(&mut self, id: u64, req: &Request) {
         let asked = Instant::now();
-        if !self.compile(req) {
+        if !self.compile(&req.scene, req.version) {
             return;
         }
         let Some(r) = &self.ready else { return };
