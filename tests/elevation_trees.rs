@@ -207,6 +207,58 @@ fn batch_heights_match_point_queries() {
     }
 }
 
+/// A blend large enough for its grid index — flat discs, multifractal discs, a nested
+/// blend — in batches (four points at a time on SIMD lanes, over the index's cells) is bit
+/// for bit the sums over every child in order, at points inside, outside and not finite.
+#[test]
+fn a_large_blend_in_batches_is_the_sum_over_every_child_bit_for_bit() {
+    use karstic::elevation::geometry::rect_contains;
+    use karstic::elevation::multifractal::{ElevationFn, Kind, Multifractal};
+    use karstic::elevation::primitive::{Disc, Primitive};
+    let mut rng = Rng(16);
+    let mut disc = |k: u32| {
+        let centre = Vec2::new(rng.range(0.0, 1000.0), rng.range(0.0, 1000.0));
+        let radius = rng.range(40.0, 160.0);
+        let elevation = match k % 5 {
+            0 => ElevationFn::Fractal(Multifractal::new(Kind::Fbm, 50.0, 80.0, 90.0, 3, k)),
+            1 => ElevationFn::Fractal(Multifractal::new(Kind::Ridged, 60.0, 90.0, 70.0, 5, k)),
+            _ => ElevationFn::Constant(rng.range(-20.0, 200.0)),
+        };
+        Node::primitive(Primitive::Disc(Disc {
+            centre,
+            radius,
+            elevation,
+        }))
+    };
+    let mut children: Vec<Node> = (0..60).map(&mut disc).collect();
+    children.insert(17, Node::blend(30.0, (60..64).map(&mut disc).collect()));
+    let base = 40.0;
+    let tree = ElevationTree::new(Node::blend(base, children.clone()));
+    let mut pts: Vec<Vec2> = (0..20_000)
+        .map(|_| Vec2::new(rng.range(-200.0, 1200.0), rng.range(-200.0, 1200.0)))
+        .collect();
+    pts.extend([Vec2::NAN, Vec2::new(f32::INFINITY, 5.0), Vec2::splat(1e9)]);
+    let mut out = vec![0.0; pts.len()];
+    tree.heights(&pts, &Lod::FULL, &mut out);
+    let mut weighed = 0;
+    for (p, h) in pts.iter().zip(&out) {
+        let (mut s, mut fs) = (0.0f32, 0.0f32);
+        for c in &children {
+            let x = c.eval(*p, &Lod::FULL);
+            if rect_contains(&c.support(), *p) && x.a > 0.0 {
+                s += x.a;
+                fs += x.a * x.f;
+            }
+        }
+        weighed += usize::from(s > 0.0);
+        let w = s.max(0.5);
+        let f = (fs + (w - s) * base) / w;
+        assert_eq!(h.to_bits(), f.to_bits(), "at {p}: {h} vs {f}");
+        assert_eq!(tree.height(*p, &Lod::FULL).to_bits(), f.to_bits(), "at {p}");
+    }
+    assert!(weighed > 10_000, "{weighed} points weighed");
+}
+
 /// A random box around the leaf's support: sizes from a fraction of a metre to a large part.
 fn random_box(f: &ElevationField, rng: &mut Rng) -> Aabb {
     let s = f.support().dilate(20.0);

@@ -1,6 +1,9 @@
 //! A uniform grid over the supports of a blend's children (Génevaux et al. 2015 §5.1: a
 //! blend "combined to a grid acceleration structure"): a point query visits only the
-//! children whose support box covers its cell.
+//! children whose support box covers its cell — for a disc, only the cells its disc
+//! meets.
+
+use std::ops::Range;
 
 use glam::Vec2;
 
@@ -24,8 +27,11 @@ pub struct GridIndex {
 
 impl GridIndex {
     /// An index of `boxes` (finite, non-empty; one per child), or `None` when they are
-    /// too few or not finite.
-    pub fn new(boxes: &[Rect]) -> Option<GridIndex> {
+    /// too few or not finite. `discs[k]` is child `k`'s disc `(centre, radius)` when its
+    /// weight is 0 off that disc: the child is then listed only in the cells the disc
+    /// meets (with a margin, so a point of a cell it is not listed in is far enough off
+    /// the disc that its weight evaluates to exactly 0).
+    pub fn new(boxes: &[Rect], discs: &[Option<(Vec2, f32)>]) -> Option<GridIndex> {
         if boxes.len() < 8
             || boxes
                 .iter()
@@ -63,12 +69,30 @@ impl GridIndex {
             items: Vec::new(),
             count: boxes.len(),
         };
+        // How far a point of a cell may lie outside the cell's rectangle, with the f32
+        // roundings of its cell's index and of its offset from a disc's centre.
+        let reach = lo.abs().max(hi.abs()).max_element() as f64;
+        let margin = 1e-3 * cell as f64 + 1e-5 * reach;
         let mut per_cell: Vec<Vec<u32>> = vec![Vec::new(); dims[0] * dims[1]];
         for (k, b) in boxes.iter().enumerate() {
             let (i0, i1, j0, j1) = index.cells(b)?;
+            let disc = discs.get(k).copied().flatten();
             for j in j0..=j1 {
                 for i in i0..=i1 {
-                    per_cell[i + dims[0] * j].push(k as u32);
+                    let meets = disc.is_none_or(|(c, r)| {
+                        let corner = |i: usize, o: f32| o as f64 + i as f64 * cell as f64;
+                        let (x0, y0) = (corner(i, lo.x), corner(j, lo.y));
+                        let (x1, y1) = (x0 + cell as f64, y0 + cell as f64);
+                        let (cx, cy) = (c.x as f64, c.y as f64);
+                        let dx = (x0 - cx).max(cx - x1).max(0.0);
+                        let dy = (y0 - cy).max(cy - y1).max(0.0);
+                        let r = r.abs() as f64;
+                        // NaN radii and centres stay listed.
+                        !((dx * dx + dy * dy).sqrt() > r * (1.0 + 1e-5) + 2.0 * margin)
+                    });
+                    if meets {
+                        per_cell[i + dims[0] * j].push(k as u32);
+                    }
                 }
             }
         }
@@ -100,16 +124,28 @@ impl GridIndex {
     /// The children whose support may hold `p`.
     #[inline]
     pub fn at(&self, p: Vec2) -> &[u32] {
+        &self.items[self.span(p)]
+    }
+
+    /// Where [`GridIndex::at`]'s children lie in [`GridIndex::items`].
+    #[inline]
+    pub fn span(&self, p: Vec2) -> Range<usize> {
         let u = (p - self.origin) * self.inv_cell;
         if !(u.x >= 0.0 && u.y >= 0.0) {
-            return &[];
+            return 0..0;
         }
         let (i, j) = (u.x as usize, u.y as usize);
         if i >= self.dims[0] || j >= self.dims[1] {
-            return &[];
+            return 0..0;
         }
         let k = i + self.dims[0] * j;
-        &self.items[self.offsets[k] as usize..self.offsets[k + 1] as usize]
+        self.offsets[k] as usize..self.offsets[k + 1] as usize
+    }
+
+    /// The cells' lists of children, one after the other.
+    #[inline]
+    pub fn items(&self) -> &[u32] {
+        &self.items
     }
 
     /// The children whose support may meet `r`, sorted, without repeats (every child when

@@ -83,11 +83,7 @@ impl ElevationTree {
     pub fn heights(&self, points: &[Vec2], lod: &Lod, out: &mut [f32]) {
         out.par_chunks_mut(BATCH)
             .zip(points.par_chunks(BATCH))
-            .for_each(|(o, p)| {
-                for (o, p) in o.iter_mut().zip(p) {
-                    *o = self.height(*p, lod);
-                }
-            });
+            .for_each(|(o, p)| self.root.heights(p, lod, o));
     }
 
     /// Bounds of `f` and `α` over `r`.

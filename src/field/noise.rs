@@ -15,7 +15,7 @@
 //! whole lattice and `n` is C¹. With `0.6` it jumps on simplex faces and has no Lipschitz
 //! constant at all. The test `four_corners_equal_the_whole_lattice` checks this.
 
-use glam::{BVec4A, Mat4, Vec3, Vec4};
+use glam::{BVec4A, Vec3, Vec4};
 use serde::de::Error as _;
 use serde::{Deserialize, Deserializer, Serialize};
 
@@ -166,24 +166,11 @@ fn simplex_impl<const GRAD: bool>(seed: u32, p: Vec3) -> (f32, Vec3) {
     (SIMPLEX_SCALE * value, SIMPLEX_SCALE * grad)
 }
 
-/// [`GRADIENTS`] as SIMD rows (the fourth lane 0), for [`simplex4`].
-const GRADIENT_ROWS: [Vec4; 16] = {
-    let mut rows = [Vec4::ZERO; 16];
-    let mut r = 0;
-    while r < 16 {
-        let g = GRADIENTS[r];
-        rows[r] = Vec4::new(g[0], g[1], g[2], 0.0);
-        r += 1;
-    }
-    rows
-};
-
 /// Four noises at once, one per lane: lane `l` is `simplex(seeds[l], (x, y, z)[l])` bit for
 /// bit — the same operations in the same order on the lanes of SIMD registers (glam's
 /// `Vec4`; no fused multiply-add), the simplex's corners chosen by masks. The octaves of a
-/// multifractal are independent noises, evaluated this way. The lattice hash stays per
-/// lane (the baseline x86-64 has no 32-bit vector multiply); `(i + 1)·m = i·m + m` spares
-/// its products by the corner offsets.
+/// multifractal are independent noises, evaluated this way. The lattice hash and the
+/// gradients' dot products run on the lanes too ([`Lattice4`]).
 #[inline(always)]
 fn simplex4(seeds: [u32; 4], x: Vec4, y: Vec4, z: Vec4) -> Vec4 {
     let s = (x + y + z) * F3;
@@ -198,30 +185,156 @@ fn simplex4(seeds: [u32; 4], x: Vec4, y: Vec4, z: Vec4) -> Vec4 {
         [xy | xz, !xy | yz, !yz | !xz],
         [yes; 3],
     ];
-    // Per axis and lane, the hash's products for the cell's two lattice planes.
-    let products: [[[u32; 2]; 4]; 3] = [(i, HASH_X), (j, HASH_Y), (k, HASH_Z)].map(|(v, m)| {
-        v.to_array().map(|f| {
-            let p = (f as i32 as u32).wrapping_mul(m);
-            [p, p.wrapping_add(m)]
-        })
-    });
+    let lattice = Lattice4::new(seeds, [i, j, k]);
     let mut value = Vec4::ZERO;
     for (c, o) in corners.iter().enumerate() {
         let off = o.map(|m| Vec4::select(m, Vec4::ONE, Vec4::ZERO));
         let g = Vec4::splat(c as f32 * G3);
         let d: [Vec4; 3] = std::array::from_fn(|a| d0[a] - off[a] + g);
         let a = (R2 - (d[0] * d[0] + d[1] * d[1] + d[2] * d[2])).max(Vec4::ZERO);
-        let bits = o.map(|m| m.bitmask());
-        let rows: [Vec4; 4] = std::array::from_fn(|l| {
-            let p = |a: usize| products[a][l][(bits[a] >> l) as usize & 1];
-            GRADIENT_ROWS[(mix32(seeds[l] ^ p(0) ^ p(1) ^ p(2)) >> 28) as usize]
-        });
-        let gt = Mat4::from_cols(rows[0], rows[1], rows[2], rows[3]).transpose();
-        let gd = gt.x_axis * d[0] + gt.y_axis * d[1] + gt.z_axis * d[2];
+        let gd = lattice.dot(*o, d);
         let a2 = a * a;
         value += a2 * a2 * gd;
     }
     SIMPLEX_SCALE * value
+}
+
+/// The lattice hash of [`gradient`] for four lanes: per axis and lane, the hash's product
+/// of the cell's lower lattice plane (`(i + 1)·m = i·m + m` gives the upper one).
+#[cfg(target_arch = "x86_64")]
+struct Lattice4 {
+    seeds: std::arch::x86_64::__m128i,
+    products: [std::arch::x86_64::__m128i; 3],
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Lattice4 {
+    /// The multipliers of the axes, per lane.
+    const MULTIPLIERS: [u32; 3] = [HASH_X, HASH_Y, HASH_Z];
+
+    /// The lanes' seeds and cells (`ijk`, integer floats).
+    #[inline(always)]
+    fn new(seeds: [u32; 4], ijk: [Vec4; 3]) -> Lattice4 {
+        use std::arch::x86_64::*;
+        // SAFETY: SSE2 is part of the x86-64 baseline; no memory is accessed.
+        unsafe {
+            let mut products = [_mm_setzero_si128(); 3];
+            for (a, v) in ijk.into_iter().enumerate() {
+                // `v as i32` as Rust converts: saturating, NaN to 0 (the instruction gives
+                // i32::MIN for every float out of range and for NaN).
+                let f = __m128::from(v);
+                let t = _mm_cvttps_epi32(f);
+                let over = _mm_castps_si128(_mm_cmpge_ps(f, _mm_set1_ps(2_147_483_648.0)));
+                let t = _mm_or_si128(
+                    _mm_andnot_si128(over, t),
+                    _mm_and_si128(over, _mm_set1_epi32(i32::MAX)),
+                );
+                let t = _mm_and_si128(t, _mm_castps_si128(_mm_cmpord_ps(f, f)));
+                products[a] = mul32(t, Self::MULTIPLIERS[a]);
+            }
+            Lattice4 {
+                seeds: _mm_set_epi32(
+                    seeds[3] as i32,
+                    seeds[2] as i32,
+                    seeds[1] as i32,
+                    seeds[0] as i32,
+                ),
+                products,
+            }
+        }
+    }
+
+    /// `g · d` per lane for the corner `o` (per axis, the lanes that step to the upper
+    /// plane), `g` the gradient the hash picks: `±u ± v` with `u`, `v` two components of
+    /// `d`: [`GRADIENTS`]' row times `d` exactly (every row is two `±1` and a `0`; only
+    /// the sign of a zero product can differ, and it does not reach the noise's sum,
+    /// which starts at `+0`).
+    #[inline(always)]
+    fn dot(&self, o: [BVec4A; 3], d: [Vec4; 3]) -> Vec4 {
+        use std::arch::x86_64::*;
+        // SAFETY: SSE2 is part of the x86-64 baseline; no memory is accessed.
+        unsafe {
+            let mut h = self.seeds;
+            for ((up, p), m) in o.into_iter().zip(self.products).zip(Self::MULTIPLIERS) {
+                let up = _mm_castps_si128(__m128::from(up));
+                let m = _mm_set1_epi32(m as i32);
+                h = _mm_xor_si128(h, _mm_add_epi32(p, _mm_and_si128(up, m)));
+            }
+            // mix32, on the lanes.
+            h = _mm_xor_si128(h, _mm_srli_epi32::<16>(h));
+            h = mul32(h, 0x7feb_352d);
+            h = _mm_xor_si128(h, _mm_srli_epi32::<15>(h));
+            h = mul32(h, 0x846c_a68b);
+            h = _mm_xor_si128(h, _mm_srli_epi32::<16>(h));
+            let row = _mm_srli_epi32::<28>(h);
+            // Rows 0–7 start with x, 8–15 with y; the second term is y for rows 0–3, x for
+            // rows 12 and 14, z otherwise; bit 0 of the row flips the first, bit 1 the second.
+            let [dx, dy, dz] = d.map(__m128::from);
+            let select = |m: __m128i, a: __m128, b: __m128| {
+                let m = _mm_castsi128_ps(m);
+                _mm_or_ps(_mm_and_ps(m, a), _mm_andnot_ps(m, b))
+            };
+            let u = select(_mm_cmplt_epi32(row, _mm_set1_epi32(8)), dx, dy);
+            let x_second =
+                _mm_cmpeq_epi32(_mm_or_si128(row, _mm_set1_epi32(2)), _mm_set1_epi32(14));
+            let v = select(
+                _mm_cmplt_epi32(row, _mm_set1_epi32(4)),
+                dy,
+                select(x_second, dx, dz),
+            );
+            let bit = |b: i32| _mm_and_si128(row, _mm_set1_epi32(b));
+            let u = _mm_xor_ps(u, _mm_castsi128_ps(_mm_slli_epi32::<31>(bit(1))));
+            let v = _mm_xor_ps(v, _mm_castsi128_ps(_mm_slli_epi32::<30>(bit(2))));
+            Vec4::from(_mm_add_ps(u, v))
+        }
+    }
+}
+
+/// The low 32 bits of the lanes' products by `m` (SSE2 multiplies only lanes 0 and 2 to
+/// 64 bits at a time).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn mul32(a: std::arch::x86_64::__m128i, m: u32) -> std::arch::x86_64::__m128i {
+    use std::arch::x86_64::*;
+    // SAFETY: SSE2 is part of the x86-64 baseline; no memory is accessed.
+    unsafe {
+        let m = _mm_set1_epi32(m as i32);
+        let even = _mm_mul_epu32(a, m);
+        let odd = _mm_mul_epu32(_mm_srli_epi64::<32>(a), m);
+        _mm_unpacklo_epi32(
+            _mm_shuffle_epi32::<0b00_00_10_00>(even),
+            _mm_shuffle_epi32::<0b00_00_10_00>(odd),
+        )
+    }
+}
+
+/// The lattice hash for four lanes, lane by lane with [`gradient`] (no 32-bit vector
+/// multiply on this target).
+#[cfg(not(target_arch = "x86_64"))]
+struct Lattice4 {
+    seeds: [u32; 4],
+    /// Per axis and lane, the cell's lower lattice plane.
+    cells: [[i32; 4]; 3],
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+impl Lattice4 {
+    #[inline(always)]
+    fn new(seeds: [u32; 4], ijk: [Vec4; 3]) -> Lattice4 {
+        let cells = ijk.map(|v| v.to_array().map(|f| f as i32));
+        Lattice4 { seeds, cells }
+    }
+
+    #[inline(always)]
+    fn dot(&self, o: [BVec4A; 3], d: [Vec4; 3]) -> Vec4 {
+        let bits = o.map(|m| m.bitmask());
+        let rows: [Vec4; 4] = std::array::from_fn(|l| {
+            let c = |a: usize| self.cells[a][l] + ((bits[a] >> l) & 1) as i32;
+            gradient(self.seeds[l], c(0), c(1), c(2)).extend(0.0)
+        });
+        let gt = glam::Mat4::from_cols(rows[0], rows[1], rows[2], rows[3]).transpose();
+        gt.x_axis * d[0] + gt.y_axis * d[1] + gt.z_axis * d[2]
+    }
 }
 
 /// How many octaves an fBm sums: `1..=12`, 4 when omitted.
