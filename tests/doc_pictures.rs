@@ -79,9 +79,9 @@ karstic render trees/sea_cliffs.ron -o sea_cliffs.png --quiet
 karstic sample trees/karst_network.ron --box 0 300 -5 396 300.5 75 --res 397 2 161 -o karst_section.npy
 karstic render trees/hoodoo_field.ron -o hoodoo_field.png --size 640 360 --quiet
 karstic render trees/jacksboro_canyon.ron -o jacksboro_canyon.png --quiet
-karstic geology section trees/jacksboro_canyon.ron --plane 5350 6450 5950 6450 --z 340 580 --width 960 --outline -o canyon_section.png
+karstic geology section trees/jacksboro_canyon.ron --plane 5350 6450 5950 6450 --z 280 560 --width 960 --outline -o canyon_section.png
 karstic sample trees/strata_islands.ron --box 330 455 40 490 455.5 135 --res 480 2 286 -o islands_caves.npy
-karstic render trees/strata_islands.ron -o islands_cave_mouth.png --camera 470 380 165 410 443 112 --fov 50 --size 640 360 --quiet
+karstic render trees/strata_islands.ron -o islands_cave_mouth.png --camera 392 424 138 416 450 104 --fov 60 --size 640 360 --quiet
 ";
 
 /// What [`COMMANDS`] write that becomes a picture, and the picture's name in `docs/img/`.

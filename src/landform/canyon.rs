@@ -1,21 +1,36 @@
 //! River canyons and gorges (Paris et al. 2019 §6.1): the riverbed is where the stream
 //! power `σ = A^½·s` of the terrain (`analysis::relief::stream_power`, drainage by
 //! Freeman 1991 over a depression-filled grid, Barnes et al. 2014) exceeds a threshold;
-//! a small convolution widens its influence to the banks (floods). Points sampled on the
-//! surface of the walls, from the bed up to `depth` metres above it, get negative
-//! spheres whose energy is the erosion effect `e(ρ, σ)`, strongest at the water: walls
-//! are undercut where the rock is soft.
+//! a convolution spreads its stress over the banks. The gorge is then carved as a volume:
+//! negative spheres on a jittered lattice fill the rock from the incised floor — `depth`
+//! metres below the bed where the stream is strongest, less up the tributaries — to the
+//! surface, each of energy the erosion effect `e(ρ, σ)` of the rock at its centre. The
+//! spheres overlap (several per radius) and their energies are scaled by the lattice's
+//! density, so together they sum to a smooth carving field `2e` with no scallops of single
+//! spheres: the rock goes where `2e` exceeds what holds it, which happens farther from the
+//! stream in soft rock than in hard. Walls recede with height above the floor (`retreat`),
+//! so the gorge opens upwards in steps: each hard bed stands out as a ledge over a soft
+//! bed eaten back beneath it.
 
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::{Ground, LandformError, Poisson, Rng, carving_sphere, effect, throw_dart};
+use super::{Ground, LandformError, effect, point};
 use crate::analysis::relief::stream_power;
+use crate::field::ISO;
 use crate::scene::{NodeSpec, Positive, Unit};
 
 fn default_beta() -> Unit {
     Unit(0.3)
 }
+
+fn default_retreat() -> Unit {
+    Unit(0.5)
+}
+
+/// `∫ g(|x|) dx` over the unit ball for Wyvill's `g(x) = (1 − x²)³`: `4π · 16/315`. A
+/// lattice of pitch `s` of such spheres of radius `R` sums to about this times `(R/s)³`.
+const WYVILL_VOLUME: f32 = 4.0 * std::f32::consts::PI * 16.0 / 315.0;
 
 /// Parameters of canyon erosion.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -23,27 +38,54 @@ fn default_beta() -> Unit {
 pub struct CanyonSpec {
     /// Stream power (m, `√m²` times slope) above which a sample is riverbed.
     pub threshold: Positive,
-    /// The riverbed's influence reaches this far onto the banks, metres.
+    /// The riverbed's stress reaches this far onto the banks, metres: the gorge is at most
+    /// twice this wide at its rim.
     pub banks: Positive,
-    /// The walls are eroded up to this height above the bed, metres.
+    /// Incision below the bed where the stream power is twice the threshold or more,
+    /// metres (proportionally less on weaker streams).
     pub depth: Positive,
-    /// Cavity radius of one sphere at full effect, metres.
+    /// Falloff radius of the spheres, metres: how far the carving field is smoothed
+    /// (smaller keeps the steps of thin beds sharper).
     pub radius: Positive,
-    /// Poisson spacing of the wall samples, metres.
+    /// Pitch of the sphere lattice, metres; at most half the radius, so the spheres
+    /// overlap into one field.
     pub spacing: Positive,
     /// β of the erosion effect (the effect on the hardest rock).
     #[serde(default = "default_beta")]
     pub beta: Unit,
+    /// How far the walls recede per metre of height above the floor (0: vertical walls).
+    #[serde(default = "default_retreat")]
+    pub retreat: Unit,
     /// Samples with a smaller effect make no sphere.
     #[serde(default = "super::default_min_effect")]
     pub min_effect: Unit,
 }
 
+/// What the river does at one sample of the top grid.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stress {
+    /// Strength of the bed the sample is under the influence of, in `[0, 1]`: 1 where
+    /// its stream power is twice the threshold or more.
+    pub strength: f32,
+    /// The elevation of that bed (NaN where no river reaches).
+    pub bed: f32,
+    /// Horizontal distance to that bed, metres.
+    pub distance: f32,
+}
+
+impl Stress {
+    const NONE: Stress = Stress {
+        strength: 0.0,
+        bed: f32::NAN,
+        distance: f32::INFINITY,
+    };
+}
+
 impl CanyonSpec {
-    /// Per sample of the top grid: the river's stress in `[0, 1]` (1 on a bed of twice
-    /// the threshold, falling linearly to 0 across the banks) and the elevation of the bed
-    /// it comes from (NaN where no river reaches).
-    pub fn stress(&self, ground: &Ground) -> Vec<(f32, f32)> {
+    /// Per sample of the top grid: the bed that stresses it most (its strength falling
+    /// linearly to 0 across the banks), or [`Stress::NONE`]-like values where no river
+    /// reaches.
+    pub fn stress(&self, ground: &Ground) -> Vec<Stress> {
         let top = &ground.top;
         let (nx, ny) = (top.nx(), top.ny());
         let sp = stream_power(top);
@@ -51,12 +93,13 @@ impl CanyonSpec {
         let t = self.threshold.0;
         let cell = top.cell();
         let reach = (self.banks.0 / cell.x.min(cell.y)).ceil() as isize;
-        let mut out = vec![(0.0f32, f32::NAN); nx * ny];
+        let lateral = |s: &Stress| s.strength * (1.0 - s.distance / self.banks.0).max(0.0);
+        let mut out = vec![Stress::NONE; nx * ny];
         for k in 0..nx * ny {
             if sp[k] <= t || z[k].is_nan() {
                 continue;
             }
-            let bed = ((sp[k] - t) / t).min(1.0);
+            let strength = ((sp[k] - t) / t).min(1.0);
             let (i, j) = ((k % nx) as isize, (k / nx) as isize);
             for dj in -reach..=reach {
                 for di in -reach..=reach {
@@ -64,12 +107,16 @@ impl CanyonSpec {
                     if a < 0 || b < 0 || a as usize >= nx || b as usize >= ny {
                         continue;
                     }
-                    let d = (Vec2::new(di as f32, dj as f32) * cell).length();
-                    let s = bed * (1.0 - d / (self.banks.0 + cell.x)).max(0.0);
+                    let s = Stress {
+                        strength,
+                        bed: z[k],
+                        distance: (Vec2::new(di as f32, dj as f32) * cell).length(),
+                    };
                     let m = a as usize + nx * b as usize;
+                    let (new, old) = (lateral(&s), lateral(&out[m]));
                     // The strongest bed wins; ties to the lower bed (fixed order).
-                    if s > out[m].0 || (s == out[m].0 && s > 0.0 && z[k] < out[m].1) {
-                        out[m] = (s, z[k]);
+                    if new > old || (new == old && new > 0.0 && s.bed < out[m].bed) {
+                        out[m] = s;
                     }
                 }
             }
@@ -77,45 +124,72 @@ impl CanyonSpec {
         out
     }
 
-    /// The wall samples and their effects.
+    /// The river's stress at `z` over a sample stressed by `s`: the bed's strength over
+    /// the inner half of the banks, falling linearly to 0 across the outer half, measured
+    /// from a wall that recedes by `retreat` metres per metre above the floor.
+    fn sigma(&self, s: &Stress, floor: f32, z: f32) -> f32 {
+        let d = (s.distance - self.retreat.0 * (z - floor).max(0.0)).max(0.0);
+        s.strength * (2.0 * (1.0 - d / self.banks.0)).clamp(0.0, 1.0)
+    }
+
+    /// The sphere centres and their weighted effects: a regular lattice of pitch
+    /// `spacing` in the columns the river stresses, from the incised floor up to the
+    /// surface. The lowest sphere of a column is weighted by how much of its layer lies
+    /// above the floor, so the floor follows the bed smoothly rather than in steps of the
+    /// lattice.
     pub fn samples(&self, ground: &Ground) -> Vec<(Vec3, f32)> {
         let stress = self.stress(ground);
         let top = &ground.top;
-        let cell = top.cell();
-        let levels = ((self.depth.0 / self.spacing.0).ceil() as usize).max(1);
-        let mut rng = Rng::new(ground.seed);
-        let mut poisson = Poisson::new(self.spacing.0);
+        let h = self.spacing.0;
+        let (nx, ny) = (top.nx(), top.ny());
+        let size = top.cell() * Vec2::new((nx - 1) as f32, (ny - 1) as f32);
+        let (mx, my) = ((size.x / h) as usize + 1, (size.y / h) as usize + 1);
         let mut out = Vec::new();
-        for (k, &(s, bed)) in stress.iter().enumerate() {
-            if s <= 0.0 {
-                continue;
-            }
-            let xy = ground.sample_point(k).truncate();
-            for l in 0..levels {
-                let z = |u: f32| bed + self.depth.0 * (l as f32 + u) / levels as f32;
-                let Some(p) = throw_dart(ground, &mut rng, xy, cell, self.spacing.0, z) else {
+        for j in 0..my {
+            for i in 0..mx {
+                let xy = top.origin() + Vec2::new(i as f32, j as f32) * h;
+                let Some(k) = ground.nearest_sample(xy) else {
                     continue;
                 };
-                let above = (p.z - bed) / self.depth.0;
-                if !(-0.2..=1.0).contains(&above) || !ground.region.contains(p) {
+                let s = stress[k];
+                let surface = ground.height(xy);
+                if s.strength <= 0.0 || !surface.is_finite() {
                     continue;
                 }
-                let sigma = s * (1.0 - above.max(0.0));
-                let e = effect((ground.resistance)(p), sigma, self.beta.0);
-                if e >= self.min_effect.0 && poisson.take(p) {
-                    out.push((p, e));
+                let floor = s.bed - self.depth.0 * s.strength;
+                let (lo, hi) = ((floor / h).floor() as i32, (surface / h).ceil() as i32);
+                for l in lo..=hi {
+                    let p = xy.extend(l as f32 * h);
+                    let weight = ((p.z + 0.5 * h - floor) / h).clamp(0.0, 1.0);
+                    if !ground.region.contains(p) {
+                        continue;
+                    }
+                    let rho = (ground.resistance)(p);
+                    let e = weight * effect(rho, self.sigma(&s, floor, p.z), self.beta.0);
+                    if e >= self.min_effect.0 {
+                        out.push((p, e));
+                    }
                 }
             }
         }
         out
     }
 
-    /// The carving spheres.
+    /// The carving spheres: energies scaled so the lattice sums to `2e`, which carves
+    /// saturated rock (`f = 2T`) where `e > T/2`.
     pub fn generate(&self, ground: &Ground) -> Result<Vec<NodeSpec>, LandformError> {
+        let r = self.radius.0;
+        if self.spacing.0 > 0.5 * r {
+            return Err(LandformError::Invalid(format!(
+                "canyon spacing {} m over half the radius {r} m: the spheres would show",
+                self.spacing.0
+            )));
+        }
+        let density = (self.spacing.0 / r).powi(3) / WYVILL_VOLUME;
         Ok(self
             .samples(ground)
             .into_iter()
-            .map(|(p, e)| carving_sphere(p, self.radius.0, e))
+            .map(|(p, e)| point(p, r, -4.0 * ISO * e * density))
             .collect())
     }
 }
