@@ -8,9 +8,10 @@
 //! location, edge flips keep the triangulation Delaunay), and only the triangles the
 //! insertion changed are scanned again: every triangle an incremental Delaunay insertion
 //! creates or flips has the new vertex as a corner, so they are the new vertex's star.
-//! Queue entries of triangles changed since are recognised as stale when popped (their
-//! error is no longer the triangle's) and dropped. The loop stops when the largest error
-//! left is at most the bound, so the TIN is within the bound at every grid point.
+//! The queue is indexed by triangle: a triangle scanned again has its entry moved (or
+//! removed, when now within the bound) in place, so every pop is a live triangle. The loop
+//! stops when the largest error left is at most the bound, so the TIN is within the bound
+//! at every grid point.
 
 mod delaunay;
 mod queue;
@@ -122,8 +123,7 @@ pub fn greedy(hf: &Heightfield, max_error: f64, budget: u64) -> Result<Tin, TinE
 }
 
 /// A queue entry: the triangle's error (as f32 bits, which order like the numbers for
-/// errors ≥ 0) above its index. An entry whose key differs from its triangle's current
-/// one is stale; an f32 tie between an old and a new error only reorders equal errors.
+/// errors ≥ 0) above its index, which breaks ties.
 fn key(error: f64, t: usize) -> u64 {
     (u64::from((error as f32).to_bits()) << 32) | t as u64
 }
@@ -135,10 +135,10 @@ struct Greedy<'h> {
     h: &'h [f32],
     nx: usize,
     max_error: f64,
-    /// Each triangle's largest error, by triangle index (its worst grid point and the
-    /// error's queue key are in the triangle's record, `Tri::a` and `Tri::b`).
+    /// Each triangle's largest error, by triangle index (its worst grid point is in the
+    /// triangle's record, `Tri::a`).
     worst: Vec<f64>,
-    /// The triangles worse than the bound, by error: [`key`]s.
+    /// The triangles worse than the bound, by error: [`key`]s, one per triangle.
     queue: Queue,
     /// The scans' rows.
     scanner: Scanner,
@@ -155,11 +155,7 @@ impl Greedy<'_> {
             }
             let Some(top) = self.queue.pop() else { break };
             let t = top as u32 as usize;
-            let tri = self.dt.tris[t];
-            if u64::from(tri.b) != top >> 32 {
-                continue; // the triangle changed since it was queued
-            }
-            let at = tri.a as usize;
+            let at = self.dt.tris[t].a as usize;
             let p = Vertex {
                 i: (at % self.nx) as i32,
                 j: (at / self.nx) as i32,
@@ -182,11 +178,11 @@ impl Greedy<'_> {
             self.worst.resize(t + 1, 0.0);
         }
         self.worst[t] = w.error;
-        let k = key(w.error, t);
         self.dt.tris[t].a = w.at;
-        self.dt.tris[t].b = (k >> 32) as u32;
         if w.error > self.max_error {
-            self.queue.push(k);
+            self.queue.set(key(w.error, t));
+        } else {
+            self.queue.remove(t);
         }
     }
 
