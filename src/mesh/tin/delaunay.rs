@@ -4,8 +4,8 @@
 //!
 //! Triangle `t` owns half-edges `4t`, `4t + 1` and `4t + 2`, counter-clockwise; a
 //! half-edge has an origin vertex and a twin (the same edge in the neighbouring triangle,
-//! [`NONE`] on the boundary). A triangle's corners, twins and its owner's word of data
-//! fill one 32-byte record: an insertion's reads of a triangle and its neighbours
+//! [`NONE`] on the boundary). A triangle's corners, twins and its owner's two words of
+//! data fill one 32-byte record: an insertion's reads of a triangle and its neighbours
 //! take a cache line each. Triangles are never deleted: an insertion rewrites the
 //! triangle it lands in (and, on an edge, the neighbour across) and appends the rest, and
 //! a flip rewrites its two triangles in place, so every slot is a live triangle.
@@ -18,7 +18,7 @@ fn next(e: u32) -> u32 {
     if e & 3 == 2 { e - 2 } else { e + 1 }
 }
 
-/// A triangle: its half-edges' origins and twins, and a word of the owner's.
+/// A triangle: its half-edges' origins and twins, and two words of the owner's.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(32))]
 pub struct Tri {
@@ -26,6 +26,9 @@ pub struct Tri {
     /// The owner's word (the greedy insertion: the worst grid point's index).
     pub a: u32,
     twin: [u32; 3],
+    /// The owner's other word (the greedy insertion: the worst grid point's height, as
+    /// f32 bits).
+    pub b: u32,
 }
 
 impl Tri {
@@ -33,6 +36,7 @@ impl Tri {
         start: [NONE; 3],
         a: 0,
         twin: [NONE; 3],
+        b: 0,
     };
 }
 

@@ -21,7 +21,7 @@ use glam::{Vec2, Vec3};
 
 use super::Mesh;
 use crate::dem::Heightfield;
-use delaunay::{Triangulation, Vertex};
+use delaunay::{Tri, Triangulation, Vertex};
 use queue::Queue;
 use raster::Scanner;
 
@@ -135,8 +135,8 @@ struct Greedy<'h> {
     h: &'h [f32],
     nx: usize,
     max_error: f64,
-    /// Each triangle's largest error, by triangle index (its worst grid point is in the
-    /// triangle's record, `Tri::a`).
+    /// Each triangle's largest error, by triangle index (its worst grid point and that
+    /// point's height are in the triangle's record, `Tri::a` and `Tri::b`).
     worst: Vec<f64>,
     /// The triangles worse than the bound, by error: [`key`]s, one per triangle.
     queue: Queue,
@@ -153,13 +153,19 @@ impl Greedy<'_> {
             for t in changed.drain(..) {
                 self.scan(t as usize);
             }
-            let Some(top) = self.queue.pop() else { break };
-            let t = top as u32 as usize;
-            let at = self.dt.tris[t].a as usize;
+            let Some(t) = self.queue.pop() else { break };
+            // The next pop is most often the next largest now: its record is asked for
+            // while this insertion and its scans run.
+            if let Some(next) = self.queue.peek() {
+                crate::cache::prefetch(&self.dt.tris[next]);
+            }
+            let Tri { a: at, b: z, .. } = self.dt.tris[t];
+            // Grids have fewer than 2³² points.
+            let nx = self.nx as u32;
             let p = Vertex {
-                i: (at % self.nx) as i32,
-                j: (at / self.nx) as i32,
-                z: self.h[at],
+                i: (at % nx) as i32,
+                j: (at / nx) as i32,
+                z: f32::from_bits(z),
             };
             self.dt.insert(t as u32, p, &mut changed);
         }
@@ -179,6 +185,7 @@ impl Greedy<'_> {
         }
         self.worst[t] = w.error;
         self.dt.tris[t].a = w.at;
+        self.dt.tris[t].b = self.h[w.at as usize].to_bits();
         if w.error > self.max_error {
             self.queue.set(key(w.error, t));
         } else {

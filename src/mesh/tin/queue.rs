@@ -55,10 +55,15 @@ impl Queue {
         }
     }
 
-    /// Removes and returns the largest key.
-    pub fn pop(&mut self) -> Option<u64> {
-        let top = *self.keys.first()?;
-        self.node[item(top)] = OUT;
+    /// The item with the largest key.
+    pub fn peek(&self) -> Option<usize> {
+        self.keys.first().map(|&k| item(k))
+    }
+
+    /// Removes the largest key and returns its item.
+    pub fn pop(&mut self) -> Option<usize> {
+        let top = item(*self.keys.first()?);
+        self.node[top] = OUT;
         let last = self.keys.pop().expect("the queue is not empty");
         if !self.keys.is_empty() {
             self.down(0, last);
@@ -139,18 +144,20 @@ mod tests {
                     reference.remove(&t);
                 }
                 _ => {
-                    let top = reference.values().max().copied();
-                    if let Some(k) = top {
-                        reference.remove(&(k & 0xffff_ffff));
+                    let top = reference.values().max().map(|&k| k & 0xffff_ffff);
+                    if let Some(t) = top {
+                        reference.remove(&t);
                     }
-                    assert_eq!(q.pop(), top);
+                    assert_eq!(q.peek(), top.map(|t| t as usize));
+                    assert_eq!(q.pop(), top.map(|t| t as usize));
                 }
             }
         }
-        while let Some(k) = reference.values().max().copied() {
-            reference.remove(&(k & 0xffff_ffff));
-            assert_eq!(q.pop(), Some(k));
+        while let Some(t) = reference.values().max().map(|&k| k & 0xffff_ffff) {
+            reference.remove(&t);
+            assert_eq!(q.pop(), Some(t as usize));
         }
+        assert_eq!(q.peek(), None);
         assert_eq!(q.pop(), None);
     }
 }

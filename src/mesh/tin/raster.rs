@@ -49,7 +49,10 @@ fn trace(p: [i64; 2], q: [i64; 2], up: bool, out: &mut [i64]) {
 impl Scanner {
     /// The grid point of the triangle with grid corners `t` (any orientation) over the
     /// samples `h` (row-major, `nx` per row, fewer than 2³² in all) farthest from the
-    /// plane through `z`, its corners excluded.
+    /// plane through `z`, its corners excluded. Inlined into its one caller: passed
+    /// through memory, the arrays were stored in pieces and loaded whole, a store-forwarding
+    /// stall at every scan.
+    #[inline(always)]
     pub fn worst_point(&mut self, t: [[i64; 2]; 3], z: [f64; 3], h: &[f32], nx: usize) -> Worst {
         let [a, mut b, mut c] = t;
         let [za, mut zb, mut zc] = z;
@@ -161,15 +164,16 @@ impl Scanner {
     }
 }
 
-/// Touches the cache line of `h[at]` (a load whose value is not used), so that its miss
-/// overlaps the work before the scan reaches it.
+/// Asks for the cache line of `h[at]`, so that its miss overlaps the work before the scan
+/// reaches it.
 fn prefetch(h: &[f32], at: usize) {
-    if let Some(&s) = h.get(at) {
-        std::hint::black_box(s);
+    if let Some(s) = h.get(at) {
+        crate::cache::prefetch(s);
     }
 }
 
 /// `|base + gx·k − h[at + k]|` for `k < len`, computed in f32, the largest of each lane.
+#[inline(always)]
 fn row_max_f32(base: f64, gx: f64, h: &[f32], at: usize, len: usize) -> Vec4 {
     let (b, g) = (Vec4::splat(base as f32), Vec4::splat(gx as f32));
     let err = |k: usize| {
