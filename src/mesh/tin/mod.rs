@@ -167,6 +167,9 @@ impl Greedy<'_> {
                 j: (at / nx) as i32,
                 z: f32::from_bits(z),
             };
+            // The new triangles cover this one (and parts of its neighbours): its rows are
+            // asked for while the insertion runs.
+            raster::prefetch_rows(self.dt.corners(t).map(Vertex::ij), self.h, self.nx);
             self.dt.insert(t as u32, p, &mut changed);
         }
     }
