@@ -13,9 +13,16 @@ reported apart, as the command's total).
     pip install pydelatin numpy
     cargo build --release --locked
     python3 benches/tin_vs_pydelatin.py [--karstic target/release/karstic] [--runs 7]
+        [--anchor OTHER_KARSTIC]
+
+With `--anchor`, a second karstic binary (e.g. one built from an earlier commit) runs in
+the same rotation, so a before/after ratio comes from the very runs pydelatin's does.
+Pin the whole script to one core (`taskset -c 0 python3 ...`) to keep karstic and
+pydelatin on the same core.
 """
 
 import argparse
+import filecmp
 import os
 import re
 import resource
@@ -63,6 +70,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--karstic", default="target/release/karstic")
     ap.add_argument("--runs", type=int, default=7)
+    ap.add_argument("--anchor", help="another karstic binary, run in the same rotation")
     args = ap.parse_args()
 
     with tempfile.TemporaryDirectory() as tmp:
@@ -72,49 +80,70 @@ def main():
         z = np.loadtxt(asc, skiprows=6, dtype=np.float32)
 
         env = dict(os.environ, RAYON_NUM_THREADS="1")
-        out = os.path.join(tmp, "tin.glb")
         delatin, delatin_cpu = [], []
-        ours, totals, cpu_totals, report = [], [], [], ""
-        # The two alternate, run by run, so a change of load on the shared machine
-        # falls on both.
+        binaries = [("karstic", args.karstic)] + ([("anchor", args.anchor)] if args.anchor else [])
+        runs = {name: Runs() for name, _ in binaries}
+        # They alternate, run by run, so a change of load on the shared machine falls on
+        # all of them.
         for _ in range(args.runs):
             t, c = time.perf_counter(), time.process_time()
             d = Delatin(z, max_error=MAX_ERROR)
             delatin.append(time.perf_counter() - t)
             delatin_cpu.append(time.process_time() - c)
-
-            before = resource.getrusage(resource.RUSAGE_CHILDREN)
-            t = time.perf_counter()
-            run = subprocess.run(
-                [args.karstic, "tin", asc, "-o", out, "--max-error", str(MAX_ERROR)],
-                env=env, capture_output=True, text=True,
-            )
-            totals.append(time.perf_counter() - t)
-            after = resource.getrusage(resource.RUSAGE_CHILDREN)
-            cpu_totals.append(after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
-            if run.returncode != 0:
-                sys.exit(f"karstic tin failed:\n{run.stderr}")
-            report = run.stderr.strip()
-            ours.append(float(re.search(r"triangulation ([0-9.]+) s", report).group(1)))
+            for name, binary in binaries:
+                runs[name].run(binary, asc, os.path.join(tmp, f"{name}.glb"), env)
         d_tris, d_err = len(d.triangles), d.error
-        k_tris = int(re.search(r"(\d+) triangles", report).group(1))
-        k_err = float(re.search(r"max error ([0-9.]+) m", report).group(1))
+        same = args.anchor and filecmp.cmp(
+            os.path.join(tmp, "karstic.glb"), os.path.join(tmp, "anchor.glb"), shallow=False)
 
     med = statistics.median
-    dm, km = med(delatin), med(ours)
+    dm = med(delatin)
     print(machine_line())
     print(f"input: {N}x{N} spectral fBm (beta {BETA}, seed {SEED}), relief {RELIEF:.0f} m, "
           f"max error {MAX_ERROR} m, median of {args.runs} runs, one core")
     print(f"pydelatin  Delatin():           wall {dm:.3f} s  CPU {med(delatin_cpu):.3f} s  "
           f"{d_tris} triangles, max error {d_err:.3f} m")
-    print(f"karstic    tin, triangulation:  wall {km:.3f} s               "
-          f"{k_tris} triangles, max error {k_err:.3f} m")
-    print(f"karstic    tin, whole command:  wall {med(totals):.3f} s  CPU {med(cpu_totals):.3f} s"
-          "  (read .asc + triangulate + write .glb)")
-    print(f"ratio pydelatin / karstic (triangulation, wall): {dm / km:.2f}x")
-    print(f"ratio pydelatin / karstic (CPU, karstic's whole command): "
-          f"{med(delatin_cpu) / med(cpu_totals):.2f}x")
-    print(f"karstic: {report}")
+    for name, binary in binaries:
+        r = runs[name]
+        km = med(r.triangulation)
+        k_tris = int(re.search(r"(\d+) triangles", r.report).group(1))
+        k_err = float(re.search(r"max error ([0-9.]+) m", r.report).group(1))
+        print(f"{name:<10} tin, triangulation:  wall {km:.3f} s               "
+              f"{k_tris} triangles, max error {k_err:.3f} m   ({binary})")
+        print(f"{name:<10} tin, whole command:  wall {med(r.total):.3f} s  "
+              f"CPU {med(r.cpu):.3f} s  (read .asc + triangulate + write .glb)")
+        print(f"ratio pydelatin / {name} (triangulation, wall): {dm / km:.2f}x")
+        print(f"ratio pydelatin / {name} (CPU, {name}'s whole command): "
+              f"{med(delatin_cpu) / med(r.cpu):.2f}x")
+    if args.anchor:
+        ratio = med(runs["anchor"].triangulation) / med(runs["karstic"].triangulation)
+        print(f"ratio anchor / karstic (triangulation, wall): {ratio:.2f}x")
+        print(f"the two .glb files are {'byte-identical' if same else 'DIFFERENT'}")
+    print(f"karstic: {runs['karstic'].report}")
+
+
+class Runs:
+    """One karstic binary's runs: the printed triangulation time, the whole command's
+    wall and CPU time, and its last report."""
+
+    def __init__(self):
+        self.triangulation, self.total, self.cpu, self.report = [], [], [], ""
+
+    def run(self, binary, asc, out, env):
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        t = time.perf_counter()
+        run = subprocess.run(
+            [binary, "tin", asc, "-o", out, "--max-error", str(MAX_ERROR)],
+            env=env, capture_output=True, text=True,
+        )
+        self.total.append(time.perf_counter() - t)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        self.cpu.append(after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
+        if run.returncode != 0:
+            sys.exit(f"{binary} tin failed:\n{run.stderr}")
+        self.report = run.stderr.strip()
+        self.triangulation.append(
+            float(re.search(r"triangulation ([0-9.]+) s", self.report).group(1)))
 
 
 if __name__ == "__main__":

@@ -8,6 +8,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod analysis;
+mod cache;
 pub mod curves;
 pub mod dem;
 pub mod editor;

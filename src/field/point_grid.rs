@@ -32,6 +32,7 @@ use glam::{Vec3, Vec4};
 
 use super::bounds::Aabb;
 use super::primitive::Round;
+use crate::cache::prefetch;
 
 /// Most cells per item.
 const CELLS_PER_ITEM: usize = 2;
@@ -322,21 +323,6 @@ impl PointGrid {
             + self.groups.len() * std::mem::size_of::<Group>()
             + self.children.len() * std::mem::size_of::<(Aabb, u32)>()
     }
-}
-
-/// Asks for the cache line holding `x` (a hint: nothing on other targets).
-#[inline(always)]
-fn prefetch<T>(x: &T) {
-    // SAFETY: a prefetch only hints the cache (it never faults nor reads into the
-    // program), and SSE, which it needs, is part of every x86-64 target.
-    #[cfg(target_arch = "x86_64")]
-    unsafe {
-        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
-            (x as *const T).cast::<i8>(),
-        );
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = x;
 }
 
 #[cfg(test)]

@@ -26,7 +26,8 @@ pub struct Tri {
     /// The owner's word (the greedy insertion: the worst grid point's index).
     pub a: u32,
     twin: [u32; 3],
-    /// The owner's other word (the greedy insertion: the worst error's queue key).
+    /// The owner's other word (the greedy insertion: the worst grid point's height, as
+    /// f32 bits).
     pub b: u32,
 }
 
@@ -155,6 +156,12 @@ impl Triangulation {
             twin: outer,
             ..
         } = self.tris[t as usize];
+        // The neighbours' records are read by the fan and the legalisation: asked for now.
+        for &f in &outer {
+            if f != NONE {
+                crate::cache::prefetch(&self.tris[(f >> 2) as usize]);
+            }
+        }
         let c = vs.map(|u| self.vertices[u as usize].ij());
         let new = self.len() as u32;
         // The edge p lies on, if any: orient(c[k], c[k+1], p) = 0.
@@ -225,6 +232,13 @@ impl Triangulation {
             }
             self.stack.push(e);
             changed.push(slots[i]);
+        }
+        // The legalisation reads the vertex across each outer edge: asked for now, the
+        // misses overlap rather than come one after the other.
+        for &f in outer {
+            if f != NONE {
+                crate::cache::prefetch(&self.vertices[self.start(next(next(f))) as usize]);
+            }
         }
     }
 

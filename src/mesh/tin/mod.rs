@@ -8,9 +8,10 @@
 //! location, edge flips keep the triangulation Delaunay), and only the triangles the
 //! insertion changed are scanned again: every triangle an incremental Delaunay insertion
 //! creates or flips has the new vertex as a corner, so they are the new vertex's star.
-//! Queue entries of triangles changed since are recognised as stale when popped (their
-//! error is no longer the triangle's) and dropped. The loop stops when the largest error
-//! left is at most the bound, so the TIN is within the bound at every grid point.
+//! The queue is indexed by triangle: a triangle scanned again has its entry moved (or
+//! removed, when now within the bound) in place, so every pop is a live triangle. The loop
+//! stops when the largest error left is at most the bound, so the TIN is within the bound
+//! at every grid point.
 
 mod delaunay;
 mod queue;
@@ -20,7 +21,7 @@ use glam::{Vec2, Vec3};
 
 use super::Mesh;
 use crate::dem::Heightfield;
-use delaunay::{Triangulation, Vertex};
+use delaunay::{Tri, Triangulation, Vertex};
 use queue::Queue;
 use raster::Scanner;
 
@@ -122,8 +123,7 @@ pub fn greedy(hf: &Heightfield, max_error: f64, budget: u64) -> Result<Tin, TinE
 }
 
 /// A queue entry: the triangle's error (as f32 bits, which order like the numbers for
-/// errors ≥ 0) above its index. An entry whose key differs from its triangle's current
-/// one is stale; an f32 tie between an old and a new error only reorders equal errors.
+/// errors ≥ 0) above its index, which breaks ties.
 fn key(error: f64, t: usize) -> u64 {
     (u64::from((error as f32).to_bits()) << 32) | t as u64
 }
@@ -135,10 +135,10 @@ struct Greedy<'h> {
     h: &'h [f32],
     nx: usize,
     max_error: f64,
-    /// Each triangle's largest error, by triangle index (its worst grid point and the
-    /// error's queue key are in the triangle's record, `Tri::a` and `Tri::b`).
+    /// Each triangle's largest error, by triangle index (its worst grid point and that
+    /// point's height are in the triangle's record, `Tri::a` and `Tri::b`).
     worst: Vec<f64>,
-    /// The triangles worse than the bound, by error: [`key`]s.
+    /// The triangles worse than the bound, by error: [`key`]s, one per triangle.
     queue: Queue,
     /// The scans' rows.
     scanner: Scanner,
@@ -153,18 +153,23 @@ impl Greedy<'_> {
             for t in changed.drain(..) {
                 self.scan(t as usize);
             }
-            let Some(top) = self.queue.pop() else { break };
-            let t = top as u32 as usize;
-            let tri = self.dt.tris[t];
-            if u64::from(tri.b) != top >> 32 {
-                continue; // the triangle changed since it was queued
+            let Some(t) = self.queue.pop() else { break };
+            // The next pop is most often the next largest now: its record is asked for
+            // while this insertion and its scans run.
+            if let Some(next) = self.queue.peek() {
+                crate::cache::prefetch(&self.dt.tris[next]);
             }
-            let at = tri.a as usize;
+            let Tri { a: at, b: z, .. } = self.dt.tris[t];
+            // Grids have fewer than 2³² points.
+            let nx = self.nx as u32;
             let p = Vertex {
-                i: (at % self.nx) as i32,
-                j: (at / self.nx) as i32,
-                z: self.h[at],
+                i: (at % nx) as i32,
+                j: (at / nx) as i32,
+                z: f32::from_bits(z),
             };
+            // The new triangles cover this one (and parts of its neighbours): its rows are
+            // asked for while the insertion runs.
+            raster::prefetch_rows(self.dt.corners(t).map(Vertex::ij), self.h, self.nx);
             self.dt.insert(t as u32, p, &mut changed);
         }
     }
@@ -182,11 +187,12 @@ impl Greedy<'_> {
             self.worst.resize(t + 1, 0.0);
         }
         self.worst[t] = w.error;
-        let k = key(w.error, t);
         self.dt.tris[t].a = w.at;
-        self.dt.tris[t].b = (k >> 32) as u32;
+        self.dt.tris[t].b = self.h[w.at as usize].to_bits();
         if w.error > self.max_error {
-            self.queue.push(k);
+            self.queue.set(key(w.error, t));
+        } else {
+            self.queue.remove(t);
         }
     }
 

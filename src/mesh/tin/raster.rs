@@ -49,7 +49,10 @@ fn trace(p: [i64; 2], q: [i64; 2], up: bool, out: &mut [i64]) {
 impl Scanner {
     /// The grid point of the triangle with grid corners `t` (any orientation) over the
     /// samples `h` (row-major, `nx` per row, fewer than 2³² in all) farthest from the
-    /// plane through `z`, its corners excluded.
+    /// plane through `z`, its corners excluded. Inlined into its one caller: passed
+    /// through memory, the arrays were stored in pieces and loaded whole, a store-forwarding
+    /// stall at every scan.
+    #[inline(always)]
     pub fn worst_point(&mut self, t: [[i64; 2]; 3], z: [f64; 3], h: &[f32], nx: usize) -> Worst {
         let [a, mut b, mut c] = t;
         let [za, mut zb, mut zc] = z;
@@ -75,9 +78,7 @@ impl Scanner {
 
         // The rows from the lowest corner v0 to the highest v2: the long edge v0 → v2
         // bounds every row on one side, v0 → v1 then v1 → v2 on the other.
-        let mut v = [a, b, c];
-        v.sort_unstable_by_key(|p| p[1]);
-        let [v0, v1, v2] = v;
+        let [v0, v1, v2] = by_row([a, b, c]);
         let long_left = (v2[0] - v0[0]) * (v1[1] - v0[1]) - (v2[1] - v0[1]) * (v1[0] - v0[0]) < 0;
         let rows = (v2[1] - v0[1] + 1) as usize;
         let mid = (v1[1] - v0[1]) as usize;
@@ -161,15 +162,48 @@ impl Scanner {
     }
 }
 
-/// Touches the cache line of `h[at]` (a load whose value is not used), so that its miss
-/// overlaps the work before the scan reaches it.
+/// The points `v` by row, stably, in registers (a slice sort went through memory).
+fn by_row(v: [[i64; 2]; 3]) -> [[i64; 2]; 3] {
+    let [mut p, mut q, mut r] = v;
+    if p[1] > q[1] {
+        std::mem::swap(&mut p, &mut q);
+    }
+    if q[1] > r[1] {
+        std::mem::swap(&mut q, &mut r);
+    }
+    if p[1] > q[1] {
+        std::mem::swap(&mut p, &mut q);
+    }
+    [p, q, r]
+}
+
+/// Most rows of a triangle whose samples [`prefetch_rows`] asks for.
+const PREFETCH_ROWS: i64 = 32;
+
+/// Asks for the cache lines at both ends of each row of the bounding box of the triangle
+/// with grid corners `t` (its first [`PREFETCH_ROWS`]), over the samples `h` (row-major,
+/// `nx` per row).
+pub fn prefetch_rows(t: [[i64; 2]; 3], h: &[f32], nx: usize) {
+    let [a, b, c] = t;
+    let (x0, x1) = (a[0].min(b[0]).min(c[0]), a[0].max(b[0]).max(c[0]));
+    let (y0, y1) = (a[1].min(b[1]).min(c[1]), a[1].max(b[1]).max(c[1]));
+    for y in y0..=y1.min(y0 + PREFETCH_ROWS - 1) {
+        let row = y as usize * nx;
+        prefetch(h, row + x0 as usize);
+        prefetch(h, row + x1 as usize);
+    }
+}
+
+/// Asks for the cache line of `h[at]`, so that its miss overlaps the work before the scan
+/// reaches it.
 fn prefetch(h: &[f32], at: usize) {
-    if let Some(&s) = h.get(at) {
-        std::hint::black_box(s);
+    if let Some(s) = h.get(at) {
+        crate::cache::prefetch(s);
     }
 }
 
 /// `|base + gx·k − h[at + k]|` for `k < len`, computed in f32, the largest of each lane.
+#[inline(always)]
 fn row_max_f32(base: f64, gx: f64, h: &[f32], at: usize, len: usize) -> Vec4 {
     let (b, g) = (Vec4::splat(base as f32), Vec4::splat(gx as f32));
     let err = |k: usize| {
