@@ -11,7 +11,7 @@ use karstic::dem::{
     DetailParams, Heightfield, HeightfieldField, HeightfieldSpec, ImplicitParams, Interpolation,
 };
 use karstic::field::falloff::sigma;
-use karstic::field::{Aabb, Fbm, Field, ISO, Rect};
+use karstic::field::{Aabb, Fbm, Field, ISO, Interval, Rect, ZBands};
 
 fn utm_leaf(r: f32, interp: Interpolation) -> HeightfieldField {
     utm_leaf_with(r, interp, "")
@@ -434,6 +434,89 @@ fn small_boxes_near_the_terrain_have_sound_and_sharp_bounds() {
         assert!(
             known * 10 >= above * 9,
             "{name}: only {known} of {above} boxes above the ground are known to be air"
+        );
+    }
+}
+
+/// Footprints of a mesh column (half a metre to two metres across) inside the domain:
+/// their terrain band holds every sampled crossing and is about as tall as the detail's
+/// reach plus the relief across the footprint — not as the relief of the DEM cells under
+/// it (90 m cells on the UTM DEM), since the tile mesher evaluates every sample of it.
+#[test]
+fn column_bands_are_sound_and_as_tall_as_the_local_relief() {
+    for (name, f) in leaves() {
+        let mut rng = Rng(8);
+        let s = f.support();
+        let (a, r) = (reach(&f), f.params().falloff);
+        let mut bands = ZBands::new();
+        let (mut checked, mut sharp, mut crossings) = (0, 0, 0);
+        while checked < 400 {
+            let c = rng.in_box(&s).truncate();
+            let half = Vec2::new(rng.range(0.25, 1.0), rng.range(0.25, 1.0));
+            let fp = Rect::new(c - half, c + half);
+            let corners = [
+                fp.min,
+                fp.max,
+                Vec2::new(fp.min.x, fp.max.y),
+                Vec2::new(fp.max.x, fp.min.y),
+            ];
+            // inside the eroded domain: the prism is whole under every corner
+            let inside = corners.iter().all(|&q| {
+                let h = f.base_height(q);
+                h.is_finite() && f.value(q.extend(h - a - r)) >= 2.0 * ISO
+            });
+            if !inside {
+                continue;
+            }
+            checked += 1;
+            let hc = f.base_height(c);
+            bands.clear();
+            f.z_bands(
+                &fp,
+                Interval::new(hc - 3.0 * (a + r), hc + 3.0 * (a + r)),
+                &mut bands,
+            );
+            let terrain = bands.as_slice().iter().find(|b| b.contains(hc));
+            let Some(terrain) = terrain else {
+                panic!(
+                    "{name}: no band holds h = {hc} over {fp:?}: {:?}",
+                    bands.as_slice()
+                );
+            };
+            // the relief across the footprint, from the DEM's samples at its corners
+            let relief = corners
+                .iter()
+                .map(|&q| (f.base_height(q) - hc).abs())
+                .fold(0.0, f32::max);
+            sharp += (terrain.width() <= 2.0 * (a + 2.0 * relief) + 2.0) as usize;
+            for _ in 0..3 {
+                let xy = Vec2::new(rng.range(fp.min.x, fp.max.x), rng.range(fp.min.y, fp.max.y));
+                let (lo, n) = (hc - 2.0 * (a + r), 400);
+                let dz = 4.0 * (a + r) / n as f32;
+                let mut prev = f.value(xy.extend(lo)) > ISO;
+                for k in 1..=n {
+                    let z = lo + k as f32 * dz;
+                    let cur = f.value(xy.extend(z)) > ISO;
+                    if cur != prev {
+                        crossings += 1;
+                        let seg = Interval::new(z - dz, z);
+                        assert!(
+                            bands.as_slice().iter().any(|b| b.overlaps(&seg)),
+                            "{name}: crossing in {seg:?} at {xy} outside {:?}",
+                            bands.as_slice()
+                        );
+                    }
+                    prev = cur;
+                }
+            }
+        }
+        assert!(
+            crossings >= 1000,
+            "{name}: too few crossings sampled ({crossings})"
+        );
+        assert!(
+            sharp * 10 >= checked * 9,
+            "{name}: only {sharp} of {checked} column bands are as tall as the local relief"
         );
     }
 }

@@ -27,7 +27,7 @@ use glam::{Vec2, Vec3};
 use super::DemError;
 use super::grid::{Heightfield, Interpolation};
 use super::pyramid::MinMaxPyramid;
-use crate::field::Fbm;
+use crate::field::{Fbm, Rect};
 
 /// Parameters of the detail (validated by [`Detail::new`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -185,6 +185,18 @@ impl Detail {
     /// `A·max m` over the whole grid.
     pub fn reach_total(&self) -> f32 {
         self.params.amplitude * self.ranges.total()[1].max(0.0)
+    }
+
+    /// `reach` (`A·max m` over the cells under `fp`) sharpened around the footprint's
+    /// centre `c`: `A·m(x) ≤ A·(m(c) + L_m·|x − c|)` on the convex `fp`, which must lie
+    /// where `m` is defined (inside the heightfield's cells).
+    #[inline]
+    pub fn reach_near(&self, fp: &Rect, reach: f32) -> f32 {
+        let c = (fp.min + fp.max) * 0.5;
+        let m = self.rough.sample(c, Interpolation::Bilinear);
+        let near = self.params.amplitude * (m + self.lip_m * (fp.max - c).length()) * (1.0 + 1e-5);
+        // NaN (c outside the raster) keeps the cells' bound
+        if near < reach { near } else { reach }
     }
 
     /// A bound of `|∇d|` where `A·m ≤ reach`: `A·L_m + reach·L_t`.

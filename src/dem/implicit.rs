@@ -265,16 +265,8 @@ impl HeightfieldField {
         self.prism_shape().value(dxy, z)
     }
 
-    /// Range of `h` over the cells under `fp` (empty when none has a surface).
-    #[inline]
-    fn h_range(&self, fp: &Rect) -> Interval {
-        match self.hf.cells_overlapping(fp) {
-            Some((i0, i1, j0, j1)) => self.heights.query_interval(i0, i1, j0, j1),
-            None => Interval::EMPTY,
-        }
-    }
-
-    /// [`Self::h_range`] sharpened for footprints inside Ω (clearance `e_lo > 0`, so `h` is
+    /// The range of `h` over the cells under `fp` (`cells`, from the min/max pyramid)
+    /// sharpened for footprints inside Ω (clearance `e_lo > 0`, so `h` is
     /// defined on all of `fp`): `h` is `s`-Lipschitz on the cells under `fp` (`s` from the
     /// slope pyramid) and `fp` is convex, so `|h(x) − h(c)| ≤ s·|x − c|` around its centre
     /// `c`. For a footprint smaller than a cell this is far tighter than the cells' ranges —
@@ -382,11 +374,13 @@ impl Field for HeightfieldField {
         if h.is_nan() {
             return (0.0, Vec3::ZERO);
         }
-        // h + d and ∇(h + d − z)
-        let (dd, gdd) = self
-            .detail
-            .as_ref()
-            .map_or((0.0, Vec3::ZERO), |d| d.value_grad(p));
+        // h + d and ∇(h + d − z); where σ is saturated whatever d is (the floor, deep
+        // rock), d is left out as in `value`: σ' = 0 there, so only signed zeros of the
+        // gradient could tell
+        let (dd, gdd) = match &self.detail {
+            Some(d) if (h - p.z).abs() < self.r + self.reach_at(xy) => d.value_grad(p),
+            _ => (0.0, Vec3::ZERO),
+        };
         let (h, gh) = (h + dd, gh.extend(-1.0) + gdd);
         let (ft, dft) = sigma_d(h - p.z, self.r);
         let (fp, gfp) = self
@@ -468,11 +462,19 @@ impl Field for HeightfieldField {
         if e.hi <= 0.0 {
             return;
         }
-        let reach = match (&self.detail, self.hf.cells_overlapping(fp)) {
-            (Some(d), Some((i0, i1, j0, j1))) => d.reach(i0, i1, j0, j1),
-            _ => 0.0,
+        let Some((i0, i1, j0, j1)) = self.hf.cells_overlapping(fp) else {
+            return self.prism_shape().z_bands(e, Interval::EMPTY, z, out);
         };
-        let h = self.h_range(fp);
+        let cells = self.heights.query_interval(i0, i1, j0, j1);
+        // Sharpened around the footprint's centre where the footprint lies inside Ω: a
+        // mesh column's band is then about as tall as the relief under it, not as a
+        // whole DEM cell's.
+        let h = self.h_range_near(fp, cells, self.slopes.query(i0, i1, j0, j1)[1], e.lo);
+        let reach = match &self.detail {
+            Some(d) if e.lo > 0.0 => d.reach_near(fp, d.reach(i0, i1, j0, j1)),
+            Some(d) => d.reach(i0, i1, j0, j1),
+            None => 0.0,
+        };
         // the terrain z = h + d lies within the detail's reach of h
         let h = if h.is_empty() {
             h

@@ -170,9 +170,10 @@ fn simplex_impl<const GRAD: bool>(seed: u32, p: Vec3) -> (f32, Vec3) {
 /// bit — the same operations in the same order on the lanes of SIMD registers (glam's
 /// `Vec4`; no fused multiply-add), the simplex's corners chosen by masks. The octaves of a
 /// multifractal are independent noises, evaluated this way. The lattice hash and the
-/// gradients' dot products run on the lanes too ([`Lattice4`]).
+/// gradients' dot products run on the lanes too ([`Lattice4`]). With `GRAD`, the
+/// gradients too, per axis, as [`simplex_grad`] gives them bit for bit (zeros otherwise).
 #[inline(always)]
-fn simplex4(seeds: [u32; 4], x: Vec4, y: Vec4, z: Vec4) -> Vec4 {
+fn simplex4<const GRAD: bool>(seeds: [u32; 4], x: Vec4, y: Vec4, z: Vec4) -> (Vec4, [Vec4; 3]) {
     let s = (x + y + z) * F3;
     let (i, j, k) = ((x + s).floor(), (y + s).floor(), (z + s).floor());
     let t = (i + j + k) * G3;
@@ -187,6 +188,7 @@ fn simplex4(seeds: [u32; 4], x: Vec4, y: Vec4, z: Vec4) -> Vec4 {
     ];
     let lattice = Lattice4::new(seeds, [i, j, k]);
     let mut value = Vec4::ZERO;
+    let mut grad = [Vec4::ZERO; 3];
     for (c, o) in corners.iter().enumerate() {
         let off = o.map(|m| Vec4::select(m, Vec4::ONE, Vec4::ZERO));
         let g = Vec4::splat(c as f32 * G3);
@@ -195,8 +197,16 @@ fn simplex4(seeds: [u32; 4], x: Vec4, y: Vec4, z: Vec4) -> Vec4 {
         let gd = lattice.dot(*o, d);
         let a2 = a * a;
         value += a2 * a2 * gd;
+        if GRAD {
+            // a²·a·(a·g − (8·(g · d))·d), in the scalar kernel's order
+            let (a3, gd8) = (a2 * a, Vec4::splat(8.0) * gd);
+            let g = lattice.gradients(*o);
+            for (axis, acc) in grad.iter_mut().enumerate() {
+                *acc += a3 * (a * g[axis] - gd8 * d[axis]);
+            }
+        }
     }
-    SIMPLEX_SCALE * value
+    (SIMPLEX_SCALE * value, grad.map(|g| SIMPLEX_SCALE * g))
 }
 
 /// The lattice hash of [`gradient`] for four lanes: per axis and lane, the hash's product
@@ -244,13 +254,40 @@ impl Lattice4 {
         }
     }
 
-    /// `g · d` per lane for the corner `o` (per axis, the lanes that step to the upper
-    /// plane), `g` the gradient the hash picks: `±u ± v` with `u`, `v` two components of
-    /// `d`: [`GRADIENTS`]' row times `d` exactly (every row is two `±1` and a `0`; only
-    /// the sign of a zero product can differ, and it does not reach the noise's sum,
-    /// which starts at `+0`).
+    /// The gradients the hash picks for the corner `o`, per axis: the rows of
+    /// [`GRADIENTS`] decoded on the lanes. Rows 0–7 start with x, 8–15 with y; the second
+    /// term is y for rows 0–3, x for rows 12 and 14, z otherwise; bit 0 of the row flips
+    /// the first, bit 1 the second.
     #[inline(always)]
-    fn dot(&self, o: [BVec4A; 3], d: [Vec4; 3]) -> Vec4 {
+    fn gradients(&self, o: [BVec4A; 3]) -> [Vec4; 3] {
+        use std::arch::x86_64::*;
+        let row = self.row(o);
+        // SAFETY: SSE2 is part of the x86-64 baseline; no memory is accessed.
+        unsafe {
+            let bit = |b: i32| _mm_and_si128(row, _mm_set1_epi32(b));
+            let one = _mm_set1_ps(1.0);
+            let s1 = _mm_xor_ps(one, _mm_castsi128_ps(_mm_slli_epi32::<31>(bit(1))));
+            let s2 = _mm_xor_ps(one, _mm_castsi128_ps(_mm_slli_epi32::<30>(bit(2))));
+            let first_x = _mm_castsi128_ps(_mm_cmplt_epi32(row, _mm_set1_epi32(8)));
+            let second_y = _mm_castsi128_ps(_mm_cmplt_epi32(row, _mm_set1_epi32(4)));
+            let second_x = _mm_castsi128_ps(_mm_cmpeq_epi32(
+                _mm_or_si128(row, _mm_set1_epi32(2)),
+                _mm_set1_epi32(14),
+            ));
+            let second_z = _mm_andnot_ps(
+                _mm_or_ps(second_y, second_x),
+                _mm_castsi128_ps(_mm_set1_epi32(-1)),
+            );
+            let gx = _mm_add_ps(_mm_and_ps(first_x, s1), _mm_and_ps(second_x, s2));
+            let gy = _mm_add_ps(_mm_andnot_ps(first_x, s1), _mm_and_ps(second_y, s2));
+            let gz = _mm_and_ps(second_z, s2);
+            [gx, gy, gz].map(Vec4::from)
+        }
+    }
+
+    /// The gradient rows (`0..16`) the hash picks for the corner `o`, per lane.
+    #[inline(always)]
+    fn row(&self, o: [BVec4A; 3]) -> std::arch::x86_64::__m128i {
         use std::arch::x86_64::*;
         // SAFETY: SSE2 is part of the x86-64 baseline; no memory is accessed.
         unsafe {
@@ -266,27 +303,19 @@ impl Lattice4 {
             h = _mm_xor_si128(h, _mm_srli_epi32::<15>(h));
             h = mul32(h, 0x846c_a68b);
             h = _mm_xor_si128(h, _mm_srli_epi32::<16>(h));
-            let row = _mm_srli_epi32::<28>(h);
-            // Rows 0–7 start with x, 8–15 with y; the second term is y for rows 0–3, x for
-            // rows 12 and 14, z otherwise; bit 0 of the row flips the first, bit 1 the second.
-            let [dx, dy, dz] = d.map(__m128::from);
-            let select = |m: __m128i, a: __m128, b: __m128| {
-                let m = _mm_castsi128_ps(m);
-                _mm_or_ps(_mm_and_ps(m, a), _mm_andnot_ps(m, b))
-            };
-            let u = select(_mm_cmplt_epi32(row, _mm_set1_epi32(8)), dx, dy);
-            let x_second =
-                _mm_cmpeq_epi32(_mm_or_si128(row, _mm_set1_epi32(2)), _mm_set1_epi32(14));
-            let v = select(
-                _mm_cmplt_epi32(row, _mm_set1_epi32(4)),
-                dy,
-                select(x_second, dx, dz),
-            );
-            let bit = |b: i32| _mm_and_si128(row, _mm_set1_epi32(b));
-            let u = _mm_xor_ps(u, _mm_castsi128_ps(_mm_slli_epi32::<31>(bit(1))));
-            let v = _mm_xor_ps(v, _mm_castsi128_ps(_mm_slli_epi32::<30>(bit(2))));
-            Vec4::from(_mm_add_ps(u, v))
+            _mm_srli_epi32::<28>(h)
         }
+    }
+}
+
+impl Lattice4 {
+    /// `g · d` per lane for the corner `o` (per axis, the lanes that step to the upper
+    /// plane), `g` the gradient the hash picks: the scalar kernel's `g.dot(d)`, in its
+    /// order.
+    #[inline(always)]
+    fn dot(&self, o: [BVec4A; 3], d: [Vec4; 3]) -> Vec4 {
+        let [gx, gy, gz] = self.gradients(o);
+        gx * d[0] + gy * d[1] + gz * d[2]
     }
 }
 
@@ -326,14 +355,14 @@ impl Lattice4 {
     }
 
     #[inline(always)]
-    fn dot(&self, o: [BVec4A; 3], d: [Vec4; 3]) -> Vec4 {
+    fn gradients(&self, o: [BVec4A; 3]) -> [Vec4; 3] {
         let bits = o.map(|m| m.bitmask());
         let rows: [Vec4; 4] = std::array::from_fn(|l| {
             let c = |a: usize| self.cells[a][l] + ((bits[a] >> l) & 1) as i32;
             gradient(self.seeds[l], c(0), c(1), c(2)).extend(0.0)
         });
         let gt = glam::Mat4::from_cols(rows[0], rows[1], rows[2], rows[3]).transpose();
-        gt.x_axis * d[0] + gt.y_axis * d[1] + gt.z_axis * d[2]
+        [gt.x_axis, gt.y_axis, gt.z_axis]
     }
 }
 
@@ -482,50 +511,62 @@ impl Fbm {
         value * self.norm
     }
 
-    /// `(t(p), ∇t(p))`.
+    /// `(t(p), ∇t(p))`: the octaves four at a time with their gradients
+    /// ([`Fbm::octaves4_grad`]), summed octave by octave as `Σ ½^k n_k` and
+    /// `Σ (½^k·2^k/λ) ∇n_k` — the same value as [`Fbm::value`], bit for bit.
     #[inline]
     pub fn value_grad(&self, p: Vec3) -> (f32, Vec3) {
-        self.eval::<true>(p)
-    }
-
-    #[inline(always)]
-    fn eval<const GRAD: bool>(&self, p: Vec3) -> (f32, Vec3) {
         let mut q = p * self.inv_wavelength;
         let (mut amp, mut freq) = (1.0f32, self.inv_wavelength);
         let (mut value, mut grad) = (0.0f32, Vec3::ZERO);
-        for k in 0..self.octaves {
-            let (n, g) = self.octave::<GRAD>(k, q);
-            value += amp * n;
-            if GRAD {
-                grad += (amp * freq) * g;
+        let mut k0 = 0;
+        while k0 < self.octaves {
+            let (n, [gx, gy, gz]) = self.octaves4_grad(k0, q);
+            let (n, gx, gy, gz) = (n.to_array(), gx.to_array(), gy.to_array(), gz.to_array());
+            for l in 0..(self.octaves - k0).min(4) as usize {
+                value += amp * n[l];
+                grad += (amp * freq) * Vec3::new(gx[l], gy[l], gz[l]);
+                amp *= GAIN;
+                freq *= LACUNARITY;
             }
-            amp *= GAIN;
-            freq *= LACUNARITY;
-            q *= LACUNARITY;
+            q *= LACUNARITY * LACUNARITY * LACUNARITY * LACUNARITY;
+            k0 += 4;
         }
         (value * self.norm, grad * self.norm)
     }
 
     /// Octave `k` alone, unweighted: `n_k(q + k·c)` (and its gradient in lattice units),
-    /// where `q = 2^k p / λ` is the point in the octave's lattice units. The elevation
-    /// trees' multifractals weight the octaves their own way (`crate::elevation`).
-    #[inline(always)]
-    pub(crate) fn octave<const GRAD: bool>(&self, k: u32, q: Vec3) -> (f32, Vec3) {
+    /// where `q = 2^k p / λ` is the point in the octave's lattice units: the reference the
+    /// four-lane evaluations are checked against.
+    #[cfg(test)]
+    fn octave<const GRAD: bool>(&self, k: u32, q: Vec3) -> (f32, Vec3) {
         let seed = self.seed.wrapping_add(k.wrapping_mul(0x9e37_79b9));
         simplex_impl::<GRAD>(seed, q + k as f32 * OCTAVE_SHIFT)
     }
 
-    /// Octaves `k0 .. k0 + 4` alone, unweighted, as [`Fbm::octave`] gives them (bit for
-    /// bit; lanes past the last octave hold noise too), `q` the point in octave `k0`'s
-    /// lattice units.
+    /// Octaves `k0 .. k0 + 4` alone, unweighted: lane `l` is octave `k0 + l`,
+    /// `n_k(2^l q + k·c)` (bit for bit the scalar noise; lanes past the last octave hold
+    /// noise too), `q` the point in octave `k0`'s lattice units. The elevation trees'
+    /// multifractals weight the octaves their own way (`crate::elevation`).
     #[inline]
     pub(crate) fn octaves4(&self, k0: u32, q: Vec3) -> Vec4 {
+        self.octaves4_impl::<false>(k0, q).0
+    }
+
+    /// [`Fbm::octaves4`] with each octave's gradient in its lattice units, per axis.
+    #[inline]
+    fn octaves4_grad(&self, k0: u32, q: Vec3) -> (Vec4, [Vec4; 3]) {
+        self.octaves4_impl::<true>(k0, q)
+    }
+
+    #[inline(always)]
+    fn octaves4_impl<const GRAD: bool>(&self, k0: u32, q: Vec3) -> (Vec4, [Vec4; 3]) {
         let ks: [u32; 4] = std::array::from_fn(|l| k0 + l as u32);
         let seeds = ks.map(|k| self.seed.wrapping_add(k.wrapping_mul(0x9e37_79b9)));
         let kf = Vec4::from_array(ks.map(|k| k as f32));
         let scale = Vec4::new(1.0, LACUNARITY, LACUNARITY * LACUNARITY, LACUNARITY.powi(3));
         let lane = |q: f32, c: f32| Vec4::splat(q) * scale + kf * c;
-        simplex4(
+        simplex4::<GRAD>(
             seeds,
             lane(q.x, OCTAVE_SHIFT.x),
             lane(q.y, OCTAVE_SHIFT.y),
@@ -611,11 +652,27 @@ mod tests {
         for n in 0..20_000 {
             let p = rng.v([0.5, 300.0, 2e4][n % 3]);
             let f = Fbm::with(rng.0, [3.0, 40.0][n % 2], 1 + n as u32 % 12);
-            let (a, b) = (f.value(p), f.value_grad(p).0);
+            let (a, (b, g)) = (f.value(p), f.value_grad(p));
             assert_eq!(
                 a.to_bits(),
                 b.to_bits(),
                 "{} octaves at {p}: {a} vs {b}",
+                f.octaves()
+            );
+            // the gradient, four octaves at a time, is the scalar kernels' sum
+            let mut q = p * f.inv_wavelength();
+            let (mut amp, mut freq, mut want) = (1.0f32, f.inv_wavelength(), Vec3::ZERO);
+            for k in 0..f.octaves() {
+                want += (amp * freq) * f.octave::<true>(k, q).1;
+                amp *= GAIN;
+                freq *= LACUNARITY;
+                q *= LACUNARITY;
+            }
+            want *= f.norm();
+            assert_eq!(
+                g.to_array().map(f32::to_bits),
+                want.to_array().map(f32::to_bits),
+                "{} octaves at {p}: {g} vs {want}",
                 f.octaves()
             );
         }

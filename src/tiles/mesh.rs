@@ -67,10 +67,17 @@ pub fn add_skirts(mesh: &mut Mesh, footprint: &Aabb, depth: f32) {
             (p.y - footprint.max.y).abs() <= tol,
         ]
     };
+    // Only edges along a side can hang a skirt, and an edge's reverse runs along the same
+    // side, so the search keeps to them (a few thousand of a tile's millions of edges).
+    let sides: Vec<[bool; 4]> = mesh.positions.iter().map(|&p| side(p.into())).collect();
     let mut edges: Vec<(u32, u32)> = mesh
         .triangles
         .iter()
         .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .filter(|&(a, b)| {
+            let (sa, sb) = (sides[a as usize], sides[b as usize]);
+            (0..4).any(|k| sa[k] && sb[k])
+        })
         .collect();
     edges.sort_unstable();
     // A directed edge is on the boundary when its reverse is not in the mesh.
@@ -78,10 +85,6 @@ pub fn add_skirts(mesh: &mut Mesh, footprint: &Aabb, depth: f32) {
         .iter()
         .copied()
         .filter(|&(a, b)| edges.binary_search(&(b, a)).is_err())
-        .filter(|&(a, b)| {
-            let (sa, sb) = (side(mesh.position(a)), side(mesh.position(b)));
-            (0..4).any(|k| sa[k] && sb[k])
-        })
         .collect();
     let mut lowered: Vec<(u32, u32)> = Vec::new();
     let mut below = |v: u32, mesh: &mut Mesh| -> u32 {
