@@ -2,7 +2,7 @@
 //! sampling, on the real UTM DEM (with its nodata edges) and on synthetic grids with
 //! polygons and bicubic.
 
-use crate::common::{Rng, check_z_bands};
+use crate::common::{Rng, check_z_bands, column_crossings_in_bands};
 
 use std::path::Path;
 
@@ -491,23 +491,8 @@ fn column_bands_are_sound_and_as_tall_as_the_local_relief() {
             sharp += (terrain.width() <= 2.0 * (a + 2.0 * relief) + 2.0) as usize;
             for _ in 0..3 {
                 let xy = Vec2::new(rng.range(fp.min.x, fp.max.x), rng.range(fp.min.y, fp.max.y));
-                let (lo, n) = (hc - 2.0 * (a + r), 400);
-                let dz = 4.0 * (a + r) / n as f32;
-                let mut prev = f.value(xy.extend(lo)) > ISO;
-                for k in 1..=n {
-                    let z = lo + k as f32 * dz;
-                    let cur = f.value(xy.extend(z)) > ISO;
-                    if cur != prev {
-                        crossings += 1;
-                        let seg = Interval::new(z - dz, z);
-                        assert!(
-                            bands.as_slice().iter().any(|b| b.overlaps(&seg)),
-                            "{name}: crossing in {seg:?} at {xy} outside {:?}",
-                            bands.as_slice()
-                        );
-                    }
-                    prev = cur;
-                }
+                let zr = Interval::new(hc - 2.0 * (a + r), hc + 2.0 * (a + r));
+                crossings += column_crossings_in_bands(name, &f, xy, zr, 400, &bands);
             }
         }
         assert!(

@@ -30,4 +30,4 @@ pub use sphere::SigmaSphere;
 pub use terrain::Terrain;
 pub use trimesh::{trimesh_import, trimesh_version};
 pub use uv_sphere::uv_sphere;
-pub use z_bands::check_z_bands;
+pub use z_bands::{check_z_bands, column_crossings_in_bands};

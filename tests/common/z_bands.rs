@@ -31,24 +31,38 @@ pub fn check_z_bands(
         pruned += 1.0 - bands.as_slice().iter().map(|b| b.width()).sum::<f32>() / zr.width();
         for _ in 0..columns {
             let xy = Vec2::new(rng.range(fp.min.x, fp.max.x), rng.range(fp.min.y, fp.max.y));
-            let n = 2000;
-            let dz = zr.width() / n as f32;
-            let mut prev = f.value(xy.extend(zr.lo)) - ISO;
-            for k in 1..=n {
-                let z = zr.lo + k as f32 * dz;
-                let cur = f.value(xy.extend(z)) - ISO;
-                if (prev > 0.0) != (cur > 0.0) {
-                    crossings += 1;
-                    let seg = Interval::new(z - dz, z);
-                    assert!(
-                        bands.as_slice().iter().any(|b| b.overlaps(&seg)),
-                        "{name}: crossing in {seg:?} at {xy} outside {:?}",
-                        bands.as_slice()
-                    );
-                }
-                prev = cur;
-            }
+            crossings += column_crossings_in_bands(name, f, xy, zr, 2000, &bands);
         }
     }
     (crossings, pruned / footprints as f32)
+}
+
+/// Scans the column at `xy` over `zr` in `n` steps and asserts that every sign change of
+/// `f − ISO` lies in one of `bands` (`name` labels the message); returns how many it found.
+pub fn column_crossings_in_bands(
+    name: &str,
+    f: &dyn Field,
+    xy: Vec2,
+    zr: Interval,
+    n: usize,
+    bands: &ZBands,
+) -> usize {
+    let dz = zr.width() / n as f32;
+    let mut crossings = 0;
+    let mut prev = f.value(xy.extend(zr.lo)) > ISO;
+    for k in 1..=n {
+        let z = zr.lo + k as f32 * dz;
+        let cur = f.value(xy.extend(z)) > ISO;
+        if cur != prev {
+            crossings += 1;
+            let seg = Interval::new(z - dz, z);
+            assert!(
+                bands.as_slice().iter().any(|b| b.overlaps(&seg)),
+                "{name}: crossing in {seg:?} at {xy} outside {:?}",
+                bands.as_slice()
+            );
+        }
+        prev = cur;
+    }
+    crossings
 }
