@@ -60,37 +60,32 @@ fn point_mut(set: &mut FeatureSet, slot: Slot) -> Option<&mut Point> {
 
 /// Every point of `set`, with its slot.
 fn slots(set: &FeatureSet) -> Vec<(Slot, Point)> {
+    /// The points of each item of `items`, `slot(item, point)` each.
+    fn lists<T>(
+        v: &mut Vec<(Slot, Point)>,
+        items: &[T],
+        points: fn(&T) -> &[Point],
+        slot: fn(usize, usize) -> Slot,
+    ) {
+        for (i, item) in items.iter().enumerate() {
+            v.extend(
+                points(item)
+                    .iter()
+                    .enumerate()
+                    .map(|(k, p)| (slot(i, k), *p)),
+            );
+        }
+    }
     let mut v = Vec::new();
-    for (i, c) in set.curves.iter().enumerate() {
-        v.extend(
-            c.points
-                .iter()
-                .enumerate()
-                .map(|(k, p)| (Slot::Curve(i, k), *p)),
-        );
-    }
-    for (i, q) in set.quads.iter().enumerate() {
-        v.extend(
-            q.corners
-                .iter()
-                .enumerate()
-                .map(|(k, p)| (Slot::Quad(i, k), *p)),
-        );
-    }
+    lists(&mut v, &set.curves, |c| &c.points, Slot::Curve);
+    lists(&mut v, &set.quads, |q| &q.corners, Slot::Quad);
     v.extend(
         set.discs
             .iter()
             .enumerate()
             .map(|(i, d)| (Slot::Disc(i), d.center)),
     );
-    for (i, t) in set.tunnels.iter().enumerate() {
-        v.extend(
-            t.path
-                .iter()
-                .enumerate()
-                .map(|(k, p)| (Slot::Tunnel(i, k), *p)),
-        );
-    }
+    lists(&mut v, &set.tunnels, |t| &t.path, Slot::Tunnel);
     for (i, a) in set.arches.iter().enumerate() {
         v.push((Slot::ArchFrom(i), a.from));
         v.push((Slot::ArchTo(i), a.to));
