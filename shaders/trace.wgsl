@@ -24,6 +24,8 @@ struct Uniforms {
     dry: vec4<f32>,       // dry grass
     disk_u: vec4<f32>,    // the sun's disk (shade.rs Shading::sun_disk)
     disk_v: vec4<f32>,
+    water: vec4<f32>,     // level, clarity, 1 when there is water (0: none)
+    water_colour: vec4<f32>,
     dims: vec4<u32>,      // width, height, max steps, ground parameters + 1 (0: no ground)
     consts: vec4<u32>,    // variation seed, occlusion samples, ground flags, sun seed
 }
@@ -278,6 +280,26 @@ fn display(c_in: vec3<f32>) -> vec3<f32> {
     return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), vec3<f32>(0.0), vec3<f32>(1.0));
 }
 
+// shade.rs Shading::seen (t < 0: a miss) and Shading::water_surface.
+fn seen(o: vec3<f32>, d: vec3<f32>, t: f32, surface: vec3<f32>) -> vec3<f32> {
+    let far = select(t, 3.0e38, t < 0.0);
+    if u.water.z > 0.0 && o.z > u.water.x && d.z < 0.0 {
+        let tw = (u.water.x - o.z) / d.z;
+        if tw < far {
+            let through = exp(-(far - tw) / u.water.y);
+            let deep = u.water_colour.xyz * light(vec3<f32>(0.0, 0.0, 1.0), 1.0, 1.0);
+            let body = mix(deep, surface, through);
+            let fresnel = 0.02 + 0.98 * pow(1.0 - clamp(-d.z, 0.0, 1.0), 5.0);
+            let mirrored = sky(vec3<f32>(d.x, d.y, -d.z));
+            return haze(mix(body, mirrored, fresnel), tw);
+        }
+    }
+    if t < 0.0 {
+        return sky(d);
+    }
+    return haze(surface, t);
+}
+
 // shade.rs Shading::sun_towards: the shadow ray of pixel (i, j).
 fn sun_towards(i: u32, j: u32) -> vec3<f32> {
     let h = mix32(i ^ mix32(j ^ u.consts.w));
@@ -503,7 +525,7 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     out_steps[at] = hit_steps;
     out_depth[at] = hit_t;
     if hit_t == MISS {
-        out_rgba[at] = srgb8(display(sky(d)));
+        out_rgba[at] = srgb8(display(seen(o, d, hit_t, vec3<f32>(0.0))));
         return;
     }
     // shade.rs ambient_occlusion.
@@ -511,7 +533,7 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     if ao_norm > 0.0 {
         ao = ao_sum / ao_norm;
     }
-    let c = haze(albedo(p, n) * light(n, lit, ao), hit_t);
+    let c = seen(o, d, hit_t, albedo(p, n) * light(n, lit, ao));
     out_rgba[at] = srgb8(display(c));
 }
 

@@ -361,3 +361,53 @@ fn pruned_tiles_hit_where_the_whole_tree_does() {
         assert!(frame.depth.iter().filter(|t| t.is_finite()).count() > depth.len() / 2);
     }
 }
+
+/// The sea cliffs' job sets a water level and its geology colours the rock: in its
+/// preview, pixels whose rays cross more than 12 m of water (three times its clarity) show water (blue over red), and
+/// the cliff's rock above it shows sandstone (red over blue); the soft bed at sea level is
+/// darker rock than the hard sandstone above it.
+#[test]
+fn sea_level_shows_water_and_the_geology_colours_the_rock() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/sea_cliffs.ron");
+    let loaded = karstic::scene::load(&path).unwrap();
+    let compiled = loaded.compile().unwrap();
+    let tree = &compiled.tree;
+    let cam = karstic::render::cpu::scene_camera(&loaded.scene, tree, None, None, 96, 54).unwrap();
+    let settings = RenderSettings::for_tree(
+        &loaded.scene,
+        tree,
+        compiled.ground.clone(),
+        &cam,
+        Method::Segment,
+    );
+    assert_eq!(settings.shading.water.map(|w| w.level), Some(0.0));
+    let m = &settings.materials;
+    let (soft, hard) = (Vec3::new(60.0, 92.0, 0.0), Vec3::new(60.0, 92.0, 20.0));
+    assert!(
+        m.rock_at(soft).length() < 0.6 * m.rock_at(hard).length(),
+        "soft bed {} against sandstone {}",
+        m.rock_at(soft),
+        m.rock_at(hard)
+    );
+    let frame = cpu::render(tree, &cam, &settings, &ProgressBar::hidden());
+    let (mut water, mut rock) = (0, 0);
+    for (k, &t) in frame.depth.iter().enumerate() {
+        let (i, j) = (k as u32 % cam.width, k as u32 / cam.width);
+        let [r, _, b, _] = [0, 1, 2, 3].map(|c| frame.rgba[4 * k + c]);
+        let ray = cam.pixel_ray(i, j);
+        let z = ray.at(t).z;
+        // Metres of water the ray crosses before the floor (shallows show their floor).
+        let path = (t - ray.origin.z / -ray.dir.z).max(0.0);
+        if !t.is_finite() || z < 0.0 {
+            if ray.dir.z < 0.0 && path > 12.0 {
+                assert!(b > r, "pixel ({i}, {j}) under the water: {r} red, {b} blue");
+                water += 1;
+            }
+        } else if z > 5.0 && m.cover(cam.pixel_ray(i, j).at(t), Vec3::Y).rock > 0.0 {
+            rock += usize::from(r > b);
+        }
+    }
+    let n = frame.depth.len();
+    assert!(water > n / 10, "{water} of {n} pixels show water");
+    assert!(rock > n / 10, "{rock} of {n} pixels show sandstone");
+}

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use super::camera::{Camera, Ray};
 use super::image::Frame;
 use super::material::Materials;
-use super::shade::{AO_SAMPLES, Shading, ambient_occlusion, to_srgb8};
+use super::shade::{AO_SAMPLES, Shading, Water, ambient_occlusion, to_srgb8};
 use super::trace::{Method, Trace, TraceParams, Tracer, outward};
 use glam::Vec3;
 
@@ -51,8 +51,8 @@ impl RenderSettings {
 
 impl RenderSettings {
     /// The settings `karstic render` and the editor use for a tree file's scene: shading at
-    /// the scale of its job's region (else the support), its materials
-    /// ([`Materials::for_tree`]) over its terrain `ground`.
+    /// the scale of its job's region (else the support) with its job's water level, its
+    /// materials ([`Materials::for_tree`]) over its terrain `ground`.
     pub fn for_tree(
         scene: &Scene,
         tree: &Tree,
@@ -60,10 +60,16 @@ impl RenderSettings {
         camera: &Camera,
         method: Method,
     ) -> Self {
-        RenderSettings {
+        let mut s = RenderSettings {
             materials: Materials::for_tree(scene, tree, ground),
             ..RenderSettings::for_scene(&scene_box(scene, tree), camera, method)
-        }
+        };
+        s.shading.water = scene
+            .job
+            .as_ref()
+            .and_then(|j| j.water_level)
+            .map(|z| Water::at(z.0));
+        s
     }
 }
 
@@ -281,8 +287,9 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
         .zip(hits)
         .map(|((ray, _, _), (tr, n, ao, shadow))| {
             if !tr.hit() {
+                let c = sh.seen(ray.origin, ray.dir, tr.t, Vec3::ZERO);
                 return Pixel {
-                    rgba: to_srgb8(sh.display(sh.sky(ray.dir))),
+                    rgba: to_srgb8(sh.display(c)),
                     trace: tr,
                 };
             }
@@ -294,7 +301,7 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
             };
             let p = ray.at(tr.t);
             let albedo = s.materials.albedo(p, n);
-            let c = sh.surface(albedo, sh.light(n, lit, ao), tr.t);
+            let c = sh.seen(ray.origin, ray.dir, tr.t, albedo * sh.light(n, lit, ao));
             Pixel {
                 rgba: to_srgb8(sh.display(c)),
                 trace: tr,

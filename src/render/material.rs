@@ -9,8 +9,14 @@
 //! back to slope alone. Boundaries between materials wander with a low-frequency noise
 //! so the cover does not follow contour lines.
 //!
+//! When the scene has a geology (Paris et al. 2019 §4), bare rock takes its colour from the
+//! resistance there: pale, warm sandstone where the rock is hard, dark shale where it is
+//! soft, so the strata a tree file writes show on cliffs and canyon walls as they do in
+//! section (`karstic geology section`).
+//!
 //! Colours are linear RGB albedos in `[0, 1]`. The GPU shader (`shaders/trace.wgsl`)
-//! mirrors [`Materials::cover`] and [`Materials::albedo`]; keep the two in step.
+//! mirrors [`Materials::cover`] and [`Materials::albedo`]; keep the two in step. It has no
+//! geology trees: a scene whose rock is coloured by one renders on the CPU.
 
 use std::sync::Arc;
 
@@ -19,6 +25,7 @@ use glam::{Vec2, Vec3};
 use crate::dem::HeightfieldField;
 use crate::field::noise::simplex;
 use crate::field::{Aabb, Field, Tree};
+use crate::geology::Geology;
 use crate::scene::Scene;
 
 /// Seed of the noise that moves material boundaries.
@@ -63,8 +70,13 @@ impl SnowLine {
 /// The material model of a scene.
 #[derive(Clone, Debug)]
 pub struct Materials {
-    /// Albedo of bare rock.
+    /// Albedo of bare rock (without a geology).
     pub rock: Vec3,
+    /// Albedos of the softest (`ρ = 0`) and the hardest (`ρ = 1`) rock, when a geology
+    /// colours it.
+    pub strata_rock: (Vec3, Vec3),
+    /// The scene's geology, when it has one: bare rock is coloured by its resistance.
+    pub geology: Option<Arc<Geology>>,
     /// Albedo of soil.
     pub soil: Vec3,
     /// Albedo of lush grass.
@@ -105,6 +117,8 @@ impl Materials {
             .map_or(0.0, |d| d.reach_total());
         Materials {
             rock: Vec3::new(0.23, 0.2, 0.17),
+            strata_rock: (Vec3::new(0.075, 0.06, 0.05), Vec3::new(0.27, 0.17, 0.095)),
+            geology: None,
             soil: Vec3::new(0.2, 0.15, 0.09),
             grass: Vec3::new(0.08, 0.16, 0.04),
             dry: Vec3::new(0.2, 0.19, 0.08),
@@ -120,7 +134,8 @@ impl Materials {
     }
 
     /// The materials of a tree file's scene: at the scale of [`scene_box`], over the
-    /// compiled scene's terrain, with the job's snow line. The preview, the feature
+    /// compiled scene's terrain, with the job's snow line, rock coloured by the scene's
+    /// geology when it has one. The preview, the feature
     /// views, the mesh colours and the texture masks all take theirs from here.
     pub fn for_tree(scene: &Scene, tree: &Tree, ground: Option<Arc<HeightfieldField>>) -> Self {
         Self::for_scene_in(scene, tree.support(), ground)
@@ -141,6 +156,10 @@ impl Materials {
             .as_ref()
             .and_then(|j| j.snow_line)
             .map(|z| SnowLine::at(z.0, &b));
+        m.geology = scene
+            .geology
+            .as_ref()
+            .map(|g| Arc::new(Geology::from_spec(g, scene.seed)));
         m
     }
 
@@ -183,18 +202,32 @@ impl Materials {
         }
     }
 
-    /// Albedo of a point with this cover.
-    pub fn albedo_of(&self, c: &Cover) -> Vec3 {
+    /// Albedo of bare rock at `p`: by the geology's resistance there, else [`Self::rock`].
+    pub fn rock_at(&self, p: Vec3) -> Vec3 {
+        match &self.geology {
+            Some(g) => self.strata_rock.0.lerp(self.strata_rock.1, g.value(p)),
+            None => self.rock,
+        }
+    }
+
+    /// Albedo of a point with this cover and `rock` the albedo of its bare rock.
+    pub fn albedo_of(&self, c: &Cover, rock: Vec3) -> Vec3 {
         self.grass
             .lerp(self.dry, c.dry)
             .lerp(self.soil, c.soil)
             .lerp(self.snow, c.snow)
-            .lerp(self.rock, c.rock)
+            .lerp(rock, c.rock)
     }
 
     /// Albedo at `p` with outward unit normal `n`.
     pub fn albedo(&self, p: Vec3, n: Vec3) -> Vec3 {
-        self.albedo_of(&self.cover(p, n))
+        let c = self.cover(p, n);
+        let rock = if c.rock > 0.0 {
+            self.rock_at(p)
+        } else {
+            self.rock
+        };
+        self.albedo_of(&c, rock)
     }
 }
 

@@ -31,7 +31,7 @@ pub use cpu::{RenderSettings, render};
 pub use fallback::{Device, Fallback, Renderable};
 pub use image::Frame;
 pub use material::{Cover, Materials};
-pub use shade::Shading;
+pub use shade::{Shading, Water};
 pub use trace::{Method, Trace, TraceParams, Tracer};
 
 /// Errors of the renderer.

@@ -18,6 +18,12 @@
 //! * **Aerial perspective.** The colour at distance `t` fades to the horizon's colour by
 //!   `exp(−t / haze)`, with the haze distance a multiple of the scene's size so close-ups
 //!   and overviews read alike.
+//! * **Water.** A tree's job may set a water level (a sea, a lake): rays from above that
+//!   cross it before the terrain see the water's surface, a Fresnel mix (Schlick 1994) of
+//!   the sky it mirrors and of the water's body; through the body the terrain below fades,
+//!   over [`Water::clarity`] metres of path, to the colour of deep water lit from above, so
+//!   shallows show their floor and the open sea does not. Pictures only: meshes stop at
+//!   the terrain.
 //! * **Tone mapping.** Narkowicz's fit of the ACES filmic curve, then sRGB.
 //!
 //! Colours are linear RGB. The GPU shader (`shaders/trace.wgsl`) mirrors these formulas;
@@ -59,6 +65,31 @@ pub struct Shading {
     pub ao_radius: f32,
     /// Exposure applied before the tone curve.
     pub exposure: f32,
+    /// A water surface, when the scene has one.
+    pub water: Option<Water>,
+}
+
+/// A horizontal water surface drawn in pictures.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Water {
+    /// Altitude of the surface, metres.
+    pub level: f32,
+    /// Path length (metres) through the water over which the floor's light fades by
+    /// `1 − 1/e` to the colour of deep water.
+    pub clarity: f32,
+    /// Albedo of deep water (the light its body scatters back).
+    pub colour: Vec3,
+}
+
+impl Water {
+    /// Water at `level`, clear over 4 m of path, blue-green when deep.
+    pub fn at(level: f32) -> Self {
+        Water {
+            level,
+            clarity: 4.0,
+            colour: Vec3::new(0.01, 0.035, 0.045),
+        }
+    }
 }
 
 impl Shading {
@@ -77,6 +108,7 @@ impl Shading {
             sun_radius: 0.02,
             ao_radius: 0.006 * r,
             exposure: 1.0,
+            water: None,
         }
     }
 
@@ -123,6 +155,39 @@ impl Shading {
     /// Colour of a surface of `albedo` lit by `light`, seen from distance `t`.
     pub fn surface(&self, albedo: Vec3, light: Vec3, t: f32) -> Vec3 {
         self.haze(albedo * light, t)
+    }
+
+    /// The radiance seen along the ray from `o` in unit direction `d` whose first surface
+    /// hit is at `t` (`∞`: none) with unhazed radiance `surface` there: the sky on a miss,
+    /// the hazed surface on a hit, and the water where the ray crosses its surface first.
+    pub fn seen(&self, o: Vec3, d: Vec3, t: f32, surface: Vec3) -> Vec3 {
+        if let Some(w) = self.water
+            && o.z > w.level
+            && d.z < 0.0
+        {
+            let tw = (w.level - o.z) / d.z;
+            if tw < t {
+                return self.haze(self.water_surface(&w, d, t - tw, surface), tw);
+            }
+        }
+        if t.is_finite() {
+            self.haze(surface, t)
+        } else {
+            self.sky(d)
+        }
+    }
+
+    /// The radiance leaving water's surface along `−d`: the floor's `below` seen through
+    /// `path` metres of water (`∞`: no floor), fading to deep water lit from above, mixed
+    /// with the mirrored sky by the Fresnel term of Schlick 1994 for water (reflectance 0.02 head-on).
+    fn water_surface(&self, w: &Water, d: Vec3, path: f32, below: Vec3) -> Vec3 {
+        let through = (-path / w.clarity).exp();
+        let deep = w.colour * self.light(Vec3::Z, 1.0, 1.0);
+        let body = deep.lerp(below, through);
+        let cos = (-d.z).clamp(0.0, 1.0);
+        let fresnel = 0.02 + 0.98 * (1.0 - cos).powi(5);
+        let mirrored = self.sky(Vec3::new(d.x, d.y, -d.z));
+        body.lerp(mirrored, fresnel)
     }
 
     /// Blends `c` seen at distance `t` towards the horizon's colour.
@@ -222,6 +287,34 @@ mod tests {
             ..s
         };
         assert_eq!(none.sun_towards(3, 4), none.sun);
+    }
+
+    #[test]
+    fn water_shows_shallows_and_mirrors_the_sky_at_grazing_angles() {
+        let s = Shading {
+            water: Some(Water::at(0.0)),
+            ..scene()
+        };
+        let o = Vec3::new(0.0, 0.0, 10.0);
+        let floor = Vec3::new(0.6, 0.3, 0.1);
+        let down = Vec3::new(0.0, 0.6, -0.8);
+        // A floor 0.1 m under the surface shows; 100 m of water hides it.
+        let t_surface = 10.0 / 0.8;
+        let shallow = s.seen(o, down, t_surface + 0.1, floor);
+        let deep = s.seen(o, down, t_surface + 100.0, floor);
+        let open = s.seen(o, down, f32::INFINITY, floor);
+        assert!(shallow.x > 2.0 * deep.x, "{shallow} vs {deep}");
+        assert!((deep - open).length() < 1e-3, "{deep} vs {open}");
+        // A hit above the water, or a ray that never reaches it, is not affected.
+        assert_eq!(s.seen(o, down, 5.0, floor), s.haze(floor, 5.0));
+        let up = Vec3::new(0.0, 0.6, 0.8);
+        assert_eq!(s.seen(o, up, f32::INFINITY, floor), s.sky(up));
+        // Grazing rays mirror the sky: the water turns sky-coloured.
+        let graze = Vec3::new(0.0, 0.999, -0.045).normalize();
+        let far = s.seen(o, graze, f32::INFINITY, floor);
+        let sky = s.haze(s.sky(Vec3::new(graze.x, graze.y, -graze.z)), 10.0 / 0.045);
+        assert!((far - sky).length() < 0.25 * sky.length(), "{far} vs {sky}");
+        assert!(open.length() < 0.5 * far.length(), "{open} vs {far}");
     }
 
     #[test]

@@ -231,6 +231,10 @@ pub struct JobSpec {
     /// Altitude (metres) above which flats turn to snow (default: no snow).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub snow_line: Option<Finite>,
+    /// Altitude (metres) of a water surface the pictures draw: a sea or a lake, with
+    /// shallows showing their floor (default: no water; meshes are not affected).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub water_level: Option<Finite>,
 }
 
 fn default_image() -> (u32, u32) {

@@ -14,7 +14,7 @@ use crate::render::camera::Camera;
 use crate::render::cpu::RenderSettings;
 use crate::render::image::Frame;
 use crate::render::material::{DRY_SCALE, VARIATION_SEED};
-use crate::render::shade::{AO_SAMPLES, SUN_SEED};
+use crate::render::shade::{AO_SAMPLES, SUN_SEED, Water};
 use crate::render::trace::Method;
 use crate::tape::Tape;
 use crate::tape::noise::encode_fbm;
@@ -23,7 +23,7 @@ use crate::tape::noise::encode_fbm;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct Uniforms {
-    v: [[f32; 4]; 21],
+    v: [[f32; 4]; 23],
     dims: [u32; 4],
     consts: [u32; 4],
 }
@@ -51,6 +51,7 @@ impl Uniforms {
         };
         let snow = m.snow_line.map_or([0.0; 2], |l| [l.altitude, l.blend]);
         let (disk_u, disk_v) = sh.sun_disk();
+        let (water, on) = sh.water.map_or((Water::at(0.0), 0.0), |w| (w, 1.0));
         let (ground_flags, ground_at) = tape.ground.map_or((0, 0), |(f, at)| (f, at + 1));
         Uniforms {
             v: [
@@ -75,6 +76,8 @@ impl Uniforms {
                 v4(m.dry, 0.0),
                 v4(disk_u, 0.0),
                 v4(disk_v, 0.0),
+                [water.level, water.clarity, on, 0.0],
+                v4(water.colour, 0.0),
             ],
             dims: [cam.width, cam.height, s.trace.max_steps, ground_at],
             consts: [VARIATION_SEED, AO_SAMPLES, ground_flags, SUN_SEED],
@@ -366,6 +369,11 @@ impl GpuContext {
         settings: &RenderSettings,
         evals_per_pass: u32,
     ) -> Result<Frame, GpuError> {
+        if settings.materials.geology.is_some() {
+            return Err(GpuError::Unsuitable(
+                "the shader has no geology trees, which colour this scene's rock".into(),
+            ));
+        }
         let (w, h) = (camera.width, camera.height);
         let n = w as u64 * h as u64;
         self.check_size("the image", 4 * n)?;
