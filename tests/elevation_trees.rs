@@ -222,6 +222,7 @@ fn a_large_blend_in_batches_is_the_sum_over_every_child_bit_for_bit() {
         let elevation = match k % 5 {
             0 => ElevationFn::Fractal(Multifractal::new(Kind::Fbm, 50.0, 80.0, 90.0, 3, k)),
             1 => ElevationFn::Fractal(Multifractal::new(Kind::Ridged, 60.0, 90.0, 70.0, 5, k)),
+            2 => ElevationFn::Fractal(Multifractal::new(Kind::Hybrid, 40.0, 70.0, 80.0, 4, k)),
             _ => ElevationFn::Constant(rng.range(-20.0, 200.0)),
         };
         Node::primitive(Primitive::Disc(Disc {

@@ -3,8 +3,6 @@
 //! children whose support box covers its cell — for a disc, only the cells its disc
 //! meets.
 
-use std::ops::Range;
-
 use glam::Vec2;
 
 use crate::field::Rect;
@@ -124,28 +122,31 @@ impl GridIndex {
     /// The children whose support may hold `p`.
     #[inline]
     pub fn at(&self, p: Vec2) -> &[u32] {
-        &self.items[self.span(p)]
+        self.cell(p).map_or(&[], |k| self.list(k))
     }
 
-    /// Where [`GridIndex::at`]'s children lie in [`GridIndex::items`].
+    /// How many cells the grid has.
     #[inline]
-    pub fn span(&self, p: Vec2) -> Range<usize> {
+    pub fn cell_count(&self) -> usize {
+        self.dims[0] * self.dims[1]
+    }
+
+    /// The cell (`0..cell_count()`) holding `p`; `None` off the grid and where `p` is not
+    /// finite.
+    #[inline]
+    pub fn cell(&self, p: Vec2) -> Option<usize> {
         let u = (p - self.origin) * self.inv_cell;
         if !(u.x >= 0.0 && u.y >= 0.0) {
-            return 0..0;
+            return None;
         }
         let (i, j) = (u.x as usize, u.y as usize);
-        if i >= self.dims[0] || j >= self.dims[1] {
-            return 0..0;
-        }
-        let k = i + self.dims[0] * j;
-        self.offsets[k] as usize..self.offsets[k + 1] as usize
+        (i < self.dims[0] && j < self.dims[1]).then(|| i + self.dims[0] * j)
     }
 
-    /// The cells' lists of children, one after the other.
+    /// The children listed in cell `k` (`k < cell_count()`).
     #[inline]
-    pub fn items(&self) -> &[u32] {
-        &self.items
+    pub fn list(&self, k: usize) -> &[u32] {
+        &self.items[self.offsets[k] as usize..self.offsets[k + 1] as usize]
     }
 
     /// The children whose support may meet `r`, sorted, without repeats (every child when
@@ -160,10 +161,7 @@ impl GridIndex {
         let mut v = Vec::new();
         for j in j0..=j1 {
             for i in i0..=i1 {
-                let k = i + self.dims[0] * j;
-                v.extend_from_slice(
-                    &self.items[self.offsets[k] as usize..self.offsets[k + 1] as usize],
-                );
+                v.extend_from_slice(self.list(i + self.dims[0] * j));
             }
         }
         v.sort_unstable();

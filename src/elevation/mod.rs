@@ -52,8 +52,8 @@ pub enum ElevationError {
     Leaf(String),
 }
 
-/// Points per rayon task in [`ElevationTree::heights`].
-const BATCH: usize = 4096;
+/// Fewest and most points per rayon task in [`ElevationTree::heights`].
+const BATCH: (usize, usize) = (4096, 65536);
 
 /// An elevation tree: its root node.
 #[derive(Clone, Debug)]
@@ -80,9 +80,13 @@ impl ElevationTree {
     }
 
     /// Elevations of many points, in parallel: `out[i] = f(points[i])`.
+    /// The points go to each thread in a few large chunks: a blend's batch shares the
+    /// work on the points that fall in the same cell of its index.
     pub fn heights(&self, points: &[Vec2], lod: &Lod, out: &mut [f32]) {
-        out.par_chunks_mut(BATCH)
-            .zip(points.par_chunks(BATCH))
+        let chunk =
+            (points.len().div_ceil(4 * rayon::current_num_threads())).clamp(BATCH.0, BATCH.1);
+        out.par_chunks_mut(chunk)
+            .zip(points.par_chunks(chunk))
             .for_each(|(o, p)| self.root.heights(p, lod, o));
     }
 

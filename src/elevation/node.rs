@@ -17,7 +17,7 @@
 //! Bounds over a rectangle (ranges of `f` and `α`, Lipschitz bounds `λ_f`, `λ_α`) are in
 //! `bounds.rs`.
 
-use glam::{Mat4, Vec2, Vec4};
+use glam::{Vec2, Vec4};
 
 use super::geometry::{EMPTY_RECT, rect_contains, rect_union};
 use super::index::GridIndex;
@@ -67,12 +67,8 @@ pub(super) struct Blend {
     /// every point). The point query weighs the discs of constant elevation (the plateaus
     /// and hills that make most of a large blend) without a branch and without reading the
     /// child's node, and reads the node of another disc only where its weight is not 0.
-    /// Then one more entry, [`NO_DISC`], which weighs 0 at every point.
     discs: Vec<Vec4>,
 }
-
-/// A flat disc at infinity: `(1 − ∞ / 1)₊³ = 0` at every finite point.
-const NO_DISC: Vec4 = Vec4::new(f32::INFINITY, f32::INFINITY, 1.0, 0.0);
 
 impl Blend {
     /// `(f(p), α(p))`: the children over `p`'s cell of the index, in the order of the
@@ -106,78 +102,129 @@ impl Blend {
     }
 
     /// `out[k] = self.eval(points[k], lod).f` bit for bit, four points at a time on the
-    /// lanes of SIMD registers: lane `l` sums its own point's candidates in their order,
-    /// with the same operations as [`Blend::eval`] (a lane past the end of its list adds
-    /// [`NO_DISC`]'s zeros, which leave the sums as they are). The points are taken in
-    /// order of their candidates' count, so the four of a group have about as many. Per
-    /// group, the terms `(α, α f)` of the discs first, then those of the other children
-    /// where they weigh, then the sums.
+    /// lanes of SIMD registers. The points are sorted by their cell of the index (a
+    /// counting sort), so the points of a cell share its list of candidates: for each
+    /// candidate in the list's order, each lane adds its point's term to its sums with the
+    /// same operations as [`Blend::eval`] — the candidate's data read once for all the
+    /// cell's points, the points' sums in memory. A multifractal disc's elevation is
+    /// evaluated only at the points it weighs at, four such points at a time
+    /// (`Multifractal::values4`).
     fn heights(&self, ix: &GridIndex, points: &[Vec2], lod: &Lod, out: &mut [f32]) {
-        let items = ix.items();
-        let lists: Vec<&[u32]> = points.iter().map(|&p| &items[ix.span(p)]).collect();
-        // A counting sort of the points by their count.
-        let longest = lists.iter().map(|l| l.len()).max().unwrap_or(0);
-        let mut next = vec![0usize; longest + 2];
-        for l in &lists {
-            next[l.len() + 1] += 1;
+        // The points off the grid (whose list is empty) go in one more cell.
+        let cells = ix.cell_count();
+        let keys: Vec<u32> = points
+            .iter()
+            .map(|&p| ix.cell(p).unwrap_or(cells) as u32)
+            .collect();
+        let mut start = vec![0u32; cells + 2];
+        for &c in &keys {
+            start[c as usize + 1] += 1;
         }
-        for n in 1..next.len() {
-            next[n] += next[n - 1];
+        for c in 1..start.len() {
+            start[c] += start[c - 1];
         }
-        let mut order = vec![0usize; points.len()];
-        for (k, l) in lists.iter().enumerate() {
-            order[next[l.len()]] = k;
-            next[l.len()] += 1;
+        // The points in the order of their cells, by coordinate, and where each came from.
+        let mut next = start.clone();
+        let (mut xs, mut ys) = (vec![0.0f32; points.len()], vec![0.0f32; points.len()]);
+        let mut order = vec![0u32; points.len()];
+        for (k, (&c, p)) in keys.iter().zip(points).enumerate() {
+            let at = next[c as usize] as usize;
+            (xs[at], ys[at], order[at]) = (p.x, p.y, k as u32);
+            next[c as usize] += 1;
         }
-        let none = self.children.len();
-        let mut terms: Vec<[Vec4; 2]> = Vec::with_capacity(longest);
-        let mut others: Vec<(usize, usize, usize)> = Vec::new();
-        for group in order.chunks(4) {
-            // A short last group repeats its last point.
-            let ks: [usize; 4] = std::array::from_fn(|l| group[l.min(group.len() - 1)]);
-            let p = ks.map(|k| points[k]);
-            let (px, py) = (
-                Vec4::from_array(p.map(|p| p.x)),
-                Vec4::from_array(p.map(|p| p.y)),
-            );
-            let l = ks.map(|k| lists[k]);
-            let steps = l.iter().map(|l| l.len()).max().unwrap_or(0);
-            terms.clear();
-            others.clear();
-            for step in 0..steps {
-                let c = l.map(|l| l.get(step).map_or(none, |&i| i as usize));
-                let d = Mat4::from_cols(
-                    self.discs[c[0]],
-                    self.discs[c[1]],
-                    self.discs[c[2]],
-                    self.discs[c[3]],
-                )
-                .transpose();
-                let (qx, qy) = (px - d.x_axis, py - d.y_axis);
-                let t = (Vec4::ONE - (qx * qx + qy * qy) / d.z_axis).max(Vec4::ZERO);
-                let a = t * t * t;
-                let flat = d.w_axis.cmpeq(d.w_axis);
-                terms.push([a, Vec4::select(flat, a * d.w_axis, Vec4::ZERO)]);
-                let other = (!flat & a.cmpgt(Vec4::ZERO)).bitmask();
-                if other != 0 {
-                    for lane in (0..4).filter(|lane| other >> lane & 1 != 0) {
-                        others.push((step, lane, c[lane]));
+        let mut lanes = Lanes::default();
+        for c in 0..=cells {
+            let run = start[c] as usize..start[c + 1] as usize;
+            if run.is_empty() {
+                continue;
+            }
+            lanes.load(&xs[run.clone()], &ys[run.clone()]);
+            let list = if c < cells { ix.list(c) } else { &[] };
+            for &i in list {
+                self.add_terms(i as usize, lod, &mut lanes);
+            }
+            for (g, group) in order[run].chunks(4).enumerate() {
+                let (s, fs) = (lanes.s[g], lanes.fs[g]);
+                let w = s.max(Vec4::splat(BLEND_FLOOR));
+                let f = ((fs + (w - s) * self.base) / w).to_array();
+                for (&k, f) in group.iter().zip(f) {
+                    out[k as usize] = f;
+                }
+            }
+        }
+    }
+
+    /// Adds child `i`'s terms `(α, α f)` to the sums of the points in `lanes`: a disc of
+    /// constant elevation from its entry in `discs`; a multifractal disc where its weight
+    /// is not 0, its elevation at those points four at a time; any other child by
+    /// [`Blend::weigh`] where its entry does not weigh 0.
+    #[inline]
+    fn add_terms(&self, i: usize, lod: &Lod, lanes: &mut Lanes) {
+        let d = self.discs[i];
+        let (cx, cy, r2) = (Vec4::splat(d.x), Vec4::splat(d.y), Vec4::splat(d.z));
+        let weight = |x: Vec4, y: Vec4| {
+            let (qx, qy) = (x - cx, y - cy);
+            let t = (Vec4::ONE - (qx * qx + qy * qy) / r2).max(Vec4::ZERO);
+            t * t * t
+        };
+        let n = lanes.x.len();
+        if !d.w.is_nan() {
+            let h = Vec4::splat(d.w);
+            for g in 0..n {
+                let a = weight(lanes.x[g], lanes.y[g]);
+                lanes.s[g] += a;
+                lanes.fs[g] += a * h;
+            }
+            return;
+        }
+        let child = &self.children[i];
+        let fractal = match &child.kind {
+            Kind::Primitive(Primitive::Disc(Disc {
+                centre,
+                elevation: ElevationFn::Fractal(m),
+                ..
+            })) => Some((*centre, m)),
+            _ => None,
+        };
+        lanes.a.clear();
+        lanes.af.clear();
+        lanes.pending.clear();
+        for g in 0..n {
+            let (x, y) = (lanes.x[g].to_array(), lanes.y[g].to_array());
+            let mut a = weight(lanes.x[g], lanes.y[g]).to_array();
+            let mut af = [0.0f32; 4];
+            for (l, (a, af)) in a.iter_mut().zip(&mut af).enumerate() {
+                if *a > 0.0 {
+                    let p = Vec2::new(x[l], y[l]);
+                    if fractal.is_some() && rect_contains(&child.support, p) {
+                        lanes.pending.push((g, l, p));
+                    } else {
+                        (*a, *af) = self.weigh(i, p, lod);
                     }
                 }
             }
-            for &(step, lane, c) in &others {
-                let (a, af) = self.weigh(c, p[lane], lod);
-                terms[step][0][lane] = a;
-                terms[step][1][lane] = af;
+            lanes.a.push(a);
+            lanes.af.push(af);
+        }
+        if let Some((centre, m)) = fractal {
+            for four in lanes.pending.chunks(4) {
+                let f = if let [(_, _, p)] = four {
+                    [m.value(*p - centre, lod); 4]
+                } else {
+                    let p = |j: usize| four[j.min(four.len() - 1)].2 - centre;
+                    let p: [Vec2; 4] = std::array::from_fn(p);
+                    let (x, y) = (p.map(|p| p.x), p.map(|p| p.y));
+                    m.values4(Vec4::from_array(x), Vec4::from_array(y), lod)
+                        .to_array()
+                };
+                for (&(g, l, _), f) in four.iter().zip(f) {
+                    lanes.af[g][l] = lanes.a[g][l] * f;
+                }
             }
-            let (s, fs) = terms
-                .iter()
-                .fold((Vec4::ZERO, Vec4::ZERO), |(s, fs), t| (s + t[0], fs + t[1]));
-            let w = s.max(Vec4::splat(BLEND_FLOOR));
-            let f = ((fs + (w - s) * self.base) / w).to_array();
-            for (&k, f) in group.iter().zip(f) {
-                out[k] = f;
-            }
+        }
+        for g in 0..n {
+            lanes.s[g] += Vec4::from_array(lanes.a[g]);
+            lanes.fs[g] += Vec4::from_array(lanes.af[g]);
         }
     }
 
@@ -194,6 +241,38 @@ impl Blend {
             _ => Some(c.eval(p, lod)).filter(|x| x.a > 0.0),
         };
         x.map_or((0.0, 0.0), |x| (x.a, x.a * x.f))
+    }
+}
+
+/// The points of one cell of [`Blend::heights`], four to a group (a short last group
+/// repeats its last point), and their sums; one child's terms, and the points where its
+/// elevation is still to be evaluated with their group and lane.
+#[derive(Default)]
+struct Lanes {
+    x: Vec<Vec4>,
+    y: Vec<Vec4>,
+    s: Vec<Vec4>,
+    fs: Vec<Vec4>,
+    a: Vec<[f32; 4]>,
+    af: Vec<[f32; 4]>,
+    pending: Vec<(usize, usize, Vec2)>,
+}
+
+impl Lanes {
+    /// The points `(xs[k], ys[k])` (at least one), with sums of 0.
+    fn load(&mut self, xs: &[f32], ys: &[f32]) {
+        let group = |v: &[f32], g: usize| {
+            Vec4::from_array(std::array::from_fn(|l| v[(4 * g + l).min(v.len() - 1)]))
+        };
+        let n = xs.len().div_ceil(4);
+        self.x.clear();
+        self.x.extend((0..n).map(|g| group(xs, g)));
+        self.y.clear();
+        self.y.extend((0..n).map(|g| group(ys, g)));
+        self.s.clear();
+        self.s.resize(n, Vec4::ZERO);
+        self.fs.clear();
+        self.fs.resize(n, Vec4::ZERO);
     }
 }
 
@@ -258,11 +337,7 @@ impl Node {
             kind: Kind::Blend(Blend {
                 base,
                 index: GridIndex::new(&boxes, &discs),
-                discs: children
-                    .iter()
-                    .map(Node::flat_disc)
-                    .chain([NO_DISC])
-                    .collect(),
+                discs: children.iter().map(Node::flat_disc).collect(),
                 children,
             }),
             support,

@@ -432,6 +432,14 @@ pub struct Fbm {
     lipschitz: f32,
 }
 
+/// The scales of the four octaves `k0 .. k0 + 4` from octave `k0`'s lattice units.
+const OCTAVE_SCALES: [f32; 4] = [
+    1.0,
+    LACUNARITY,
+    LACUNARITY * LACUNARITY,
+    LACUNARITY * LACUNARITY * LACUNARITY,
+];
+
 /// Shift of octave `k` in lattice units: `k · OCTAVE_SHIFT`.
 pub(crate) const OCTAVE_SHIFT: Vec3 = Vec3::new(0.547_7, 0.312_7, 0.753_1);
 
@@ -553,6 +561,26 @@ impl Fbm {
         self.octaves4_impl::<false>(k0, q).0
     }
 
+    /// Octave `k` alone at four points, unweighted: lane `l` is lane `k mod 4` of
+    /// [`Fbm::octaves4`]`(k − k mod 4, q_l)` bit for bit, where `q_l = (q[0], q[1], q[2])[l]`
+    /// is a point in the lattice units of octave `k − k mod 4` — the same operations, with
+    /// one seed on every lane. The elevation trees' multifractals evaluate the octaves of
+    /// four points this way (`crate::elevation`).
+    #[inline]
+    pub(crate) fn octave4(&self, k: u32, q: [Vec4; 3]) -> Vec4 {
+        let seed = self.seed.wrapping_add(k.wrapping_mul(0x9e37_79b9));
+        let scale = Vec4::splat(OCTAVE_SCALES[(k % 4) as usize]);
+        let kf = Vec4::splat(k as f32);
+        let lane = |q: Vec4, c: f32| q * scale + kf * c;
+        simplex4::<false>(
+            [seed; 4],
+            lane(q[0], OCTAVE_SHIFT.x),
+            lane(q[1], OCTAVE_SHIFT.y),
+            lane(q[2], OCTAVE_SHIFT.z),
+        )
+        .0
+    }
+
     /// [`Fbm::octaves4`] with each octave's gradient in its lattice units, per axis.
     #[inline]
     fn octaves4_grad(&self, k0: u32, q: Vec3) -> (Vec4, [Vec4; 3]) {
@@ -564,7 +592,7 @@ impl Fbm {
         let ks: [u32; 4] = std::array::from_fn(|l| k0 + l as u32);
         let seeds = ks.map(|k| self.seed.wrapping_add(k.wrapping_mul(0x9e37_79b9)));
         let kf = Vec4::from_array(ks.map(|k| k as f32));
-        let scale = Vec4::new(1.0, LACUNARITY, LACUNARITY * LACUNARITY, LACUNARITY.powi(3));
+        let scale = Vec4::from_array(OCTAVE_SCALES);
         let lane = |q: f32, c: f32| Vec4::splat(q) * scale + kf * c;
         simplex4::<GRAD>(
             seeds,
@@ -694,6 +722,32 @@ mod tests {
             for (l, v) in four.iter().enumerate() {
                 let k = k0 + l as u32;
                 let one = f.octave::<false>(k, q * 2f32.powi(l as i32)).0;
+                assert_eq!(
+                    v.to_bits(),
+                    one.to_bits(),
+                    "octave {k} at {q}: {v} vs {one}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn one_octave_at_four_points_is_the_octave_bit_for_bit() {
+        let mut rng = Rng(4);
+        for n in 0..5_000 {
+            let q: [Vec3; 4] = std::array::from_fn(|l| {
+                if (n + l) % 10 == 0 {
+                    rng.v(8.0).round()
+                } else {
+                    rng.v([0.01, 40.0, 3e4][(n + l) % 3])
+                }
+            });
+            let f = Fbm::with(rng.0, 1.0, 12);
+            let k = n as u32 % 12;
+            let lanes = [0, 1, 2].map(|a| Vec4::from_array(q.map(|q| q[a])));
+            let four = f.octave4(k, lanes).to_array();
+            for (v, q) in four.iter().zip(q) {
+                let one = f.octaves4(k - k % 4, q).to_array()[(k % 4) as usize];
                 assert_eq!(
                     v.to_bits(),
                     one.to_bits(),
