@@ -315,6 +315,35 @@ fn eval_block_matches_value() {
     }
 }
 
+/// A vertical line's values in one call are the points' values bit for bit, inside and
+/// outside the domain and the support, above, in and below the detail's band.
+#[test]
+fn eval_column_matches_value() {
+    let mut rng = Rng(29);
+    for (name, f) in leaves() {
+        let s = f.support().dilate(20.0);
+        for _ in 0..200 {
+            let xy = Vec2::new(rng.range(s.min.x, s.max.x), rng.range(s.min.y, s.max.y));
+            let h = f.base_height(xy);
+            let centre = if h.is_nan() { s.center().z } else { h };
+            let mut zs: Vec<f32> = (0..40)
+                .map(|k| centre - 60.0 + 3.0 * k as f32 + rng.range(0.0, 3.0))
+                .collect();
+            zs.push(s.min.z - 1.0);
+            zs.push(s.max.z + 1.0);
+            let mut out = vec![f32::NAN; zs.len()];
+            assert!(
+                f.eval_column(xy, &zs, &mut out),
+                "{name}: shares the column"
+            );
+            for (&z, &v) in zs.iter().zip(&out) {
+                let p = xy.extend(z);
+                assert_eq!(v.to_bits(), f.value(p).to_bits(), "{name} at {p}");
+            }
+        }
+    }
+}
+
 #[test]
 fn spec_errors_carry_positions_and_paths() {
     let e =

@@ -79,6 +79,17 @@ impl ImplicitParams {
     }
 }
 
+/// What the points of one vertical line share ([`HeightfieldField::column`]).
+struct Column {
+    xy: Vec2,
+    /// `h(xy)`, without detail.
+    h: f32,
+    /// Horizontal distance to the eroded domain, `max(0, R − e(xy))`.
+    dxy: f32,
+    /// The detail's reach `A·m(xy)`.
+    reach: f32,
+}
+
 /// The implicit heightfield leaf: `f = min(σ_R(h − z), 2T·g(d(p, P)/R))`.
 #[derive(Clone, Debug)]
 pub struct HeightfieldField {
@@ -317,11 +328,32 @@ impl HeightfieldField {
         self.prism_shape().dist_range(e, z)
     }
 
-    /// The detail `d(p)` over the elevation `h`, or 0 where it cannot matter: without
-    /// detail, or where σ is saturated whatever it is (`|h − z| ≥ R + A·m`).
+    /// What every point of the vertical line over `xy` shares: `None` where the field is
+    /// 0 (outside Ω or where `h` is undefined).
     #[inline]
-    fn detail_at(&self, h: f32, p: Vec3) -> f32 {
-        self.detail_in_column(self.reach_at(p.truncate()), h, p)
+    fn column(&self, xy: Vec2) -> Option<Column> {
+        let e = self.domain.clearance(xy);
+        if e <= 0.0 {
+            return None;
+        }
+        let h = self.base_height(xy);
+        if h.is_nan() {
+            return None;
+        }
+        Some(Column {
+            xy,
+            h,
+            dxy: (self.r - e).max(0.0),
+            reach: self.reach_at(xy),
+        })
+    }
+
+    /// `f` at height `z` on the line `c`: `min(σ_R(h + d − z), f_P)`, the detail left out
+    /// where σ is saturated whatever it is (`|h − z| ≥ R + A·m`).
+    #[inline]
+    fn column_value(&self, c: &Column, z: f32) -> f32 {
+        let hd = c.h + self.detail_in_column(c.reach, c.h, c.xy.extend(z));
+        sigma(hd - z, self.r).min(self.prism(c.dxy, z))
     }
 
     /// The detail's reach `A·m` over the column at `xy` (0 without detail).
@@ -330,7 +362,9 @@ impl HeightfieldField {
         self.detail.as_ref().map_or(0.0, |d| d.reach_at(xy))
     }
 
-    /// [`Self::detail_at`] in a column whose reach ([`Self::reach_at`]) is known.
+    /// The detail `d(p)` over the elevation `h` in a column of reach `reach`
+    /// ([`Self::reach_at`]), or 0 where it cannot matter: without detail, or where σ is
+    /// saturated whatever it is (`|h − z| ≥ R + A·m`).
     #[inline]
     fn detail_in_column(&self, reach: f32, h: f32, p: Vec3) -> f32 {
         match &self.detail {
@@ -351,17 +385,8 @@ impl HeightfieldField {
 impl Field for HeightfieldField {
     #[inline]
     fn value(&self, p: Vec3) -> f32 {
-        let xy = p.truncate();
-        let e = self.domain.clearance(xy);
-        if e <= 0.0 {
-            return 0.0;
-        }
-        let h = self.base_height(xy);
-        if h.is_nan() {
-            return 0.0;
-        }
-        let h = h + self.detail_at(h, p);
-        sigma(h - p.z, self.r).min(self.prism((self.r - e).max(0.0), p.z))
+        self.column(p.truncate())
+            .map_or(0.0, |c| self.column_value(&c, p.z))
     }
 
     fn value_grad(&self, p: Vec3) -> (f32, Vec3) {
@@ -484,35 +509,35 @@ impl Field for HeightfieldField {
         self.prism_shape().z_bands(e, h, z, out);
     }
 
+    /// The bands are the terrain's and the prism's over `fp`, intersected with `z`.
+    fn z_bands_clip(&self) -> bool {
+        true
+    }
+
     fn eval_block(&self, origin: Vec3, step: Vec3, dims: [usize; 3], out: &mut [f32]) {
         let [nx, ny, nz] = dims;
         let plane = nx * ny;
         for j in 0..ny {
             for i in 0..nx {
                 let p = origin + Vec3::new(i as f32, j as f32, 0.0) * step;
-                let xy = p.truncate();
-                let e = self.domain.clearance(xy);
-                let h = if e > 0.0 {
-                    self.base_height(xy)
-                } else {
-                    f32::NAN
-                };
+                let column = self.column(p.truncate());
                 let base = i + nx * j;
-                if h.is_nan() {
-                    for k in 0..nz {
-                        out[base + plane * k] = 0.0;
-                    }
-                    continue;
-                }
-                let dxy = (self.r - e).max(0.0);
-                let reach = self.reach_at(xy);
                 for k in 0..nz {
                     let z = (origin + Vec3::new(i as f32, j as f32, k as f32) * step).z;
-                    let hd = h + self.detail_in_column(reach, h, xy.extend(z));
-                    out[base + plane * k] = sigma(hd - z, self.r).min(self.prism(dxy, z));
+                    out[base + plane * k] =
+                        column.as_ref().map_or(0.0, |c| self.column_value(c, z));
                 }
             }
         }
+    }
+
+    /// One elevation lookup for the whole line (and none of the points' tree walks).
+    fn eval_column(&self, xy: Vec2, zs: &[f32], out: &mut [f32]) -> bool {
+        let column = self.column(xy);
+        for (o, &z) in out.iter_mut().zip(zs) {
+            *o = column.as_ref().map_or(0.0, |c| self.column_value(c, z));
+        }
+        true
     }
 
     /// Inside the eroded domain; with detail, only where `|∂d/∂z| ≤ ½` over `fp`, so that

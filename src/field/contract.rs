@@ -40,6 +40,13 @@ pub trait Field: Send + Sync {
         z_bands_by_interval(self, fp, z, out);
     }
 
+    /// Whether [`Field::z_bands`] searched inside `z` are always the bands searched inside
+    /// any larger range, intersected with `z` (the bands do not depend on where they are
+    /// searched): one search per footprint then serves several ranges. Default `false`.
+    fn z_bands_clip(&self) -> bool {
+        false
+    }
+
     /// A field equal to this one inside `region` and cheaper to evaluate there (children
     /// that cannot matter in `region` dropped), or `None` when nothing can be dropped.
     fn prune(&self, _region: &Aabb) -> Option<Box<dyn Field + '_>> {
@@ -58,6 +65,16 @@ pub trait Field: Send + Sync {
                 }
             }
         }
+    }
+
+    /// Values along the vertical line over `xy`, when the field can share work between
+    /// them: `out[k] = f(xy, zs[k])`, bit for bit what [`Field::value`] gives at those
+    /// points, and `true`. The default shares nothing and answers `false`, leaving `out`
+    /// as it is; a heightfield leaf (one elevation lookup per line instead of one per
+    /// point) and a tree whose root is such a leaf override it. The mesher evaluates its
+    /// sample columns this way where it can.
+    fn eval_column(&self, _xy: Vec2, _zs: &[f32], _out: &mut [f32]) -> bool {
+        false
     }
 
     /// When, over the footprint `fp`, the field is a heightfield's, returns it: for

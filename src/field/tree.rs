@@ -2,7 +2,7 @@
 
 use std::sync::Arc;
 
-use glam::{Affine3A, Vec3};
+use glam::{Affine3A, Vec2, Vec3};
 
 use super::bounds::{Aabb, Interval, Rect, ZBands};
 use super::bvh::{BVH_MIN_CHILDREN, ChildBvh};
@@ -395,6 +395,32 @@ impl Tree {
     }
 }
 
+impl Tree {
+    /// [`Field::eval_column`] of node `id`: where the node is a leaf, the leaf's own
+    /// (0 outside the node's support, as [`Tree::value_at`] gives); `false` otherwise.
+    pub fn eval_column_at(&self, id: NodeId, xy: Vec2, zs: &[f32], out: &mut [f32]) -> bool {
+        let Node::Leaf(f) = &self.nodes[id as usize] else {
+            return false;
+        };
+        if !f.eval_column(xy, zs, out) {
+            return false;
+        }
+        let support = &self.supports[id as usize];
+        for (o, &z) in out.iter_mut().zip(zs) {
+            if !support.contains(xy.extend(z)) {
+                *o = 0.0;
+            }
+        }
+        true
+    }
+
+    /// [`Field::z_bands_clip`] of node `id`: a leaf's own (its support's clipping is an
+    /// intersection too); `false` otherwise.
+    pub fn z_bands_clip_at(&self, id: NodeId) -> bool {
+        matches!(&self.nodes[id as usize], Node::Leaf(f) if f.z_bands_clip())
+    }
+}
+
 /// A view of one node of a tree as a [`Field`].
 #[derive(Clone, Copy)]
 pub struct SubTree<'t> {
@@ -436,6 +462,12 @@ impl Field for SubTree<'_> {
     fn eval_block(&self, origin: Vec3, step: Vec3, dims: [usize; 3], out: &mut [f32]) {
         self.tree.eval_block_at(self.id, origin, step, dims, out)
     }
+    fn eval_column(&self, xy: Vec2, zs: &[f32], out: &mut [f32]) -> bool {
+        self.tree.eval_column_at(self.id, xy, zs, out)
+    }
+    fn z_bands_clip(&self) -> bool {
+        self.tree.z_bands_clip_at(self.id)
+    }
 }
 
 impl Field for Tree {
@@ -471,6 +503,12 @@ impl Field for Tree {
     }
     fn eval_block(&self, origin: Vec3, step: Vec3, dims: [usize; 3], out: &mut [f32]) {
         self.eval_block_at(self.root, origin, step, dims, out)
+    }
+    fn eval_column(&self, xy: Vec2, zs: &[f32], out: &mut [f32]) -> bool {
+        self.eval_column_at(self.root, xy, zs, out)
+    }
+    fn z_bands_clip(&self) -> bool {
+        self.z_bands_clip_at(self.root)
     }
     /// The tree itself, so consumers can read its size (the renderer prunes small trees
     /// per tile).

@@ -380,6 +380,9 @@ pub fn tile_bands<'f>(
                 brick_runs(f, &fp, grid)
             })
             .collect();
+        // Where the field's bands do not depend on the range searched, one search per
+        // column serves all its runs.
+        let clip = f.z_bands_clip();
         let mut bands = ZBands::new();
         let mut list = Vec::new();
         for (i, j) in tiles.columns(t) {
@@ -396,18 +399,32 @@ pub fn tile_bands<'f>(
             );
             bands.clear();
             list.clear();
+            if let (true, Some(first), Some(last)) = (clip, runs.first(), runs.last()) {
+                f.z_bands(
+                    &cfp,
+                    Interval::new(z_of(first[0]), z_of(last[1])),
+                    &mut bands,
+                );
+            }
             for &[a, b] in runs {
                 let run_z = Interval::new(z_of(a), z_of(b));
-                f.z_bands(&cfp, run_z, &mut bands);
+                if !clip {
+                    bands.clear();
+                    f.z_bands(&cfp, run_z, &mut bands);
+                }
                 for band in bands.as_slice() {
-                    if let Some([ca, cb]) = cells_of_band(*band, z0, dz, ncz) {
+                    // as a search inside `run_z` would have clipped it (and dropped it empty)
+                    let band = if clip { band.intersect(run_z) } else { *band };
+                    if band.is_empty() {
+                        continue;
+                    }
+                    if let Some([ca, cb]) = cells_of_band(band, z0, dz, ncz) {
                         let r = [ca.max(a as u32), cb.min(b as u32)];
                         if r[0] < r[1] {
                             push_range(&mut list, r);
                         }
                     }
                 }
-                bands.clear();
             }
             counts.push(list.len() as u32);
             items.extend_from_slice(&list);

@@ -6,7 +6,9 @@
 //! 2. **Samples**: the union of the adjacent cells' layers per grid column, laid out tile
 //!    by tile; the memory budget is checked here exactly, after a first check before
 //!    anything is allocated ([`super::estimate`]).
-//! 3. **Values**: field samples via [`Field::eval_block`] on the tile's pruned field;
+//! 3. **Values**: field samples on the tile's pruned field, a grid column at a time
+//!    through [`Field::eval_column`] where the field shares work along vertical lines (a
+//!    heightfield), else via [`Field::eval_block`];
 //!    in elevation columns one `h(x, y)` per column gives pseudo-values
 //!    `T + (h − z) / dz`, whose sign is the field's and whose linear interpolation puts
 //!    vertical-edge vertices at `z = h` and horizontal-edge vertices on the linear root
@@ -376,10 +378,22 @@ impl<'f> Ctx<'_, 'f> {
         let f: &dyn Field = pruned.as_deref().unwrap_or(self.field);
         let (mut evals, mut heights, mut elev_columns) = (0, 0, 0);
         let dz = self.grid.spacing.z;
+        let (mut zs, mut line) = (Vec::new(), Vec::new());
         for (i, j) in self.tiles.columns(t) {
             let id = self.tiles.id(i, j);
+            let spans = self.samples.of(id);
+            // The column's field samples as one vertical line, where the field shares work
+            // along it (a heightfield's elevation lookup): each at its grid point.
+            zs.clear();
+            for s in spans.iter().filter(|s| !s.elevation) {
+                zs.extend((s.k0..s.k1).map(|k| self.grid.point(i, j, k as usize).z));
+            }
+            line.resize(zs.len(), 0.0);
+            let xy = self.grid.point(i, j, 0).truncate();
+            let lined = !zs.is_empty() && f.eval_column(xy, &zs, &mut line);
+            let mut from = 0;
             let mut h = None;
-            for s in self.samples.of(id) {
+            for s in spans {
                 let n = (s.k1 - s.k0) as usize;
                 let dst = &mut out[s.offset - base..s.offset - base + n];
                 let p0 = self.grid.point(i, j, s.k0 as usize);
@@ -397,6 +411,10 @@ impl<'f> Ctx<'_, 'f> {
                         let z = self.grid.point(i, j, s.k0 as usize + k).z;
                         *d = ISO + (h - z) / dz;
                     }
+                } else if lined {
+                    dst.copy_from_slice(&line[from..from + n]);
+                    from += n;
+                    evals += n as u64;
                 } else if n < SHORT_SPAN {
                     for (k, d) in dst.iter_mut().enumerate() {
                         *d = f.value(self.grid.point(i, j, s.k0 as usize + k));
