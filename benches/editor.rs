@@ -14,15 +14,70 @@
 //! * `refined 960x540`: the editor's refinement on the CPU (the fast pass, then the full
 //!   image band by band over it), against `render 960x540`, the full image as
 //!   `karstic render` draws it.
+//!
+//! The figures are the **CPU time** of the process (all its threads, from
+//! `/proc/self/task/*/schedstat`, in ms), not wall time: on a machine shared with other
+//! work the wall time says more about the load than about the editor. With
+//! `RAYON_NUM_THREADS=1` the CPU time is the wall time of an unloaded core.
 
 use std::path::Path;
 
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::measurement::{Measurement, ValueFormatter};
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use karstic::editor::preview::{DRAG_BUDGET, Quality, draw, fast_size, refine};
 use karstic::render::cpu::scene_camera;
 use karstic::scene::{compile_scene, edit, load};
 
-fn editor(c: &mut Criterion) {
+/// Nanoseconds on a CPU of every thread of this process so far (Linux).
+fn cpu_ns() -> u64 {
+    let tasks = std::fs::read_dir("/proc/self/task").expect("/proc/self/task (Linux)");
+    tasks
+        .filter_map(|t| std::fs::read_to_string(t.ok()?.path().join("schedstat")).ok())
+        .filter_map(|s| s.split_whitespace().next()?.parse::<u64>().ok())
+        .sum()
+}
+
+/// Criterion's measurement as the process's CPU time.
+struct CpuTime;
+
+impl Measurement for CpuTime {
+    type Intermediate = u64;
+    type Value = u64;
+    fn start(&self) -> u64 {
+        cpu_ns()
+    }
+    fn end(&self, start: u64) -> u64 {
+        cpu_ns().saturating_sub(start)
+    }
+    fn add(&self, a: &u64, b: &u64) -> u64 {
+        a + b
+    }
+    fn zero(&self) -> u64 {
+        0
+    }
+    fn to_f64(&self, v: &u64) -> f64 {
+        *v as f64
+    }
+    fn formatter(&self) -> &dyn ValueFormatter {
+        self
+    }
+}
+
+impl ValueFormatter for CpuTime {
+    fn scale_values(&self, _typical: f64, values: &mut [f64]) -> &'static str {
+        values.iter_mut().for_each(|v| *v *= 1e-6);
+        "ms (CPU)"
+    }
+    fn scale_throughputs(&self, _: f64, _: &Throughput, values: &mut [f64]) -> &'static str {
+        values.iter_mut().for_each(|v| *v *= 1e-6);
+        "ms (CPU)"
+    }
+    fn scale_for_machines(&self, _values: &mut [f64]) -> &'static str {
+        "ns"
+    }
+}
+
+fn editor(c: &mut Criterion<CpuTime>) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/jacksboro_caves.ron");
     let file = load(&path).unwrap();
     let compiled = file.compile().unwrap();
@@ -78,5 +133,9 @@ fn editor(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, editor);
+criterion_group! {
+    name = benches;
+    config = Criterion::default().with_measurement(CpuTime);
+    targets = editor
+}
 criterion_main!(benches);

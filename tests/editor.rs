@@ -287,10 +287,10 @@ fn editor_refines_the_viewport_on_the_gpu_when_asked() {
     }
     let (_dir, paths) = scene_dir(&["a.ron"]);
     let how = Headless {
-        size: (760, 330),
+        size: (700, 260),
         select: None,
         backend: Backend::Gpu,
-        timeout: Duration::from_secs(120),
+        timeout: Duration::from_secs(300),
     };
     let h = karstic::editor::headless(&paths[0], &how).unwrap();
     let shown = h.state().shown().unwrap().clone();
@@ -333,25 +333,24 @@ fn editor_recompiles_a_volume_when_its_terrain_changes() {
         let spec = f.feature_volumes()[0].clone();
         f.build_feature_volume(&spec, scene.seed, 1 << 30).unwrap()
     };
-    let before = volume(&file.scene);
-    let ground = file.compile().unwrap().ground.unwrap();
-    let mid = glam::Vec2::new(3700.0, 5125.0);
-    let p = mid.extend(ground.height(mid) - 5.0);
-    use karstic::field::Field;
-    let v = before.value(p);
+    // The whole field, its voxels included (a small volume).
+    let text = |f: karstic::voxel::SField| format!("{f:?}");
+    let before = text(volume(&file.scene));
     // The anchor's offset is not the volume's: the same field.
     let mut other = file.scene.clone();
     edit::set_in_scene(&mut other, &path, "grotto.offset", "-20").unwrap();
-    assert_eq!(volume(&other).value(p), v);
+    assert!(
+        text(volume(&other)) == before,
+        "the anchor changed the volume"
+    );
     // The terrain raised by 50 m raises the tunnel with its ground points.
     let mut raised = file.scene.clone();
     edit::set_in_scene(&mut raised, &path, "dem.vertical_offset", "50").unwrap();
-    let after = volume(&raised).value(p);
     assert!(
-        after != v,
-        "the tunnel did not move with its terrain ({v} both)"
+        text(volume(&raised)) != before,
+        "the tunnel did not move with its terrain"
     );
-    assert_eq!(volume(&file.scene).value(p), v);
+    assert!(text(volume(&file.scene)) == before);
 }
 
 /// The fast pass: a sixteenth of the side before any cost is known, then the size that

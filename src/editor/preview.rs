@@ -220,6 +220,22 @@ pub struct Preview {
     reports: Receiver<Report>,
     /// Counts the requests: the thread stops an image whose request is not the latest.
     latest: Arc<AtomicU64>,
+    /// The render thread, joined on drop.
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Drop for Preview {
+    /// Stops the CPU's image under way and waits for the render thread to end, so that a
+    /// GPU device it opened is closed before the process exits (one left open while the
+    /// process exits corrupted the heap of lavapipe's driver).
+    fn drop(&mut self) {
+        self.latest.fetch_add(1, Ordering::SeqCst);
+        // Dropping the only sender ends the thread's loop.
+        self.requests = channel().0;
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
 }
 
 impl Preview {
@@ -240,7 +256,7 @@ impl Preview {
             backend,
             gpu: None,
         };
-        std::thread::Builder::new()
+        let thread = std::thread::Builder::new()
             .name("karstic-preview".into())
             .spawn(move || server.serve(&incoming))
             .expect("spawning the preview thread");
@@ -248,6 +264,7 @@ impl Preview {
             requests,
             reports,
             latest,
+            thread: Some(thread),
         }
     }
 
