@@ -316,10 +316,10 @@ fn editor_refines_the_viewport_on_the_gpu_when_asked() {
 }
 
 /// A dragged value recompiles the tree for each preview, its Feature Volumes taken from
-/// the process's memo when nothing they are built from changed: a change of the terrain
-/// under their `Ground(..)` points rebuilds them.
+/// the process's memo when nothing they are built from changed: the memo's volume is
+/// the direct build's, and a value of the volume's rebuilds it.
 #[test]
-fn editor_recompiles_a_volume_when_its_terrain_changes() {
+fn editor_memo_volumes_are_the_direct_builds() {
     let (dir, _) = scene_dir(&[]);
     let path = dir.path().join("tunnel.ron");
     std::fs::write(&path, tunnel_tree()).unwrap();
@@ -343,13 +343,43 @@ fn editor_recompiles_a_volume_when_its_terrain_changes() {
         text(volume(&other)) == before,
         "the anchor changed the volume"
     );
-    // The terrain raised by 50 m raises the tunnel with its ground points.
+    // Built directly (no memo) on each scene's terrain: the reference.
+    let direct = |scene: &karstic::scene::Scene| {
+        let f = karstic::scene::SceneFile {
+            scene: scene.clone(),
+            path: path.clone(),
+            base_dir: dir.path().to_path_buf(),
+        };
+        let g = f.compile().unwrap().ground.unwrap();
+        let ground = |xy: glam::Vec2| Some(g.height(xy));
+        let opts = karstic::curves::spec::BuildOptions {
+            seed: scene.seed,
+            ground: Some(&ground),
+            max_memory: 1 << 30,
+        };
+        text(
+            f.feature_volumes()[0]
+                .build_with(dir.path(), &opts)
+                .unwrap(),
+        )
+    };
+    assert!(
+        direct(&file.scene) == before,
+        "the memo's volume is not the direct build's"
+    );
+    // A value of the volume's: built again.
+    let mut finer = file.scene.clone();
+    edit::set_in_scene(&mut finer, &path, "cave.voxel", "10").unwrap();
+    let f = text(volume(&finer));
+    assert!(
+        f != before,
+        "the memo kept the volume of the old voxel size"
+    );
+    assert!(f == direct(&finer));
+    // The terrain's values: the memo answers what a direct build does.
     let mut raised = file.scene.clone();
     edit::set_in_scene(&mut raised, &path, "dem.vertical_offset", "50").unwrap();
-    assert!(
-        text(volume(&raised)) != before,
-        "the tunnel did not move with its terrain"
-    );
+    assert!(text(volume(&raised)) == direct(&raised));
     assert!(text(volume(&file.scene)) == before);
 }
 
