@@ -9,10 +9,13 @@ use std::time::Duration;
 use egui::accesskit::Role;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
-use karstic::editor::{Editor, Tool, settle};
+use karstic::editor::preview::{
+    COARSEST_DIVISOR, DRAG_BUDGET, FAST_DIVISOR, FIRST_DIVISOR, Quality, draw, fast_size,
+};
+use karstic::editor::{Backend, Editor, Headless, Tool, settle};
 use karstic::scene::{NodeSpec, edit};
 
-use crate::common::{REQUIRE_GPU, unavailable};
+use crate::common::{REQUIRE_GPU, assert_frames_match, unavailable};
 
 /// A Jacksboro crop with a carved grotto, a small job view.
 const TREE: &str = r#"(
@@ -222,9 +225,16 @@ fn editor_viewport_shows_the_tracers_image() {
     }
     let (_dir, paths) = scene_dir(&["a.ron"]);
     let a = &paths[0];
-    let mut h = karstic::editor::headless(a, 900, 500, None, Duration::from_secs(120)).unwrap();
+    let how = Headless {
+        size: (900, 500),
+        select: None,
+        backend: Backend::Cpu,
+        timeout: Duration::from_secs(120),
+    };
+    let mut h = karstic::editor::headless(a, &how).unwrap();
     let image = h.render().unwrap();
     let shown = h.state().shown().unwrap().clone();
+    assert_eq!(shown.tracer, "CPU");
     let rect = h.state().viewport().unwrap();
     let f = &shown.frame;
     assert_eq!(
@@ -261,6 +271,136 @@ fn editor_viewport_shows_the_tracers_image() {
         (far as f64) < 0.01 * n,
         "{far} pixels differ by more than 12 levels"
     );
+}
+
+/// With `--gpu` the viewport's refined image is the wgpu tracer's (here on whatever
+/// adapter there is, lavapipe included), equal to the CPU's image of the same view within
+/// the renderers' parity tolerance, and the status line says which tracer drew it.
+#[test]
+fn editor_refines_the_viewport_on_the_gpu_when_asked() {
+    if karstic::render::gpu::GpuContext::new().is_err() {
+        unavailable(
+            REQUIRE_GPU,
+            "the editor's GPU viewport needs a wgpu adapter",
+        );
+        return;
+    }
+    let (_dir, paths) = scene_dir(&["a.ron"]);
+    let how = Headless {
+        size: (700, 260),
+        select: None,
+        backend: Backend::Gpu,
+        timeout: Duration::from_secs(300),
+    };
+    let h = karstic::editor::headless(&paths[0], &how).unwrap();
+    let shown = h.state().shown().unwrap().clone();
+    assert!(
+        shown.tracer.starts_with("GPU ("),
+        "drawn by {}",
+        shown.tracer
+    );
+    assert_eq!(shown.quality, Quality::Full);
+    let f = &shown.frame;
+    assert!(
+        f.width >= 100 && f.height >= 100,
+        "{} × {}",
+        f.width,
+        f.height
+    );
+    let file = karstic::scene::load(&paths[0]).unwrap();
+    let compiled = file.compile().unwrap();
+    let cpu = draw(&file.scene, &compiled, &shown.camera, Quality::Full);
+    assert!(cpu.hits() > f.depth.len() / 4, "{} hits", cpu.hits());
+    assert_frames_match("the editor's GPU viewport", &cpu, f);
+    h.get_by_label_contains("viewport: GPU (");
+}
+
+/// A dragged value recompiles the tree for each preview, its Feature Volumes taken from
+/// the process's memo when nothing they are built from changed: the memo's volume is
+/// the direct build's, and a value of the volume's rebuilds it.
+#[test]
+fn editor_memo_volumes_are_the_direct_builds() {
+    let (dir, _) = scene_dir(&[]);
+    let path = dir.path().join("tunnel.ron");
+    std::fs::write(&path, tunnel_tree()).unwrap();
+    let file = karstic::scene::load(&path).unwrap();
+    let volume = |scene: &karstic::scene::Scene| {
+        let f = karstic::scene::SceneFile {
+            scene: scene.clone(),
+            path: path.clone(),
+            base_dir: dir.path().to_path_buf(),
+        };
+        let spec = f.feature_volumes()[0].clone();
+        f.build_feature_volume(&spec, scene.seed, 1 << 30).unwrap()
+    };
+    // The whole field, its voxels included (a small volume).
+    let text = |f: karstic::voxel::SField| format!("{f:?}");
+    let before = text(volume(&file.scene));
+    // The anchor's offset is not the volume's: the same field.
+    let mut other = file.scene.clone();
+    edit::set_in_scene(&mut other, &path, "grotto.offset", "-20").unwrap();
+    assert!(
+        text(volume(&other)) == before,
+        "the anchor changed the volume"
+    );
+    // Built directly (no memo) on each scene's terrain: the reference.
+    let direct = |scene: &karstic::scene::Scene| {
+        let f = karstic::scene::SceneFile {
+            scene: scene.clone(),
+            path: path.clone(),
+            base_dir: dir.path().to_path_buf(),
+        };
+        let g = f.compile().unwrap().ground.unwrap();
+        let ground = |xy: glam::Vec2| Some(g.height(xy));
+        let opts = karstic::curves::spec::BuildOptions {
+            seed: scene.seed,
+            ground: Some(&ground),
+            max_memory: 1 << 30,
+        };
+        text(
+            f.feature_volumes()[0]
+                .build_with(dir.path(), &opts)
+                .unwrap(),
+        )
+    };
+    assert!(
+        direct(&file.scene) == before,
+        "the memo's volume is not the direct build's"
+    );
+    // A value of the volume's: built again.
+    let mut finer = file.scene.clone();
+    edit::set_in_scene(&mut finer, &path, "cave.voxel", "10").unwrap();
+    let f = text(volume(&finer));
+    assert!(
+        f != before,
+        "the memo kept the volume of the old voxel size"
+    );
+    assert!(f == direct(&finer));
+    // The terrain's values: the memo answers what a direct build does.
+    let mut raised = file.scene.clone();
+    edit::set_in_scene(&mut raised, &path, "dem.vertical_offset", "50").unwrap();
+    assert!(text(volume(&raised)) == direct(&raised));
+    assert!(text(volume(&file.scene)) == before);
+}
+
+/// The fast pass: a sixteenth of the side before any cost is known, then the size that
+/// fits the drag budget, between an eighth and a thirty-second of the side.
+#[test]
+fn editor_fast_passes_fit_the_drag_budget() {
+    let view = (960, 540);
+    let side = |d: u32| (960 / d, 540 / d);
+    assert_eq!(fast_size(view, None, DRAG_BUDGET), side(FIRST_DIVISOR));
+    // 1 µs a pixel: 518,400 pixels take 0.52 s, 80 ms is 6.5× fewer: 1/2.5 of the
+    // side, held at an eighth.
+    assert_eq!(fast_size(view, Some(1e-6), DRAG_BUDGET), side(FAST_DIVISOR));
+    // 31 µs a pixel (a 120 × 67 pass in 0.25 s): 200× too many, a fifteenth of the side.
+    assert_eq!(fast_size(view, Some(3.1e-5), DRAG_BUDGET), side(15));
+    // Far too slow: held at a thirty-second; a tiny view: at least one pixel.
+    assert_eq!(
+        fast_size(view, Some(1.0), DRAG_BUDGET),
+        side(COARSEST_DIVISOR)
+    );
+    assert_eq!(fast_size((10, 5), Some(1.0), DRAG_BUDGET), (1, 1));
 }
 
 /// The editor's tree with a Feature Volume carving a tunnel whose ends are on the

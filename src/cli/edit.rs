@@ -3,6 +3,8 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
+use karstic::editor::{Backend, Headless};
+
 /// Arguments of `karstic edit`.
 #[derive(clap::Args, Debug)]
 pub(super) struct EditArgs {
@@ -21,11 +23,23 @@ pub(super) struct EditArgs {
     /// Longest wait for the viewport to settle before `--screenshot` gives up, seconds.
     #[arg(long, default_value_t = 300.0)]
     timeout: f64,
+    /// Refine the viewport on the GPU (wgpu) even on a software adapter such as lavapipe
+    /// (by default the GPU refines only on a hardware adapter, the CPU otherwise).
+    #[arg(long, conflicts_with = "cpu")]
+    gpu: bool,
+    /// Refine the viewport on the CPU even when a hardware GPU adapter is there.
+    #[arg(long)]
+    cpu: bool,
 }
 
 /// Runs `karstic edit`.
 pub(super) fn run(args: EditArgs) -> anyhow::Result<()> {
     karstic::scene::load(&args.tree)?;
+    let backend = match (args.gpu, args.cpu) {
+        (true, _) => Backend::Gpu,
+        (_, true) => Backend::Cpu,
+        _ => Backend::Auto,
+    };
     match &args.screenshot {
         Some(out) => {
             karstic::render::camera::check_size(args.size[0], args.size[1])?;
@@ -33,13 +47,13 @@ pub(super) fn run(args: EditArgs) -> anyhow::Result<()> {
                 args.timeout.is_finite() && args.timeout > 0.0,
                 "--timeout must be a positive number of seconds"
             );
-            let t = karstic::editor::screenshot(
-                &args.tree,
-                out,
-                (args.size[0], args.size[1]),
-                args.select.as_deref(),
-                Duration::from_secs_f64(args.timeout),
-            )?;
+            let how = Headless {
+                size: (args.size[0], args.size[1]),
+                select: args.select.as_deref(),
+                backend,
+                timeout: Duration::from_secs_f64(args.timeout),
+            };
+            let t = karstic::editor::screenshot(&args.tree, out, &how)?;
             eprintln!(
                 "first image after {:.2} s, settled after {:.2} s (viewport {} × {}) → {}",
                 t.first.as_secs_f64(),
@@ -50,6 +64,6 @@ pub(super) fn run(args: EditArgs) -> anyhow::Result<()> {
             );
             Ok(())
         }
-        None => karstic::editor::run_window(&args.tree, args.select.as_deref()),
+        None => karstic::editor::run_window(&args.tree, args.select.as_deref(), backend),
     }
 }

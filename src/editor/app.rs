@@ -11,7 +11,7 @@ use super::history::{Edit, History};
 use super::inspector::{Change, Inspector};
 use super::placement;
 use super::points::{self, Handle};
-use super::preview::{Look, Orbit, Preview, Quality, Rendered, Report, Request};
+use super::preview::{Backend, Look, Orbit, Preview, Quality, Rendered, Report, Request};
 use crate::scene::load::read_text;
 use crate::scene::{Scene, edit, parse_scene};
 
@@ -85,13 +85,19 @@ fn stamp(path: &Path) -> Option<(SystemTime, u64)> {
 }
 
 impl Editor {
-    /// Opens the tree file at `path`. A file the loader refuses still opens: its error is
-    /// shown, with its line and column, until the file is fixed.
+    /// Opens the tree file at `path`, its viewport refined on the GPU when a hardware
+    /// adapter is there ([`Backend::Auto`]). A file the loader refuses still opens: its
+    /// error is shown, with its line and column, until the file is fixed.
     pub fn open(path: &Path) -> Self {
+        Self::open_with(path, Backend::Auto)
+    }
+
+    /// [`Editor::open`] with the viewport's refined images drawn by `backend`.
+    pub fn open_with(path: &Path, backend: Backend) -> Self {
         // The render thread starts now and compiles the scene while the window opens.
         let wake: Arc<OnceLock<egui::Context>> = Arc::default();
         let woken = wake.clone();
-        let preview = Preview::start(path, move || {
+        let preview = Preview::start(path, backend, move || {
             if let Some(ctx) = woken.get() {
                 ctx.request_repaint();
             }
@@ -326,9 +332,15 @@ impl Editor {
         if let Some(e) = &self.load_error {
             ui.colored_label(ui.visuals().error_fg_color, e);
         }
-        if !self.status.is_empty() {
-            ui.label(&self.status);
-        }
+        let tracer = self
+            .shown
+            .as_ref()
+            .map_or("tracing…", |s| s.tracer.as_str());
+        let line = match self.status.as_str() {
+            "" => format!("viewport: {tracer}"),
+            status => format!("{status} · viewport: {tracer}"),
+        };
+        ui.label(line);
     }
 
     fn inspector(&mut self, ui: &mut Ui) {

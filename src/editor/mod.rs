@@ -4,7 +4,8 @@
 //! [`crate::scene`], every edit is one of `karstic tree set/add/rm`'s operations
 //! ([`crate::scene::edit`]) written to the file at once (validated, atomically, the
 //! previous version kept as `.bak`), and the viewport is the CPU tracer
-//! ([`crate::render::cpu`]) on a background thread.
+//! ([`crate::render::cpu`]) on a background thread, its refined images the wgpu tracer's
+//! ([`crate::render::gpu`]) on a hardware adapter or when asked ([`preview::Backend`]).
 //!
 //! * [`app`]: the editor's state and frame; undo/redo; reloading on outside edits.
 //! * [`history`]: edits as `tree` operations, undo byte for byte.
@@ -29,11 +30,12 @@ use std::time::{Duration, Instant};
 
 pub use app::{Editor, Tool};
 pub use history::{Edit, History};
+pub use preview::Backend;
 
 /// Opens the editor's window on the tree file at `path` (with the node named `select`
-/// selected) until it is closed.
-pub fn run_window(path: &Path, select: Option<&str>) -> anyhow::Result<()> {
-    let mut editor = Editor::open(path);
+/// selected, the viewport refined by `backend`) until it is closed.
+pub fn run_window(path: &Path, select: Option<&str>, backend: Backend) -> anyhow::Result<()> {
+    let mut editor = Editor::open_with(path, backend);
     editor.select(select.map(str::to_string));
     let title = format!("karstic edit {}", path.display());
     let options = eframe::NativeOptions {
@@ -57,19 +59,30 @@ impl eframe::App for Window {
     }
 }
 
-/// The editor drawn headless (egui_kittest on a wgpu adapter, software ones included), a
-/// `width × height` window of it on the tree file at `path` with the node named `select`
-/// selected, stepped until the viewport has settled (the full-size image of the file's
-/// scene), waiting at most `timeout`.
+/// How to draw the editor headless: its window's size, the node selected, the viewport's
+/// [`Backend`], and the longest wait for the viewport to settle.
+#[derive(Clone, Copy, Debug)]
+pub struct Headless<'a> {
+    /// Window size, pixels.
+    pub size: (u32, u32),
+    /// The name of the node selected.
+    pub select: Option<&'a str>,
+    /// The tracer of the viewport's refined images.
+    pub backend: Backend,
+    /// The longest wait for the viewport to settle.
+    pub timeout: Duration,
+}
+
+/// The editor drawn headless (egui_kittest on a wgpu adapter, software ones included) on
+/// the tree file at `path` as `how` says, stepped until the viewport has settled (the
+/// full-size image of the file's scene).
 pub fn headless(
     path: &Path,
-    width: u32,
-    height: u32,
-    select: Option<&str>,
-    timeout: Duration,
+    how: &Headless<'_>,
 ) -> anyhow::Result<egui_kittest::Harness<'static, Editor>> {
-    let mut editor = Editor::open(path);
-    if let Some(name) = select {
+    let (width, height) = how.size;
+    let mut editor = Editor::open_with(path, how.backend);
+    if let Some(name) = how.select {
         anyhow::ensure!(
             editor.scene().is_some_and(|s| s.named().contains_key(name)),
             "{}: no node named {name:?}",
@@ -81,7 +94,7 @@ pub fn headless(
         .with_size(egui::vec2(width as f32, height as f32))
         .wgpu()
         .build_ui_state(|ui, e: &mut Editor| e.ui(ui), editor);
-    settle(&mut harness, timeout)?;
+    settle(&mut harness, how.timeout)?;
     Ok(harness)
 }
 
@@ -122,15 +135,9 @@ pub struct Timings {
 
 /// `karstic edit TREE --screenshot OUT`: the editor's first settled frame as a PNG, and
 /// how long it took.
-pub fn screenshot(
-    path: &Path,
-    out: &Path,
-    (width, height): (u32, u32),
-    select: Option<&str>,
-    timeout: Duration,
-) -> anyhow::Result<Timings> {
+pub fn screenshot(path: &Path, out: &Path, how: &Headless<'_>) -> anyhow::Result<Timings> {
     let start = Instant::now();
-    let mut harness = headless(path, width, height, select, timeout)?;
+    let mut harness = headless(path, how)?;
     let settled = start.elapsed();
     let first = harness.state().first_image().unwrap_or(settled);
     let size = harness

@@ -1,16 +1,20 @@
 //! The viewport's renderer: the CPU tracer on a background thread, so the interface never
 //! waits for it.
 //!
-//! Each request is drawn first as a *fast pass*: at most an eighth of the size, without
-//! shadow rays or occlusion samples (a few hundredths of the full image's work), shown at
-//! once. While the view or a value is dragged, only fast passes are drawn, at the size
-//! that the last ones' cost per pixel says fits in [`DRAG_BUDGET`]. Otherwise the full
-//! image follows, shaded as `karstic render` shades it, band by band over the enlarged
-//! fast pass (so the refinement costs what the command line's render costs, plus the
-//! fast pass). A newer request stops the work under way before its next tile.
+//! Each request is drawn first as a *fast pass*: a sixteenth of the side for the first
+//! image, then the size that the last passes' cost per pixel says fits in
+//! [`DRAG_BUDGET`] (between an eighth and a thirty-second of the side), without shadow
+//! rays or occlusion samples and with the surface tolerance at a whole pixel's footprint
+//! (a few thousandths of the full image's work), shown at once. While the view or a
+//! value is dragged, only fast passes are drawn. Otherwise the full image follows,
+//! shaded as `karstic render` shades it: on the CPU, band by band over the enlarged fast
+//! pass (so the refinement costs what the command line's render costs, plus the fast
+//! pass), or in one dispatch of the wgpu tracer over the tree's tape
+//! ([`crate::render::gpu`]) when the [`Backend`] says so. A newer request stops the CPU
+//! work under way before its next tile.
 //!
 //! The scene is compiled once per version and the compiled tree kept for every image of
-//! that version (views and sizes change nothing of it).
+//! that version (views and sizes change nothing of it); so is its tape for the GPU.
 
 use std::path::Path;
 use std::sync::Arc;
@@ -24,12 +28,24 @@ use rayon::prelude::*;
 
 use super::points::{Handle, handles};
 use crate::render::cpu::{Bands, render_bands, scene_camera};
+use crate::render::gpu::GpuContext;
 use crate::render::trace::normal;
 use crate::render::{Camera, Frame, Method, RenderSettings, cpu};
 use crate::scene::{Compiled, Scene, compile_scene};
+use crate::tape::Tape;
 
 /// The fast pass is at most this fraction of the image's side.
 pub const FAST_DIVISOR: u32 = 8;
+
+/// The first fast pass, before any cost was measured, is this fraction of the side.
+pub const FIRST_DIVISOR: u32 = 16;
+
+/// The fast pass is at least this fraction of the side, however slow the last ones were.
+pub const COARSEST_DIVISOR: u32 = 32;
+
+/// The fast pass's surface tolerance, in pixel footprints (a full image's is half of one):
+/// at its size a finer hit changes no pixel, and the march near the surface is shorter.
+const FAST_CONE: f32 = 2.0;
 
 /// Time one preview may take while something is dragged: ten previews a second.
 pub const DRAG_BUDGET: Duration = Duration::from_millis(80);
@@ -122,6 +138,18 @@ pub enum Quality {
     Full,
 }
 
+/// Which tracer draws the viewport's refined images (the fast passes are the CPU's).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Backend {
+    /// The wgpu tracer when the default adapter is a hardware one, else the CPU's.
+    #[default]
+    Auto,
+    /// The CPU tracer.
+    Cpu,
+    /// The wgpu tracer on any adapter, software ones (lavapipe) included.
+    Gpu,
+}
+
 /// What to draw.
 #[derive(Clone, Debug)]
 pub struct Request {
@@ -159,6 +187,8 @@ pub struct Rendered {
     pub normals: Option<Vec<u8>>,
     /// The Feature Curve control points of the scene, where they are in the world.
     pub handles: Arc<Vec<Handle>>,
+    /// Which tracer drew it: `"CPU"`, `"GPU (adapter)"`, or the CPU and why not the GPU.
+    pub tracer: String,
 }
 
 /// What the renderer reports.
@@ -190,12 +220,29 @@ pub struct Preview {
     reports: Receiver<Report>,
     /// Counts the requests: the thread stops an image whose request is not the latest.
     latest: Arc<AtomicU64>,
+    /// The render thread, joined on drop.
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Drop for Preview {
+    /// Stops the CPU's image under way and waits for the render thread to end, so that a
+    /// GPU device it opened is closed before the process exits (one left open while the
+    /// process exits corrupted the heap of lavapipe's driver).
+    fn drop(&mut self) {
+        self.latest.fetch_add(1, Ordering::SeqCst);
+        // Dropping the only sender ends the thread's loop.
+        self.requests = channel().0;
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
 }
 
 impl Preview {
     /// Starts the render thread for scenes of the tree file at `path` (asset paths are
-    /// relative to its folder); `wake` is called after each report (a repaint request).
-    pub fn start(path: &Path, wake: impl Fn() + Send + 'static) -> Self {
+    /// relative to its folder), refining on `backend`; `wake` is called after each report
+    /// (a repaint request).
+    pub fn start(path: &Path, backend: Backend, wake: impl Fn() + Send + 'static) -> Self {
         let (requests, incoming) = channel();
         let (outgoing, reports) = channel();
         let latest = Arc::new(AtomicU64::new(0));
@@ -206,8 +253,10 @@ impl Preview {
             wake: Box::new(wake),
             ready: None,
             per_pixel: Default::default(),
+            backend,
+            gpu: None,
         };
-        std::thread::Builder::new()
+        let thread = std::thread::Builder::new()
             .name("karstic-preview".into())
             .spawn(move || server.serve(&incoming))
             .expect("spawning the preview thread");
@@ -215,6 +264,7 @@ impl Preview {
             requests,
             reports,
             latest,
+            thread: Some(thread),
         }
     }
 
@@ -243,6 +293,16 @@ struct Ready {
     version: u64,
     compiled: Compiled,
     handles: Arc<Vec<Handle>>,
+    /// Its encoding for the GPU (built on the first GPU image), or why it has none.
+    tape: Option<Result<Tape, String>>,
+}
+
+/// The GPU as the render thread found it when first asked.
+enum Gpu {
+    /// Open, with its pipelines.
+    Open(Box<GpuContext>),
+    /// Not used, and why.
+    Off(String),
 }
 
 /// The render thread's state.
@@ -254,15 +314,21 @@ struct Server {
     ready: Option<Ready>,
     /// Seconds per pixel of the last fast pass.
     per_pixel: std::cell::Cell<Option<f64>>,
+    /// The tracer asked for the refined images.
+    backend: Backend,
+    /// Opened on the first refined image (never with [`Backend::Cpu`]).
+    gpu: Option<Gpu>,
 }
 
 /// The image size that fits `per_pixel` seconds per pixel in `budget`, for a `size`
-/// view: an integer fraction of it, at most [`FAST_DIVISOR`] of its side, at least one
-/// pixel.
+/// view: an integer fraction of it, between [`FAST_DIVISOR`] and [`COARSEST_DIVISOR`] of
+/// its side ([`FIRST_DIVISOR`] when no cost is known yet), at least one pixel.
 pub fn fast_size(size: (u32, u32), per_pixel: Option<f64>, budget: Duration) -> (u32, u32) {
     let pixels = size.0 as f64 * size.1 as f64;
-    let want = per_pixel.map_or(1.0, |c| (pixels * c / budget.as_secs_f64()).sqrt());
-    let div = (want.ceil() as u32).max(FAST_DIVISOR);
+    let div = per_pixel.map_or(FIRST_DIVISOR, |c| {
+        let want = (pixels * c / budget.as_secs_f64()).sqrt();
+        (want.ceil() as u32).clamp(FAST_DIVISOR, COARSEST_DIVISOR)
+    });
     ((size.0 / div).max(1), (size.1 / div).max(1))
 }
 
@@ -308,6 +374,7 @@ impl Server {
                     version,
                     compiled,
                     handles,
+                    tape: None,
                 });
                 true
             }
@@ -318,13 +385,74 @@ impl Server {
         }
     }
 
+    /// The GPU to refine on, opened on first use as the backend says; `Err`: why the
+    /// CPU refines instead (`None` for [`Backend::Cpu`], which needs no reason).
+    fn gpu(&mut self) -> Result<&GpuContext, Option<String>> {
+        let backend = self.backend;
+        let gpu = self.gpu.get_or_insert_with(|| {
+            let open = |software_ok: bool| match GpuContext::default_adapter() {
+                Ok((name, true)) if !software_ok => Gpu::Off(format!(
+                    "the only GPU adapter is a software one ({name}), slower than the CPU (use it with --gpu)"
+                )),
+                Ok(_) => match GpuContext::new() {
+                    Ok(ctx) => Gpu::Open(Box::new(ctx)),
+                    Err(e) => Gpu::Off(crate::io::chain(&e)),
+                },
+                Err(e) => Gpu::Off(crate::io::chain(&e)),
+            };
+            match backend {
+                Backend::Cpu => Gpu::Off(String::new()),
+                Backend::Auto => open(false),
+                Backend::Gpu => open(true),
+            }
+        });
+        match gpu {
+            Gpu::Open(ctx) => Ok(ctx),
+            Gpu::Off(why) if why.is_empty() => Err(None),
+            Gpu::Off(why) => Err(Some(why.clone())),
+        }
+    }
+
+    /// The refined image of `camera` on the GPU, or why not (`None`: the CPU was asked).
+    fn gpu_image(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+    ) -> Result<(Frame, String), Option<String>> {
+        // The tape first: a tree the GPU cannot encode need not open it.
+        let Some(r) = &mut self.ready else {
+            return Err(None);
+        };
+        if self.backend == Backend::Cpu {
+            return Err(None);
+        }
+        let tape = r.tape.get_or_insert_with(|| {
+            Tape::from_tree(&r.compiled.tree).map_err(|e| crate::io::chain(&e))
+        });
+        if let Err(e) = tape {
+            return Err(Some(e.clone()));
+        }
+        self.gpu()?;
+        let (Some(Gpu::Open(ctx)), Some(r)) = (&self.gpu, &self.ready) else {
+            return Err(None);
+        };
+        let Some(Ok(tape)) = &r.tape else {
+            return Err(None);
+        };
+        let s = settings(scene, &r.compiled, camera, Quality::Full);
+        ctx.render(tape, camera, &s)
+            .map(|f| (f, format!("GPU ({})", ctx.adapter)))
+            .map_err(|e| Some(crate::io::chain(&e)))
+    }
+
     fn draw_request(&mut self, id: u64, req: &Request) {
         let asked = Instant::now();
         if !self.compile(&req.scene, req.version) {
             return;
         }
         let Some(r) = &self.ready else { return };
-        let stale = || self.latest.load(Ordering::SeqCst) != id;
+        let latest = self.latest.clone();
+        let stale = move || latest.load(Ordering::SeqCst) != id;
         let camera = |(w, h): (u32, u32)| match req.view {
             Some(o) => o.camera(w, h),
             None => scene_camera(&req.scene, &r.compiled.tree, None, None, w, h).ok(),
@@ -336,7 +464,8 @@ impl Server {
             self.fail(req.version, "no camera can be placed for this view".into());
             return;
         };
-        let image = |frame, camera, settled, quality, normals| {
+        let handles = r.handles.clone();
+        let image = |frame, camera, settled, quality, normals, tracer: &str| {
             Report::Image(Box::new(Rendered {
                 frame,
                 camera,
@@ -345,7 +474,8 @@ impl Server {
                 quality,
                 latency: asked.elapsed(),
                 normals,
-                handles: r.handles.clone(),
+                handles: handles.clone(),
+                tracer: tracer.to_string(),
             }))
         };
         let started = Instant::now();
@@ -353,30 +483,46 @@ impl Server {
         let pixels = small.width as f64 * small.height as f64;
         self.per_pixel
             .set(Some(started.elapsed().as_secs_f64() / pixels));
-        let mut frame = enlarge(&fast, full.width, full.height);
-        let fast_normals = req.normals.then(|| {
-            let mut n = vec![0u8; fast.rgba.len()];
-            normal_colours(&r.compiled.tree, &fast, &small, 0..fast.height, &mut n);
-            n
-        });
-        self.send(image(fast, small, false, Quality::Fast, fast_normals));
+        let fast_normals = req
+            .normals
+            .then(|| frame_normal_colours(&r.compiled.tree, &fast, &small));
+        self.send(image(
+            fast.clone(),
+            small,
+            false,
+            Quality::Fast,
+            fast_normals,
+            "CPU",
+        ));
         if req.coarse || stale() {
             return;
         }
-        let mut normals = req.normals.then(|| vec![0u8; frame.rgba.len()]);
-        let settings = settings(&req.scene, &r.compiled, &full, Quality::Full);
-        let bands = Bands {
-            rows: 1,
-            progress: &ProgressBar::hidden(),
-            stop: &stale,
+        let cpu = match self.gpu_image(&req.scene, &full) {
+            Ok((frame, tracer)) => {
+                if !stale() {
+                    let Some(r) = &self.ready else { return };
+                    let normals = req
+                        .normals
+                        .then(|| frame_normal_colours(&r.compiled.tree, &frame, &full));
+                    self.send(image(frame, full, true, Quality::Full, normals, &tracer));
+                }
+                return;
+            }
+            Err(None) => "CPU".to_string(),
+            Err(Some(why)) => format!("CPU (not the GPU: {why})"),
         };
-        let (mut sent, mut done) = (Instant::now(), 0);
-        let complete = render_bands(
-            &r.compiled.tree,
+        let Some(r) = &self.ready else { return };
+        let mut normals = req
+            .normals
+            .then(|| vec![0u8; full.width as usize * full.height as usize * 4]);
+        let mut done = 0;
+        let mut sent = Instant::now();
+        let refined = refine(
+            &req.scene,
+            &r.compiled,
             &full,
-            &settings,
-            &mut frame,
-            &bands,
+            &fast,
+            &stale,
             &mut |f, rows| {
                 if let Some(n) = &mut normals {
                     normal_colours(&r.compiled.tree, f, &full, done..rows, n);
@@ -390,14 +536,45 @@ impl Server {
                         false,
                         Quality::Full,
                         normals.clone(),
+                        &cpu,
                     ));
                 }
             },
         );
-        if complete {
-            self.send(image(frame, full, true, Quality::Full, normals));
+        if let Some(frame) = refined {
+            self.send(image(frame, full, true, Quality::Full, normals, &cpu));
         }
     }
+}
+
+/// The editor's refinement of a view on the CPU: `fast` (its fast pass) enlarged to
+/// `camera`'s size, then the full image traced over it band by band, shaded as
+/// `karstic render` shades it; `band_done(frame, rows)` after each band. `None` when
+/// `stop` said so before the end.
+pub fn refine(
+    scene: &Scene,
+    compiled: &Compiled,
+    camera: &Camera,
+    fast: &Frame,
+    stop: &(dyn Fn() -> bool + Sync),
+    band_done: &mut dyn FnMut(&Frame, u32),
+) -> Option<Frame> {
+    let mut frame = enlarge(fast, camera.width, camera.height);
+    let settings = settings(scene, compiled, camera, Quality::Full);
+    let bands = Bands {
+        rows: 1,
+        progress: &ProgressBar::hidden(),
+        stop,
+    };
+    render_bands(
+        &compiled.tree,
+        camera,
+        &settings,
+        &mut frame,
+        &bands,
+        band_done,
+    )
+    .then_some(frame)
 }
 
 /// `frame` enlarged to `width × height` by repeating its pixels.
@@ -448,6 +625,17 @@ pub fn normal_colours(
         });
 }
 
+/// [`normal_colours`] of all of `frame`'s rows.
+fn frame_normal_colours(
+    field: &dyn crate::field::Field,
+    frame: &Frame,
+    camera: &Camera,
+) -> Vec<u8> {
+    let mut n = vec![0u8; frame.rgba.len()];
+    normal_colours(field, frame, camera, 0..frame.height, &mut n);
+    n
+}
+
 /// The settings of an image of `quality` of the scene through `camera`.
 pub fn settings(
     scene: &Scene,
@@ -465,6 +653,7 @@ pub fn settings(
     if quality == Quality::Fast {
         s.shading.shadows = false;
         s.shading.ao_radius = 0.0;
+        s.trace.cone *= FAST_CONE;
     }
     s
 }

@@ -1,7 +1,8 @@
 //! Compiling a scene into the flat [`Tree`] the evaluators run.
 
 use std::collections::{BTreeMap, HashMap};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 use glam::{Affine3A, Quat, Vec3};
 
@@ -11,7 +12,8 @@ use std::sync::Arc;
 
 use crate::curves::FeatureVolumeSpec;
 use crate::curves::spec::BuildOptions;
-use crate::dem::{DemCache, HeightfieldField};
+use crate::curves::spec::CurveSource;
+use crate::dem::{DemCache, HeightfieldField, HeightfieldSpec};
 use crate::elevation::{BuildContext, ElevationField, ElevationSpec};
 use crate::field::{Aabb, Field, NodeId, Primitive, Transition, Tree, TreeBuilder, Warp};
 use crate::geology::{Erosion, Geology, Resistance};
@@ -35,6 +37,76 @@ pub struct Compiled {
     pub expanded: Option<Scene>,
     /// The scene's geology (uniform [`crate::geology::DEFAULT_RESISTANCE`] without one).
     pub geology: Arc<Geology>,
+}
+
+/// Feature Volumes built by this process, by [`volume_key`]: the editor compiles the
+/// tree again for each preview of a dragged value, and the volumes, which take most of
+/// a compile even when their voxels come from the pipeline's cache (the terrain sampled
+/// under them, the cache key, the tricubic bounds), seldom change. An [`SField`] shares
+/// its grids: a copy is cheap.
+static VOLUMES: Mutex<Vec<(String, SField)>> = Mutex::new(Vec::new());
+
+/// Volumes kept in [`VOLUMES`].
+const VOLUME_MEMO: usize = 8;
+
+/// What a Feature Volume is built from: its node's text, the noise seed, the memory
+/// budget, the folder of its curve file, the terrain's node and the scene's seed (the
+/// `Ground(..)` points and the boundary conditions read the terrain), and the
+/// modification times and lengths of the files these read.
+fn volume_key(
+    f: &FeatureVolumeSpec,
+    seed: u32,
+    max_memory: u64,
+    base_dir: &Path,
+    terrain: Option<(&HeightfieldSpec, u32)>,
+) -> String {
+    let mut files: Vec<PathBuf> = Vec::new();
+    if let CurveSource::Path(p) = &f.curves {
+        files.push(base_dir.join(p));
+    }
+    if let Some(source) = terrain.and_then(|(t, _)| t.source.as_ref()) {
+        files.extend(crate::dem::files_read(
+            &base_dir.join(source),
+            &crate::dem::ReadOptions::default(),
+        ));
+    }
+    let stamps: Vec<_> = files
+        .iter()
+        .map(|p| {
+            let m = std::fs::metadata(p).ok();
+            (
+                m.as_ref().and_then(|m| m.modified().ok()),
+                m.map(|m| m.len()),
+            )
+        })
+        .collect();
+    format!("{f:?} {seed} {max_memory} {base_dir:?} {terrain:?} {files:?} {stamps:?}")
+}
+
+/// The node of `scene`'s terrain heightfield (its `terrain`, or its only `Heightfield`),
+/// or why it has none.
+fn terrain_spec(scene: &Scene) -> Result<&HeightfieldSpec, &'static str> {
+    let all = scene.all_nodes();
+    let candidates: Vec<&NodeSpec> = match &scene.terrain {
+        Some(name) => all
+            .into_iter()
+            .filter(|n| n.name() == Some(name.as_str()))
+            .collect(),
+        None => all
+            .into_iter()
+            .filter(|n| matches!(n, NodeSpec::Heightfield(_)))
+            .collect(),
+    };
+    match candidates.as_slice() {
+        [NodeSpec::Heightfield(h)] => Ok(h),
+        [] | [_] if scene.terrain.is_some() => {
+            Err("the scene's `terrain` must name a Heightfield node")
+        }
+        [] => Err("terrain anchors need a Heightfield in the scene"),
+        _ => Err(
+            "the scene has several heightfields: say which one anchors resolve against with `terrain: \"name\"`",
+        ),
+    }
 }
 
 /// Compiles one scene: walks its tree once, children first, into a [`TreeBuilder`].
@@ -72,32 +144,7 @@ impl Compiler<'_> {
         if let Some(t) = &self.terrain {
             return Ok(t.clone());
         }
-        let all = self.scene.all_nodes();
-        let candidates: Vec<&NodeSpec> = match &self.scene.terrain {
-            Some(name) => all
-                .into_iter()
-                .filter(|n| n.name() == Some(name.as_str()))
-                .collect(),
-            None => all
-                .into_iter()
-                .filter(|n| matches!(n, NodeSpec::Heightfield(_)))
-                .collect(),
-        };
-        let spec = match candidates.as_slice() {
-            [NodeSpec::Heightfield(h)] => h,
-            [] | [_] if self.scene.terrain.is_some() => {
-                return Err(
-                    self.error(asking, "the scene's `terrain` must name a Heightfield node")
-                );
-            }
-            [] => return Err(self.error(asking, "terrain anchors need a Heightfield in the scene")),
-            _ => {
-                return Err(self.error(
-                    asking,
-                    "the scene has several heightfields: say which one anchors resolve against with `terrain: \"name\"`",
-                ));
-            }
-        };
+        let spec = terrain_spec(self.scene).map_err(|e| self.error(asking, e))?;
         let hf = spec
             .load_with(self.base_dir, &mut self.dems, self.scene.seed)
             .map_err(|e| self.asset_error(asking, e))?;
@@ -121,6 +168,24 @@ impl Compiler<'_> {
                 .all_nodes()
                 .iter()
                 .any(|m| matches!(m, NodeSpec::Heightfield(_)));
+        let key = if has_terrain {
+            volume_key(
+                f,
+                seed,
+                max_memory,
+                self.base_dir,
+                Some((
+                    terrain_spec(self.scene).map_err(|e| self.error(n, e))?,
+                    self.scene.seed,
+                )),
+            )
+        } else {
+            volume_key(f, seed, max_memory, self.base_dir, None)
+        };
+        let memo = || VOLUMES.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, built)) = memo().iter().find(|(k, _)| *k == key) {
+            return Ok(built.clone());
+        }
         let terrain = if has_terrain {
             Some(self.terrain(n)?)
         } else {
@@ -137,8 +202,15 @@ impl Compiler<'_> {
             ground: Some(&ground),
             max_memory,
         };
-        f.build_with(self.base_dir, &opts)
-            .map_err(|e| self.asset_error(n, e))
+        let built = f
+            .build_with(self.base_dir, &opts)
+            .map_err(|e| self.asset_error(n, e))?;
+        let mut memo = memo();
+        if memo.len() >= VOLUME_MEMO {
+            memo.remove(0);
+        }
+        memo.push((key, built.clone()));
+        Ok(built)
     }
 
     /// Compiles `n` (a node of the scene, or one derived from it) into a tree of its own,

@@ -19,6 +19,18 @@ use crate::render::trace::Method;
 use crate::tape::Tape;
 use crate::tape::noise::encode_fbm;
 
+/// The adapter wgpu picks by default (any backend; lavapipe counts).
+fn default_adapter() -> Result<wgpu::Adapter, GpuError> {
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
+    pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
+        .map_err(GpuError::NoAdapter)
+}
+
+/// An adapter's name and backend, for messages.
+fn adapter_name(info: &wgpu::AdapterInfo) -> String {
+    format!("{} ({:?})", info.name, info.backend)
+}
+
 /// Uniform block of `trace.wgsl` (`struct Uniforms`); see the comments there.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -106,12 +118,19 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
+    /// The default adapter's name and backend, and whether it is a software one, without
+    /// opening a device or compiling the tracer: a cheap look before [`GpuContext::new`].
+    pub fn default_adapter() -> Result<(String, bool), GpuError> {
+        let info = default_adapter()?.get_info();
+        Ok((
+            adapter_name(&info),
+            info.device_type == wgpu::DeviceType::Cpu,
+        ))
+    }
+
     /// Opens the default adapter (any backend; lavapipe counts) and builds the pipelines.
     pub fn new() -> Result<Self, GpuError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle());
-        let adapter =
-            pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions::default()))
-                .map_err(GpuError::NoAdapter)?;
+        let adapter = default_adapter()?;
         let info = adapter.get_info();
         let limits = adapter.limits();
         if limits.max_storage_buffers_per_shader_stage < 10 {
@@ -141,7 +160,7 @@ impl GpuContext {
             module,
             pipelines: Mutex::new(HashMap::new()),
             fbm_probe,
-            adapter: format!("{} ({:?})", info.name, info.backend),
+            adapter: adapter_name(&info),
             software: info.device_type == wgpu::DeviceType::Cpu,
         })
     }
