@@ -110,12 +110,8 @@ pub fn frame_surface(
     Camera::look_at(eye, target, fov_y, width, height)
 }
 
-/// Width (pixels) of the probe image [`frame_surface`] renders.
+/// Side of the square-ish probe images (pixels across) candidate views render.
 const PROBE_WIDTH: u32 = 96;
-/// Width (pixels) of the probe images candidate feature views render: 48 pixels see a
-/// feature as well as 96 for choosing among eyes, at a quarter of the rays (the 16 probes
-/// per feature were a fifth of the views' time at 96).
-const VIEW_PROBE_WIDTH: u32 = 48;
 /// Azimuths of the candidate eyes around a feature.
 const AZIMUTHS: u32 = 8;
 /// Elevations (degrees) of the candidate eyes above the feature's centre.
@@ -137,7 +133,7 @@ pub fn feature_view(
     }
     let centre = feature.center();
     let reach = feature.radius().max(1.0);
-    let probe_h = (VIEW_PROBE_WIDTH * height / width).max(8);
+    let probe_h = (PROBE_WIDTH * height / width).max(8);
     let mut best: Option<(usize, Camera, Vec<Vec3>)> = None;
     for e in ELEVATIONS {
         for a in 0..AZIMUTHS {
@@ -148,7 +144,7 @@ pub fn feature_view(
             if field.value(eye) >= ISO {
                 continue;
             }
-            let cam = Camera::look_at(eye, centre, fov_y, VIEW_PROBE_WIDTH, probe_h)?;
+            let cam = Camera::look_at(eye, centre, fov_y, PROBE_WIDTH, probe_h)?;
             let seen = feature_points(field, &cam, feature, materials);
             if seen.len() >= MIN_FEATURE_PIXELS && best.as_ref().is_none_or(|b| seen.len() > b.0) {
                 best = Some((seen.len(), cam, seen));

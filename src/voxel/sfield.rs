@@ -261,7 +261,9 @@ impl SField {
     /// `(S(p), ∇S(p), α(p))` returned instead: `S'` lies within the margin `α` of it.
     /// With `far` the sigmoid's width the field is then the same with `S` itself (the
     /// noise cannot bring `S'` into its range): most of a terrain-aware volume lies far
-    /// from the surface.
+    /// from the surface. With the tricubic blend and without `GRAD`, the blend's 64-node
+    /// stencil is skipped too where the trilinear `|L(p)| ≥ far + α(p) + E` (`E` the
+    /// cell's bound of `|S − L|`, [`Cubic::cell_error`]): `(L(p), ∇L(p), α(p) + E)`.
     #[inline(always)]
     fn s_eval<const GRAD: bool>(&self, p: Vec3, far: f32) -> (f32, Vec3, f32) {
         self.s_eval_with::<GRAD, true>(p, far, 0.0)
@@ -283,21 +285,28 @@ impl SField {
         };
         let h = self.vol.levels[l].geom.h;
         let mut lin = trilinear_grad(&self.vol.s[l], &idx, f, h);
+        let (a, ga) = if self.noise_amp == 0.0 {
+            (0.0, Vec3::ZERO)
+        } else {
+            trilinear_grad(&self.vol.alpha[l], &idx, f, h)
+        };
         let mut err = 0.0;
         if let Some(c) = &self.cubic
             && l + 1 == self.vol.levels.len()
         {
-            if CUBIC {
-                lin = c.eval::<GRAD>(&self.vol.levels[l], &self.vol.s[l], &idx, f, lin);
-            } else {
+            if !CUBIC {
                 err = cubic_err;
+            } else if !GRAD && lin.0.abs() >= far + a * FBM_AMPLITUDE + c.cell_error(idx[0]) {
+                // The blend cannot bring S' within `far`: the 64-node stencil is skipped.
+                err = c.cell_error(idx[0]);
+            } else {
+                lin = c.eval::<GRAD>(&self.vol.levels[l], &self.vol.s[l], &idx, f, lin);
             }
         }
         let (s, gs) = lin;
         if self.noise_amp == 0.0 {
             return (s, gs, err);
         }
-        let (a, ga) = trilinear_grad(&self.vol.alpha[l], &idx, f, h);
         let margin = a * FBM_AMPLITUDE + err;
         if s.abs() >= far + margin {
             return (s, gs, margin);
@@ -439,11 +448,9 @@ impl SField {
     fn s_box(&self, bc: &Aabb) -> SBox {
         let (bb, cubic_err) = self.box_bounds(bc);
         let (amp, lip_noise) = if self.noise_amp > 0.0 {
-            let reach = bc
-                .corners()
-                .iter()
-                .map(|c| c.distance(self.params.domain.min))
-                .fold(0.0, f32::max);
+            // The farthest corner from the origin, axis by axis.
+            let o = self.params.domain.min;
+            let reach = (bc.min - o).abs().max((bc.max - o).abs()).length();
             (
                 bb.alpha[1].max(0.0) * FBM_AMPLITUDE,
                 noise_lipschitz(&self.params, &bb, reach),
