@@ -332,7 +332,7 @@ fn beam_start(field: &dyn Field, rays: &[PixelRay], params: &TraceParams) -> f32
         .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), (_, sp)| {
             (a.min(sp.0), b.max(sp.1))
         });
-    let mut delta = (end - t) * 1.0 / 16.0;
+    let mut delta = (end - t) / 16.0;
     while t < end && params.max_steps > 0 {
         let next = (t + delta).min(end);
         let Some(b) = segments_box(
