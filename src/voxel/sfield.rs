@@ -261,7 +261,9 @@ impl SField {
     /// `(S(p), ∇S(p), α(p))` returned instead: `S'` lies within the margin `α` of it.
     /// With `far` the sigmoid's width the field is then the same with `S` itself (the
     /// noise cannot bring `S'` into its range): most of a terrain-aware volume lies far
-    /// from the surface.
+    /// from the surface. With the tricubic blend and without `GRAD`, the blend's 64-node
+    /// stencil is skipped too where the trilinear `|L(p)| ≥ far + α(p) + E` (`E` the
+    /// cell's bound of `|S − L|`, [`Cubic::cell_error`]): `(L(p), ∇L(p), α(p) + E)`.
     #[inline(always)]
     fn s_eval<const GRAD: bool>(&self, p: Vec3, far: f32) -> (f32, Vec3, f32) {
         self.s_eval_with::<GRAD, true>(p, far, 0.0)
@@ -283,21 +285,28 @@ impl SField {
         };
         let h = self.vol.levels[l].geom.h;
         let mut lin = trilinear_grad(&self.vol.s[l], &idx, f, h);
+        let (a, ga) = if self.noise_amp == 0.0 {
+            (0.0, Vec3::ZERO)
+        } else {
+            trilinear_grad(&self.vol.alpha[l], &idx, f, h)
+        };
         let mut err = 0.0;
         if let Some(c) = &self.cubic
             && l + 1 == self.vol.levels.len()
         {
-            if CUBIC {
-                lin = c.eval::<GRAD>(&self.vol.levels[l], &self.vol.s[l], &idx, f, lin);
-            } else {
+            if !CUBIC {
                 err = cubic_err;
+            } else if !GRAD && lin.0.abs() >= far + a * FBM_AMPLITUDE + c.cell_error(idx[0]) {
+                // The blend cannot bring S' within `far`: the 64-node stencil is skipped.
+                err = c.cell_error(idx[0]);
+            } else {
+                lin = c.eval::<GRAD>(&self.vol.levels[l], &self.vol.s[l], &idx, f, lin);
             }
         }
         let (s, gs) = lin;
         if self.noise_amp == 0.0 {
             return (s, gs, err);
         }
-        let (a, ga) = trilinear_grad(&self.vol.alpha[l], &idx, f, h);
         let margin = a * FBM_AMPLITUDE + err;
         if s.abs() >= far + margin {
             return (s, gs, margin);
@@ -351,7 +360,11 @@ impl SField {
     }
 
     /// Bounds over the bricks whose nodes the field can read inside `b` (clamped to the
-    /// domain), across all levels; with the tricubic blend, over its stencils too, widened.
+    /// domain), from the finest level down to the first whose bricks there are all
+    /// allocated: a point reads the finest level holding its cell
+    /// ([`super::sparse::locate`]), so no point of `b` reads a coarser one (their wide
+    /// bricks would only loosen the bounds); with the tricubic blend, over its stencils
+    /// too, widened.
     /// Also returns the tricubic blend's `E` over those stencils
     /// ([`CubicBounds::value_error`]; 0 without the blend): `|S − L| ≤ E` in `b`.
     fn box_bounds(&self, b: &Aabb) -> (BrickBounds, f32) {
@@ -360,7 +373,7 @@ impl SField {
         let finest = self.vol.levels.len().saturating_sub(1);
         // Nodes read around a point: its cell's corners, or the tricubic stencil.
         let reach = if self.cubic.is_some() { 2.0 } else { 1.0 };
-        for (l, bricks) in self.vol.levels.iter().enumerate() {
+        for (l, bricks) in self.vol.levels.iter().enumerate().rev() {
             let g = bricks.geom;
             let tc = self.cubic.as_deref().filter(|_| l == finest);
             let lo = ((b.min - g.origin) / g.h - Vec3::splat(reach))
@@ -384,18 +397,24 @@ impl SField {
                 }
                 continue;
             }
+            let mut complete = true;
             for z in lo.z..=hi.z {
                 for y in lo.y..=hi.y {
                     for x in lo.x..=hi.x {
                         let k = bricks.brick(glam::IVec3::new(x, y, z));
-                        if k != NONE {
-                            acc = hull(&acc, &self.vol.bounds[l][k as usize]);
-                            if let Some(c) = tc {
-                                cubic = cubic.hull(c.brick(k as usize));
-                            }
+                        if k == NONE {
+                            complete = false;
+                            continue;
+                        }
+                        acc = hull(&acc, &self.vol.bounds[l][k as usize]);
+                        if let Some(c) = tc {
+                            cubic = cubic.hull(c.brick(k as usize));
                         }
                     }
                 }
+            }
+            if complete {
+                break;
             }
         }
         match self.vol.levels.last() {
@@ -429,11 +448,9 @@ impl SField {
     fn s_box(&self, bc: &Aabb) -> SBox {
         let (bb, cubic_err) = self.box_bounds(bc);
         let (amp, lip_noise) = if self.noise_amp > 0.0 {
-            let reach = bc
-                .corners()
-                .iter()
-                .map(|c| c.distance(self.params.domain.min))
-                .fold(0.0, f32::max);
+            // The farthest corner from the origin, axis by axis.
+            let o = self.params.domain.min;
+            let reach = (bc.min - o).abs().max((bc.max - o).abs()).length();
             (
                 bb.alpha[1].max(0.0) * FBM_AMPLITUDE,
                 noise_lipschitz(&self.params, &bb, reach),

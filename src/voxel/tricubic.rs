@@ -37,7 +37,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::pipeline::BrickBounds;
-use super::sparse::{BRICK, BRICK_NODES, Bricks, PAD_NODES, local, padded, trilinear_grad};
+use super::sparse::{BRICK, BRICK_NODES, Bricks, NONE, PAD_NODES, local, padded, trilinear_grad};
 
 /// How S is interpolated between the voxel nodes (a `FeatureVolume`'s `interpolation`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -122,6 +122,10 @@ pub struct Cubic {
     bounds: Vec<CubicBounds>,
     /// Hull of `bounds`.
     all: CubicBounds,
+    /// Per brick, `E` over the bounds of its 26 neighbours and itself: a bound of
+    /// `|S − L|` in every cell whose first corner lies in the brick (its stencil stays in
+    /// those bricks).
+    near: Vec<f32>,
 }
 
 impl Cubic {
@@ -171,7 +175,31 @@ impl Cubic {
             })
             .collect();
         let all = bounds.iter().fold(CubicBounds::EMPTY, |a, x| a.hull(x));
-        Cubic { w, bounds, all }
+        let near = (0..bricks.len())
+            .into_par_iter()
+            .map(|b| {
+                bricks
+                    .neighbours(b)
+                    .iter()
+                    .filter(|&&k| k != NONE)
+                    .fold(CubicBounds::EMPTY, |a, &k| a.hull(&bounds[k as usize]))
+                    .value_error(g.h)
+            })
+            .collect();
+        Cubic {
+            w,
+            bounds,
+            all,
+            near,
+        }
+    }
+
+    /// A bound of `|S − L|` (the blend's departure from the trilinear interpolant) in the
+    /// cell whose first corner has data index `i0` ([`CubicBounds::value_error`] over the
+    /// bricks its stencil reads).
+    #[inline]
+    pub fn cell_error(&self, i0: u32) -> f32 {
+        self.near[i0 as usize / BRICK_NODES]
     }
 
     /// Bounds of brick `b`.
@@ -191,7 +219,9 @@ impl Cubic {
 
     /// Bytes held.
     pub fn bytes(&self) -> u64 {
-        (self.w.len() * 4 + self.bounds.len() * std::mem::size_of::<CubicBounds>()) as u64
+        (self.w.len() * 4
+            + self.bounds.len() * std::mem::size_of::<CubicBounds>()
+            + self.near.len() * 4) as u64
     }
 
     /// S and its gradient in the finest level's cell `idx` at fraction `f`, given the
