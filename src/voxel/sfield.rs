@@ -360,11 +360,7 @@ impl SField {
     }
 
     /// Bounds over the bricks whose nodes the field can read inside `b` (clamped to the
-    /// domain), from the finest level down to the first whose bricks there are all
-    /// allocated: a point reads the finest level holding its cell
-    /// ([`super::sparse::locate`]), so no point of `b` reads a coarser one (their wide
-    /// bricks would only loosen the bounds); with the tricubic blend, over its stencils
-    /// too, widened.
+    /// domain), across all levels; with the tricubic blend, over its stencils too, widened.
     /// Also returns the tricubic blend's `E` over those stencils
     /// ([`CubicBounds::value_error`]; 0 without the blend): `|S − L| ≤ E` in `b`.
     fn box_bounds(&self, b: &Aabb) -> (BrickBounds, f32) {
@@ -373,7 +369,7 @@ impl SField {
         let finest = self.vol.levels.len().saturating_sub(1);
         // Nodes read around a point: its cell's corners, or the tricubic stencil.
         let reach = if self.cubic.is_some() { 2.0 } else { 1.0 };
-        for (l, bricks) in self.vol.levels.iter().enumerate().rev() {
+        for (l, bricks) in self.vol.levels.iter().enumerate() {
             let g = bricks.geom;
             let tc = self.cubic.as_deref().filter(|_| l == finest);
             let lo = ((b.min - g.origin) / g.h - Vec3::splat(reach))
@@ -397,24 +393,18 @@ impl SField {
                 }
                 continue;
             }
-            let mut complete = true;
             for z in lo.z..=hi.z {
                 for y in lo.y..=hi.y {
                     for x in lo.x..=hi.x {
                         let k = bricks.brick(glam::IVec3::new(x, y, z));
-                        if k == NONE {
-                            complete = false;
-                            continue;
-                        }
-                        acc = hull(&acc, &self.vol.bounds[l][k as usize]);
-                        if let Some(c) = tc {
-                            cubic = cubic.hull(c.brick(k as usize));
+                        if k != NONE {
+                            acc = hull(&acc, &self.vol.bounds[l][k as usize]);
+                            if let Some(c) = tc {
+                                cubic = cubic.hull(c.brick(k as usize));
+                            }
                         }
                     }
                 }
-            }
-            if complete {
-                break;
             }
         }
         match self.vol.levels.last() {
