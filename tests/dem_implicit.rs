@@ -467,6 +467,68 @@ fn small_boxes_near_the_terrain_have_sound_and_sharp_bounds() {
     }
 }
 
+/// Segment bounds (what the tracer asks): along a segment only the slope of `h + d − z`
+/// in its direction counts, and in the air above the terrain's band the field is 0. Rays
+/// grazing the ground (nearly level, a few metres to tens of metres above it) and steep
+/// ones: every sampled pair obeys the bound, and along level segments the bound is below
+/// the box's (which takes every direction) — the directional bound is what is checked.
+#[test]
+fn segment_bounds_are_sound_along_grazing_rays() {
+    for (name, f) in leaves() {
+        let interp = f.params().interpolation;
+        let mut rng = Rng(9);
+        let s = f.support();
+        let (mut checked, mut level, mut sharper) = (0, 0, 0);
+        while checked < 4000 {
+            let c = rng.in_box(&s);
+            let h = f.heightfield().sample(c.truncate(), interp);
+            if h.is_nan() {
+                continue;
+            }
+            checked += 1;
+            let a = c.truncate().extend(h + rng.range(-10.0, 60.0));
+            let steep = checked % 4 == 0;
+            let dz = if steep {
+                rng.range(-1.0, 1.0)
+            } else {
+                rng.range(-0.15, 0.15)
+            };
+            let heading = rng.range(0.0, std::f32::consts::TAU);
+            let u = Vec3::new(heading.cos(), heading.sin(), dz).normalize();
+            let b = a + u * rng.range(0.2, 40.0) * rng.f32();
+            let lam = f.lipschitz_segment(a, b);
+            assert!(
+                lam <= f.lipschitz() * 1.0001 + 1e-6,
+                "{name}: segment bound {lam} above the global one"
+            );
+            // p and q are rounded to f32 (millimetres at these coordinates), which moves
+            // them off the segment's line: the global bound covers that sideways offset
+            let off = 2.0 * f.lipschitz() * a.abs().max_element() * f32::EPSILON;
+            for _ in 0..12 {
+                let (p, q) = (a.lerp(b, rng.f32()), a.lerp(b, rng.f32()));
+                let d = p.distance(q);
+                if d < 1e-2 {
+                    continue;
+                }
+                let df = (f.value(p) - f.value(q)).abs();
+                assert!(
+                    df <= lam * d * 1.001 + 1e-6 + off,
+                    "{name}: |Δf| = {df} over {d} m > bound {lam} on [{a}, {b}]"
+                );
+            }
+            if !steep {
+                let lb = f.lipschitz_box(&Aabb::new(a, b));
+                level += (lb > 0.0) as usize;
+                sharper += (lam < lb * 0.98) as usize;
+            }
+        }
+        assert!(
+            sharper * 2 > level,
+            "{name}: level segments' bounds are no sharper than their boxes' ({sharper} of {level})"
+        );
+    }
+}
+
 /// Footprints of a mesh column (half a metre to two metres across) inside the domain:
 /// their terrain band holds every sampled crossing and is about as tall as the detail's
 /// reach plus the relief across the footprint — not as the relief of the DEM cells under

@@ -182,6 +182,13 @@ impl Detail {
         self.params.amplitude * self.ranges.query(i0, i1, j0, j1)[1].max(0.0)
     }
 
+    /// `A·max m` over cell `(i, j)` (0 where `m` is undefined): the per-cell values
+    /// [`Detail::reach`] takes the maximum of.
+    #[inline]
+    pub fn cell_reach(&self, i: usize, j: usize) -> f32 {
+        self.params.amplitude * self.ranges.cell(i, j)[1].max(0.0)
+    }
+
     /// `A·max m` over the whole grid.
     pub fn reach_total(&self) -> f32 {
         self.params.amplitude * self.ranges.total()[1].max(0.0)

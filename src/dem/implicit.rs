@@ -98,8 +98,9 @@ pub struct HeightfieldField {
     r: f32,
     dz: Interval,
     domain: Domain,
-    heights: MinMaxPyramid,
-    slopes: MinMaxPyramid,
+    /// Per cell `[min h, max h, slope bound of h, detail reach A·max m]`: one query
+    /// answers what every bound needs.
+    cells: MinMaxPyramid<4>,
     lip_h: f32,
     detail: Option<Detail>,
     support: Aabb,
@@ -139,18 +140,30 @@ impl HeightfieldField {
         let interp = p.interpolation;
         let domain = Domain::new(&placed, interp, p.domain.as_deref())?;
         let (cx, cy) = placed.cells();
-        let heights = MinMaxPyramid::new(cx, cy, placed.cell_ranges(interp));
-        let [zmin, zmax] = heights.total();
-        if zmin > zmax {
-            return bad("the heightfield has no cell with a surface (too much nodata)".into());
-        }
-        let slopes = MinMaxPyramid::new(cx, cy, placed.cell_slopes(interp));
-        let lip_h = slopes.total()[1].max(0.0);
         let detail = p
             .detail
             .as_ref()
             .map(|d| Detail::new(&placed, d))
             .transpose()?;
+        let slopes = placed.cell_slopes(interp);
+        let per_cell = placed
+            .cell_ranges(interp)
+            .into_iter()
+            .zip(slopes)
+            .enumerate()
+            .map(|(k, ([lo, hi], [_, s]))| {
+                let reach = detail
+                    .as_ref()
+                    .map_or(0.0, |d| d.cell_reach(k % cx, k / cx));
+                [lo, hi, s, reach]
+            })
+            .collect();
+        let cells = MinMaxPyramid::new(cx, cy, per_cell);
+        let [zmin, zmax, lip_h, _] = cells.total();
+        if zmin > zmax {
+            return bad("the heightfield has no cell with a surface (too much nodata)".into());
+        }
+        let lip_h = lip_h.max(0.0);
         let reach = detail.as_ref().map_or(0.0, Detail::reach_total);
         let r = p.falloff;
         let dz = Interval::new(zmin - reach - p.base_depth, zmax + reach + r);
@@ -161,8 +174,7 @@ impl HeightfieldField {
             r,
             dz,
             domain,
-            heights,
-            slopes,
+            cells,
             lip_h,
             detail,
             support,
@@ -297,30 +309,27 @@ impl HeightfieldField {
         Interval::new((hc - reach).max(cells.lo), (hc + reach).min(cells.hi))
     }
 
-    /// `(range of d over b, A·max m)` for the detail over the cells `i0..=i1 × j0..=j1`
-    /// under `b` (zeros without detail): `|d| ≤ A·max m`, with `sharpen` narrowed around
-    /// the box's centre by the detail's slope (one more noise evaluation).
+    /// Over the cells `i0..=i1 × j0..=j1`, from one pyramid query: the range of `h`
+    /// (empty where no cell has a surface), the slope bound `s ≥ 0` of `h` and the
+    /// detail's reach `A·max m ≥ 0` (0 without detail).
     #[inline]
-    fn detail_range(
-        &self,
-        b: &Aabb,
-        (i0, i1, j0, j1): (usize, usize, usize, usize),
-        sharpen: bool,
-    ) -> (Interval, f32) {
+    fn cells_under(&self, (i0, i1, j0, j1): (usize, usize, usize, usize)) -> (Interval, f32, f32) {
+        let [lo, hi, s, reach] = self.cells.query(i0, i1, j0, j1);
+        (Interval { lo, hi }, s.max(0.0), reach.max(0.0))
+    }
+
+    /// The range of `d` over `b` where `|d| ≤ reach` (`A·max m` over the cells under `b`;
+    /// zero without detail), narrowed around the box's centre by the detail's slope (one
+    /// more noise evaluation).
+    #[inline]
+    fn detail_range(&self, b: &Aabb, reach: f32) -> Interval {
         let Some(d) = &self.detail else {
-            return (Interval::ZERO, 0.0);
+            return Interval::ZERO;
         };
-        let reach = d.reach(i0, i1, j0, j1);
-        if !sharpen {
-            return (Interval::new(-reach, reach), reach);
-        }
         let c = b.center();
         let (dc, rad) = (d.value(c), d.slope(reach) * b.radius() * (1.0 + 1e-5));
         let eps = self.eps(reach);
-        (
-            Interval::new((dc - rad).max(-reach) - eps, (dc + rad).min(reach) + eps),
-            reach,
-        )
+        Interval::new((dc - rad).max(-reach) - eps, (dc + rad).min(reach) + eps)
     }
 
     /// Range of the distance to `P` over `b`, from the clearance range `e`.
@@ -375,6 +384,52 @@ impl HeightfieldField {
         }
     }
 
+    /// A Lipschitz bound over `b`, or, with `dir = Some((|u_xy|, |u_z|))` for a unit
+    /// direction `u`, of the derivative along `u` on a segment of direction `u` inside `b`.
+    ///
+    /// `f = min(f_T, f_P)`: where `σ` is saturated at 0 over `b` (`h + d − z ≤ −R`, the air
+    /// above the terrain's band), `f = 0` whatever `f_P ≥ 0` is, so the bound is 0. Along
+    /// `u`, `|∂(h + d − z)/∂u| ≤ s·|u_xy| + |u_z| + |∇d|` (`s` the slope of `h`), never
+    /// above the isotropic `√(1 + s²) + |∇d|` (Cauchy–Schwarz) and far below it along
+    /// the nearly level rays that graze the terrain.
+    fn lipschitz_along(&self, b: &Aabb, dir: Option<(f32, f32)>) -> f32 {
+        let fp = b.footprint();
+        let e = self.domain.clearance_range(&fp);
+        let Some((i0, i1, j0, j1)) = self.hf.cells_overlapping(&fp) else {
+            return 0.0;
+        };
+        if e.hi <= 0.0 {
+            return 0.0;
+        }
+        let (cells, s, reach) = self.cells_under((i0, i1, j0, j1));
+        let z = b.z();
+        // h + d − z over b, with |d| ≤ reach (the centre's detail would sharpen σ's slope
+        // only where it is small anyway)
+        let v_of = |h: Interval| Interval::new(h.lo - reach - z.hi, h.hi + reach - z.lo);
+        let lt = if cells.is_empty() || v_of(cells).lo >= self.r {
+            // no surface, or σ saturated at 2T whatever h is: f = f_P
+            0.0
+        } else if v_of(cells).hi <= -self.r {
+            return 0.0;
+        } else {
+            let h = self.h_range_near(&fp, cells, s, e.lo);
+            let v = v_of(h);
+            if v.hi <= -self.r {
+                return 0.0;
+            }
+            // |∇(h + d − z)| ≤ √(1 + s²) + |∇d|
+            let ld = self.detail.as_ref().map_or(0.0, |d| d.slope(reach));
+            let lh = match dir {
+                Some((uxy, uz)) => s * uxy + uz,
+                None => (1.0 + s * s).sqrt(),
+            };
+            sigma_slope(v, self.r) * (lh + ld)
+        };
+        let d = self.dist_range(e, z);
+        let lp = 2.0 * ISO * wyvill_slope(d.scale(1.0 / self.r)) / self.r * self.domain.lipschitz();
+        lt.max(lp)
+    }
+
     /// A float tolerance for bands around elevations of magnitude `m`.
     #[inline]
     fn eps(&self, m: f32) -> f32 {
@@ -424,12 +479,12 @@ impl Field for HeightfieldField {
         let Some((i0, i1, j0, j1)) = self.hf.cells_overlapping(&fp) else {
             return Interval::ZERO;
         };
-        let h = self.heights.query_interval(i0, i1, j0, j1);
+        let (h, s, reach) = self.cells_under((i0, i1, j0, j1));
         if e.hi <= 0.0 || h.is_empty() {
             return Interval::ZERO;
         }
-        let h = self.h_range_near(&fp, h, self.slopes.query(i0, i1, j0, j1)[1], e.lo);
-        let (dd, _) = self.detail_range(b, (i0, i1, j0, j1), true);
+        let h = self.h_range_near(&fp, h, s, e.lo);
+        let dd = self.detail_range(b, reach);
         let z = b.z();
         let ft = sigma_interval(
             Interval::new(h.lo + dd.lo - z.hi, h.hi + dd.hi - z.lo),
@@ -456,30 +511,15 @@ impl Field for HeightfieldField {
     }
 
     fn lipschitz_box(&self, b: &Aabb) -> f32 {
-        let fp = b.footprint();
-        let e = self.domain.clearance_range(&fp);
-        let Some((i0, i1, j0, j1)) = self.hf.cells_overlapping(&fp) else {
-            return 0.0;
-        };
-        if e.hi <= 0.0 {
-            return 0.0;
-        }
-        let s = self.slopes.query(i0, i1, j0, j1)[1].max(0.0);
-        let h = self.h_range_near(&fp, self.heights.query_interval(i0, i1, j0, j1), s, e.lo);
-        let z = b.z();
-        let lt = if h.is_empty() {
-            0.0
-        } else {
-            // |∇(h + d − z)| ≤ √(1 + s²) + |∇d|
-            // (the centre's detail would sharpen σ's slope only where it is small anyway)
-            let (dd, reach) = self.detail_range(b, (i0, i1, j0, j1), false);
-            let ld = self.detail.as_ref().map_or(0.0, |d| d.slope(reach));
-            let v = Interval::new(h.lo + dd.lo - z.hi, h.hi + dd.hi - z.lo);
-            sigma_slope(v, self.r) * ((1.0 + s * s).sqrt() + ld)
-        };
-        let d = self.dist_range(e, z);
-        let lp = 2.0 * ISO * wyvill_slope(d.scale(1.0 / self.r)) / self.r * self.domain.lipschitz();
-        lt.max(lp)
+        self.lipschitz_along(b, None)
+    }
+
+    /// Along the segment only the slope of `h + d − z` in the segment's direction counts:
+    /// see [`HeightfieldField::lipschitz_along`].
+    fn lipschitz_segment(&self, a: Vec3, b: Vec3) -> f32 {
+        let u = (b - a).normalize_or_zero();
+        let dir = (u != Vec3::ZERO).then(|| (u.truncate().length(), u.z.abs()));
+        self.lipschitz_along(&Aabb::new(a, b), dir)
     }
 
     fn z_bands(&self, fp: &Rect, z: Interval, out: &mut ZBands) {
@@ -490,15 +530,14 @@ impl Field for HeightfieldField {
         let Some((i0, i1, j0, j1)) = self.hf.cells_overlapping(fp) else {
             return self.prism_shape().z_bands(e, Interval::EMPTY, z, out);
         };
-        let cells = self.heights.query_interval(i0, i1, j0, j1);
+        let (cells, s, reach) = self.cells_under((i0, i1, j0, j1));
         // Sharpened around the footprint's centre where the footprint lies inside Ω: a
         // mesh column's band is then about as tall as the relief under it, not as a
         // whole DEM cell's.
-        let h = self.h_range_near(fp, cells, self.slopes.query(i0, i1, j0, j1)[1], e.lo);
+        let h = self.h_range_near(fp, cells, s, e.lo);
         let reach = match &self.detail {
-            Some(d) if e.lo > 0.0 => d.reach_near(fp, d.reach(i0, i1, j0, j1)),
-            Some(d) => d.reach(i0, i1, j0, j1),
-            None => 0.0,
+            Some(d) if e.lo > 0.0 => d.reach_near(fp, reach),
+            _ => reach,
         };
         // the terrain z = h + d lies within the detail's reach of h
         let h = if h.is_empty() {

@@ -1,38 +1,58 @@
 //! A min/max pyramid over grid cells: conservative ranges over any cell rectangle in O(1).
 //!
-//! Level 0 holds one `[lo, hi]` per cell; level `k + 1` merges 2×2 blocks of level `k`. A
+//! Level 0 holds one `[lo, hi]` per cell (or, with `N > 2` channels, a range followed by
+//! further values merged by their maximum: the heightfield leaf keeps its elevation
+//! range, slope bound and detail reach per cell in one pyramid, so one query answers all
+//! three); level `k + 1` merges 2×2 blocks of level `k`. A
 //! query picks the finest level at which the rectangle spans at most 4 blocks per axis and
 //! merges those (≤ 16 lookups). The answer contains the exact range of the rectangle and is
 //! exact when the rectangle is block-aligned at that level (always for ≤ 4×4 cells).
 
 use crate::field::Interval;
 
-/// Pyramid of `[lo, hi]` ranges; `[+∞, −∞]` marks a cell with no value.
+/// Pyramid of `[lo, hi]` ranges; `[+∞, −∞]` marks a cell with no value. With `N`
+/// channels, channel 0 merges by minimum and the others by maximum.
 #[derive(Clone, Debug)]
-pub struct MinMaxPyramid {
-    levels: Vec<Level>,
+pub struct MinMaxPyramid<const N: usize = 2> {
+    levels: Vec<Level<N>>,
 }
 
 #[derive(Clone, Debug)]
-struct Level {
+struct Level<const N: usize> {
     w: usize,
     h: usize,
-    data: Vec<[f32; 2]>,
+    data: Vec<[f32; N]>,
 }
 
 #[inline]
-fn merge(a: [f32; 2], b: [f32; 2]) -> [f32; 2] {
-    [a[0].min(b[0]), a[1].max(b[1])]
+fn merge<const N: usize>(a: [f32; N], b: [f32; N]) -> [f32; N] {
+    std::array::from_fn(|k| {
+        if k == 0 {
+            a[0].min(b[0])
+        } else {
+            a[k].max(b[k])
+        }
+    })
 }
 
-const EMPTY: [f32; 2] = [f32::INFINITY, f32::NEG_INFINITY];
+/// The merge's identity: `[+∞, −∞, …]`.
+#[inline]
+fn empty<const N: usize>() -> [f32; N] {
+    std::array::from_fn(|k| {
+        if k == 0 {
+            f32::INFINITY
+        } else {
+            f32::NEG_INFINITY
+        }
+    })
+}
 
-impl MinMaxPyramid {
-    /// Builds the pyramid over a `w × h` grid of cell ranges (row-major).
+impl<const N: usize> MinMaxPyramid<N> {
+    /// Builds the pyramid over a `w × h` grid of cell values (row-major).
     ///
     /// # Panics
     /// When `cells.len() != w · h` or the grid is empty (a programming error).
-    pub fn new(w: usize, h: usize, cells: Vec<[f32; 2]>) -> MinMaxPyramid {
+    pub fn new(w: usize, h: usize, cells: Vec<[f32; N]>) -> MinMaxPyramid<N> {
         assert!(
             w > 0 && h > 0 && cells.len() == w * h,
             "pyramid of {w}×{h} needs {} cells",
@@ -41,7 +61,7 @@ impl MinMaxPyramid {
         let mut levels = vec![Level { w, h, data: cells }];
         while let Some(l) = levels.last().filter(|l| l.w > 1 || l.h > 1) {
             let (w2, h2) = (l.w.div_ceil(2), l.h.div_ceil(2));
-            let mut data = vec![EMPTY; w2 * h2];
+            let mut data = vec![empty(); w2 * h2];
             for j in 0..l.h {
                 for i in 0..l.w {
                     let d = &mut data[i / 2 + w2 * (j / 2)];
@@ -60,23 +80,23 @@ impl MinMaxPyramid {
 
     /// Range of one cell.
     #[inline]
-    pub fn cell(&self, i: usize, j: usize) -> [f32; 2] {
+    pub fn cell(&self, i: usize, j: usize) -> [f32; N] {
         let l = &self.levels[0];
         l.data[i + l.w * j]
     }
 
     /// The range over the whole grid (`[+∞, −∞]` when no cell has a value).
-    pub fn total(&self) -> [f32; 2] {
-        self.levels.last().map_or(EMPTY, |l| l.data[0])
+    pub fn total(&self) -> [f32; N] {
+        self.levels.last().map_or(empty(), |l| l.data[0])
     }
 
     /// A range containing the ranges of cells `i0..=i1 × j0..=j1` (indices clamped).
     #[inline]
-    pub fn query(&self, i0: usize, i1: usize, j0: usize, j1: usize) -> [f32; 2] {
+    pub fn query(&self, i0: usize, i1: usize, j0: usize, j1: usize) -> [f32; N] {
         let (w, h) = self.dims();
         let (i1, j1) = (i1.min(w - 1), j1.min(h - 1));
         if i0 > i1 || j0 > j1 {
-            return EMPTY;
+            return empty();
         }
         let span = (i1 - i0).max(j1 - j0);
         // smallest k with (i1 >> k) - (i0 >> k) ≤ 3: start from the span's magnitude
@@ -91,7 +111,7 @@ impl MinMaxPyramid {
             k += 1;
         }
         let l = &self.levels[k.min(self.levels.len() - 1)];
-        let mut r = EMPTY;
+        let mut r = empty();
         for j in (j0 >> k)..=(j1 >> k).min(l.h - 1) {
             for i in (i0 >> k)..=(i1 >> k).min(l.w - 1) {
                 r = merge(r, l.data[i + l.w * j]);
@@ -100,28 +120,31 @@ impl MinMaxPyramid {
         r
     }
 
-    /// [`MinMaxPyramid::query`] as an [`Interval`] (empty when no cell has a value).
+    /// Channels 0 and 1 of [`MinMaxPyramid::query`] as an [`Interval`] (empty when no
+    /// cell has a value).
     #[inline]
     pub fn query_interval(&self, i0: usize, i1: usize, j0: usize, j1: usize) -> Interval {
-        let [lo, hi] = self.query(i0, i1, j0, j1);
-        Interval { lo, hi }
+        let q = self.query(i0, i1, j0, j1);
+        Interval { lo: q[0], hi: q[1] }
     }
 
     /// The levels, finest first: `(w, h, ranges)` with `ranges[i + w·j]` the range of
     /// block `(i, j)` (`2^k × 2^k` cells at level `k`, so `w = ⌈w₀ / 2^k⌉`).
-    pub fn levels(&self) -> impl Iterator<Item = (usize, usize, &[[f32; 2]])> {
+    pub fn levels(&self) -> impl Iterator<Item = (usize, usize, &[[f32; N]])> {
         self.levels.iter().map(|l| (l.w, l.h, l.data.as_slice()))
     }
 
     /// Bytes held.
     pub fn memory(&self) -> usize {
-        self.levels.iter().map(|l| l.data.len() * 8).sum()
+        self.levels.iter().map(|l| l.data.len() * 4 * N).sum()
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    const EMPTY: [f32; 2] = [f32::INFINITY, f32::NEG_INFINITY];
 
     #[test]
     fn queries_contain_the_exact_range_and_are_exact_when_small() {
@@ -164,5 +187,29 @@ mod tests {
         assert!(loose > 0, "big queries are allowed to be conservative");
         assert_eq!(p.query(0, w - 1, 0, h - 1), p.total());
         assert_eq!(p.query(5, 4, 0, 0), EMPTY);
+    }
+
+    #[test]
+    fn channels_merge_like_pyramids_of_their_own() {
+        let (w, h) = (19, 13);
+        let cell = |k: usize| {
+            let v = ((k * 7919) % 101) as f32;
+            [v, v + 3.0, (k % 11) as f32, ((k * 13) % 17) as f32]
+        };
+        let four = MinMaxPyramid::new(w, h, (0..w * h).map(cell).collect());
+        let range =
+            MinMaxPyramid::new(w, h, (0..w * h).map(|k| [cell(k)[0], cell(k)[1]]).collect());
+        let maxima = |c: usize| {
+            MinMaxPyramid::new(w, h, (0..w * h).map(|k| [cell(k)[c], cell(k)[c]]).collect())
+        };
+        let (m2, m3) = (maxima(2), maxima(3));
+        for (i0, i1, j0, j1) in [(0, 18, 0, 12), (3, 9, 2, 11), (5, 5, 7, 7), (1, 17, 4, 6)] {
+            let q = four.query(i0, i1, j0, j1);
+            let want = range.query(i0, i1, j0, j1);
+            assert_eq!([q[0], q[1]], want);
+            assert_eq!(q[2], m2.query(i0, i1, j0, j1)[1]);
+            assert_eq!(q[3], m3.query(i0, i1, j0, j1)[1]);
+        }
+        assert_eq!(four.memory(), 2 * range.memory());
     }
 }
