@@ -17,6 +17,7 @@ use karstic::mesh::{GridSpec, MeshOptions, polygonize};
 use karstic::render::raycast::MeshRaycaster;
 use karstic::render::trace::TraceParams;
 use karstic::render::{Camera, Method, RenderSettings, cpu, render};
+use karstic::scene::Compiled;
 use karstic::tape::{Tape, TapeError, tape_from_tree};
 
 /// The scenes `trees/*.ron` and `trees/curves/*.ron`, sorted.
@@ -313,6 +314,24 @@ fn nodes_without_an_encoding_are_named_errors() {
     );
 }
 
+/// The tree file at `path` compiled, its preview's camera at `width × height` and the
+/// render settings `karstic render` gives it.
+fn job_view(path: &Path, width: u32, height: u32) -> (Compiled, Camera, RenderSettings) {
+    let loaded = karstic::scene::load(path).unwrap();
+    let compiled = loaded.compile().unwrap();
+    let tree = &compiled.tree;
+    let cam =
+        karstic::render::cpu::scene_camera(&loaded.scene, tree, None, None, width, height).unwrap();
+    let settings = RenderSettings::for_tree(
+        &loaded.scene,
+        tree,
+        compiled.ground.clone(),
+        &cam,
+        Method::Segment,
+    );
+    (compiled, cam, settings)
+}
+
 /// A render prunes its tree per tile ([`Field::prune`]); the pruned tree must hit the
 /// surfaces the whole tree hits. The job views of the tunnel and main-job scenes, traced
 /// with the render's own parameters through the whole tree (`cpu::depth`), agree with the
@@ -322,18 +341,8 @@ fn pruned_tiles_hit_where_the_whole_tree_does() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
     for file in ["ridge_tunnel.ron", "jacksboro_caves.ron"] {
         let path = dir.join(file);
-        let loaded = karstic::scene::load(&path).unwrap();
-        let compiled = loaded.compile().unwrap();
+        let (compiled, cam, settings) = job_view(&path, 128, 72);
         let tree = &compiled.tree;
-        let cam =
-            karstic::render::cpu::scene_camera(&loaded.scene, tree, None, None, 128, 72).unwrap();
-        let settings = RenderSettings::for_tree(
-            &loaded.scene,
-            tree,
-            compiled.ground.clone(),
-            &cam,
-            Method::Segment,
-        );
         let frame = cpu::render(tree, &cam, &settings, &ProgressBar::hidden());
         let (depth, _) = cpu::depth(tree, &cam, &settings.trace);
         let mut worst = (0.0f32, 0u32);
@@ -372,17 +381,8 @@ fn pruned_tiles_hit_where_the_whole_tree_does() {
 #[test]
 fn sea_level_shows_water_and_the_geology_colours_the_rock() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/sea_cliffs.ron");
-    let loaded = karstic::scene::load(&path).unwrap();
-    let compiled = loaded.compile().unwrap();
+    let (compiled, cam, settings) = job_view(&path, 96, 54);
     let tree = &compiled.tree;
-    let cam = karstic::render::cpu::scene_camera(&loaded.scene, tree, None, None, 96, 54).unwrap();
-    let settings = RenderSettings::for_tree(
-        &loaded.scene,
-        tree,
-        compiled.ground.clone(),
-        &cam,
-        Method::Segment,
-    );
     assert_eq!(settings.shading.water.map(|w| w.level), Some(0.0));
     let m = &settings.materials;
     let (soft, hard) = (Vec3::new(60.0, 92.0, 0.0), Vec3::new(60.0, 92.0, 20.0));

@@ -206,7 +206,10 @@ fn run_tiles(a: RunArgs) -> anyhow::Result<()> {
             .collect();
         handles
             .into_iter()
-            .map(|h| h.join().unwrap_or_else(|_| Err(anyhow::anyhow!("a tile worker panicked"))))
+            .map(|h| {
+                h.join()
+                    .unwrap_or_else(|_| Err(anyhow::anyhow!("a tile worker panicked")))
+            })
             .collect::<anyhow::Result<Vec<()>>>()
     })?;
     Ok(())
