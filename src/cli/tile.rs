@@ -177,7 +177,7 @@ fn run_tiles(a: RunArgs) -> anyhow::Result<()> {
     // after the other on a single thread (a tile's own parallel stages keep two cores
     // only ~80% busy), each with its share of the memory budget. Every tile's bytes are
     // the same whatever the threads.
-    let workers = rayon::current_num_threads().clamp(1, indices.len());
+    let workers = rayon::current_num_threads().min(indices.len()).max(1);
     let budget = a.budget.max_memory / workers as u64;
     let one = |i: usize| -> anyhow::Result<()> {
         let t = Instant::now();

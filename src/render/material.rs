@@ -156,10 +156,7 @@ impl Materials {
             .as_ref()
             .and_then(|j| j.snow_line)
             .map(|z| SnowLine::at(z.0, &b));
-        m.geology = scene
-            .geology
-            .as_ref()
-            .map(|g| Arc::new(Geology::from_spec(g, scene.seed)));
+        m.geology = Geology::of_scene(scene).map(Arc::new);
         m
     }
 

@@ -564,12 +564,7 @@ impl<'s> Compiler<'s> {
             index: scene.named(),
             budget,
             roi: None,
-            geology: Arc::new(
-                scene
-                    .geology
-                    .as_ref()
-                    .map_or_else(Geology::default, |g| Geology::from_spec(g, scene.seed)),
-            ),
+            geology: Arc::new(Geology::of_scene(scene).unwrap_or_default()),
         }
     }
 
