@@ -6,10 +6,11 @@
 //!   the surface can be, and their union frames the image.
 //! * [`feature_view`]: a camera outside the terrain looking at a feature — into a
 //!   tunnel's mouth, under an arch, at an overhang. Candidate eyes circle the feature's
-//!   box; each renders a small depth image, and the one that sees the most *feature
-//!   surface* (surface points in the box, away from the ground: [`Materials::cover`])
-//!   wins (without a terrain, any surface in the box counts). The camera then aims at the centre of what it saw and moves in until that
-//!   fills the frame.
+//!   box; each renders a small depth image, scored by the feature's surface it sees
+//!   (surface points in the box, away from the ground: [`Materials::feature`]; without a
+//!   terrain, any surface in the box) and, worth more, by the pixels that see *under* the
+//!   feature (through the arch, into the mouth). The camera then aims at the centre of
+//!   what the best eye saw and moves in until that fills the frame.
 
 use glam::Vec3;
 
@@ -91,23 +92,37 @@ pub fn frame_surface(
     if seen.len() < MIN_FEATURE_PIXELS {
         return Ok(first);
     }
-    // The hits on the image plane at unit distance, and their depths.
+    let (eye, target) = fit(&probe, &seen, &seen, 0.0, 0.9);
+    Camera::look_at(eye, target, fov_y, width, height)
+}
+
+/// Where to look from and at so that `points`, seen by `probe`, fill `fill` of its frame:
+/// the view turns to the centre of their extent on the image (between the `q` and
+/// `1 − q` quantiles on each axis, so a few stray points do not widen it) and moves along
+/// itself, from the mean depth of `at` (where it should look: the points themselves, or
+/// the mouth of what they line), until that extent fills the frame. Returns
+/// `(eye, target)`; `points` and `at` are not empty.
+fn fit(probe: &Camera, points: &[Vec3], at: &[Vec3], q: f32, fill: f32) -> (Vec3, Vec3) {
     let (right, up, forward, tan_v) = probe.basis();
-    let tan_h = tan_v * width as f32 / height as f32;
-    let (mut lo, mut hi, mut depth) = (glam::Vec2::MAX, glam::Vec2::MIN, 0.0);
-    for p in &seen {
+    let tan_h = tan_v * probe.width as f32 / probe.height as f32;
+    let (mut us, mut vs) = (Vec::new(), Vec::new());
+    for p in points {
         let d = *p - probe.eye;
         let z = d.dot(forward);
-        let uv = glam::Vec2::new(d.dot(right), d.dot(up)) / z;
-        (lo, hi, depth) = (lo.min(uv), hi.max(uv), depth + z);
+        us.push(d.dot(right) / z);
+        vs.push(d.dot(up) / z);
     }
-    let depth = depth / seen.len() as f32;
-    let c = 0.5 * (lo + hi);
-    let target = probe.eye + (forward + right * c.x + up * c.y) * depth;
-    let fill = ((hi.x - lo.x) / (2.0 * tan_h)).max((hi.y - lo.y) / (2.0 * tan_v)) / 0.9;
+    let depth = at.iter().map(|p| (*p - probe.eye).dot(forward)).sum::<f32>() / at.len() as f32;
+    let range = |v: &mut Vec<f32>| {
+        v.sort_by(f32::total_cmp);
+        let at = |x: f32| v[((v.len() - 1) as f32 * x).round() as usize];
+        (at(q), at(1.0 - q))
+    };
+    let ((u0, u1), (v0, v1)) = (range(&mut us), range(&mut vs));
+    let target = probe.eye + (forward + right * 0.5 * (u0 + u1) + up * 0.5 * (v0 + v1)) * depth;
+    let need = ((u1 - u0) / (2.0 * tan_h)).max((v1 - v0) / (2.0 * tan_v)) / fill;
     let back = (probe.eye - target).normalize();
-    let eye = target + back * (depth * fill.max(1e-3));
-    Camera::look_at(eye, target, fov_y, width, height)
+    (target + back * (depth * need.max(1e-3)), target)
 }
 
 /// Side of the square-ish probe images (pixels across) candidate views render.
@@ -118,9 +133,22 @@ const AZIMUTHS: u32 = 8;
 const ELEVATIONS: [f32; 2] = [6.0, 24.0];
 /// Fewest feature pixels of a probe for a view to count.
 const MIN_FEATURE_PIXELS: usize = 3;
+/// What a pixel that sees *under* the feature (through an arch, into a tunnel's mouth,
+/// beneath an overhang) is worth against one that sees its surface.
+const UNDER_WEIGHT: usize = 4;
+/// Share of a feature view's frame what its eye saw of the feature fills: the rest shows
+/// the terrain it sits in.
+const FRAME_FILL: f32 = 0.7;
+/// Share of the seen points left out on each side of each image axis when framing them.
+const FRAME_QUANTILE: f32 = 0.02;
 
 /// A close-up of a feature whose surface lies in `feature` (a box), or `None` when no
 /// candidate eye outside the terrain sees it (a chamber sealed in the rock).
+///
+/// Candidates are scored by what shows a feature *as 3D*: pixels that see under it
+/// ([`Probe::under`]) count [`UNDER_WEIGHT`] times a pixel of its surface. Without that, a
+/// thin arch seen end-on (a pillar of rock) out-scored the same arch seen across its
+/// opening, and a grotto seen from above (a patch of rock) the view under its roof.
 pub fn feature_view(
     field: &dyn Field,
     feature: &Aabb,
@@ -134,7 +162,7 @@ pub fn feature_view(
     let centre = feature.center();
     let reach = feature.radius().max(1.0);
     let probe_h = (PROBE_WIDTH * height / width).max(8);
-    let mut best: Option<(usize, Camera, Vec<Vec3>)> = None;
+    let mut best: Option<(usize, Camera, Probe)> = None;
     for e in ELEVATIONS {
         for a in 0..AZIMUTHS {
             let az = std::f32::consts::TAU * a as f32 / AZIMUTHS as f32;
@@ -145,24 +173,28 @@ pub fn feature_view(
                 continue;
             }
             let cam = Camera::look_at(eye, centre, fov_y, PROBE_WIDTH, probe_h)?;
-            let seen = feature_points(field, &cam, feature, materials);
-            if seen.len() >= MIN_FEATURE_PIXELS && best.as_ref().is_none_or(|b| seen.len() > b.0) {
-                best = Some((seen.len(), cam, seen));
+            let seen = Probe::of(field, &cam, feature, materials);
+            let score = seen.surface.len() + UNDER_WEIGHT * seen.under.len();
+            if seen.surface.len() + seen.under.len() >= MIN_FEATURE_PIXELS
+                && best.as_ref().is_none_or(|b| score > b.0)
+            {
+                best = Some((score, cam, seen));
             }
         }
     }
     let Some((_, probe, seen)) = best else {
         return Ok(None);
     };
-    // Aim at what the best eye saw, and come as close as frames it.
-    let target = seen.iter().sum::<Vec3>() / seen.len() as f32;
-    let mut spread: Vec<f32> = seen.iter().map(|p| p.distance(target)).collect();
-    spread.sort_by(f32::total_cmp);
-    let size = spread[spread.len() * 9 / 10].max(1.0);
-    let back = (probe.eye - target).normalize();
-    let fit = 1.4 * size / (0.5 * fov_y.to_radians()).tan();
-    let dist = fit.min(probe.eye.distance(target));
-    let eye = target + back * dist;
+    // Aim at what the best eye saw, and come as close as frames it with its
+    // surroundings; the distance is taken from where its rays pass under the feature
+    // (a tunnel's mouth, not its far end), when they do.
+    let points: Vec<Vec3> = seen.surface.iter().chain(&seen.under).copied().collect();
+    let at = if seen.under.is_empty() {
+        &seen.surface
+    } else {
+        &seen.under
+    };
+    let (eye, target) = fit(&probe, &points, at, FRAME_QUANTILE, FRAME_FILL);
     let eye = if field.value(eye) < ISO {
         eye
     } else {
@@ -171,13 +203,17 @@ pub fn feature_view(
     Camera::look_at(eye, target, fov_y, width, height).map(Some)
 }
 
-/// The hit points of `camera`'s rays.
-fn hit_points(field: &dyn Field, camera: &Camera) -> Vec<Vec3> {
+/// The depth image of `camera`'s rays (`∞` where a ray hits nothing).
+fn depth_image(field: &dyn Field, camera: &Camera) -> Vec<f32> {
     let support = field.support();
     let params = TraceParams::for_scene(Method::Segment, 2.0 * support.radius())
         .with_pixel_angle(camera.pixel_angle());
-    let (depth, _) = cpu::depth(field, camera, &params);
-    depth
+    cpu::depth(field, camera, &params).0
+}
+
+/// The hit points of `camera`'s rays.
+fn hit_points(field: &dyn Field, camera: &Camera) -> Vec<Vec3> {
+    depth_image(field, camera)
         .iter()
         .enumerate()
         .filter(|(_, t)| t.is_finite())
@@ -188,11 +224,49 @@ fn hit_points(field: &dyn Field, camera: &Camera) -> Vec<Vec3> {
         .collect()
 }
 
-/// The hit points of `camera`'s rays that lie on a feature's surface in `feature`.
-fn feature_points(field: &dyn Field, camera: &Camera, feature: &Aabb, m: &Materials) -> Vec<Vec3> {
-    let box_ = feature.dilate(0.02 * feature.radius());
-    hit_points(field, camera)
-        .into_iter()
-        .filter(|p| box_.contains(*p) && (m.ground.is_none() || m.feature(*p) >= 1.0))
-        .collect()
+/// What a probe image sees of a feature.
+struct Probe {
+    /// Hit points on the feature's surface (in its box, away from the ground).
+    surface: Vec<Vec3>,
+    /// For each pixel that sees *under* the feature, the point where its ray passes under:
+    /// the nearest pixel above it in the image that is nearer by a margin lies in the
+    /// feature's box and *above* the ray there (mostly in z, not beside it), so the ray
+    /// goes on beneath solid — through an arch's opening, into a tunnel's mouth, under a
+    /// grotto's roof. A heightfield seen from outside has none: below a surface point is
+    /// rock, so no ray passes a step beneath it in the air.
+    under: Vec<Vec3>,
+}
+
+impl Probe {
+    fn of(field: &dyn Field, camera: &Camera, feature: &Aabb, m: &Materials) -> Self {
+        let box_ = feature.dilate(0.02 * feature.radius());
+        let margin = 0.05 * feature.radius();
+        let depth = depth_image(field, camera);
+        let w = camera.width as usize;
+        let ray = |k: usize| camera.pixel_ray((k % w) as u32, (k / w) as u32);
+        let mut surface = Vec::new();
+        let mut under = Vec::new();
+        for (k, &t) in depth.iter().enumerate() {
+            if t.is_finite() {
+                let p = ray(k).at(t);
+                if box_.contains(p) && (m.ground.is_none() || m.feature(p) >= 1.0) {
+                    surface.push(p);
+                }
+            }
+            // The first pixel above, in the same column, nearer by the margin.
+            let above = (0..k / w)
+                .rev()
+                .map(|j| k % w + j * w)
+                .find(|&kk| depth[kk] + margin < t);
+            if let Some(kk) = above {
+                let q = ray(kk).at(depth[kk]);
+                let r = ray(k).at(depth[kk]);
+                let d = q - r;
+                if box_.contains(q) && box_.contains(r) && d.z > 0.7 * d.length() {
+                    under.push(r);
+                }
+            }
+        }
+        Probe { surface, under }
+    }
 }
