@@ -636,3 +636,41 @@ fn editor_shows_the_normals_and_the_cost_of_its_image() {
     assert_eq!(h.state().shown_colours(), Some(f.cost_rgba()));
     assert_ne!(f.cost_rgba(), f.rgba);
 }
+
+#[test]
+fn editor_graph_selects_like_the_outline_and_follows_the_file() {
+    let (_dir, paths) = scene_dir(&["a.ron"]);
+    // Wide enough for the graph's four columns between the outline and the inspector.
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(1500.0, 800.0))
+        .build_ui_state(|ui, e: &mut Editor| e.ui(ui), Editor::open(&paths[0]));
+    h.run_steps(2);
+    h.get_by_label("graph").click();
+    h.run_steps(2);
+    // Every named node is in the outline and, lowest in the window, in the graph.
+    let graph_node = |h: &Harness<'_, Editor>, name: &str| {
+        let nodes: Vec<_> = h.get_all_by_label_contains(name).collect();
+        assert!(nodes.len() >= 2, "{name}: in the outline and the graph");
+        nodes
+            .into_iter()
+            .max_by(|a, b| a.rect().min.y.total_cmp(&b.rect().min.y))
+            .unwrap()
+            .rect()
+    };
+    for name in ["root", "dem", "grotto", "blob"] {
+        let at = graph_node(&h, name).center();
+        h.get_all_by_label_contains(name)
+            .find(|n| n.rect().center() == at)
+            .unwrap()
+            .click();
+        h.run_steps(2);
+        assert_eq!(h.state().selected(), Some(name));
+    }
+    // Parents to the right of their children, wired from the file's tree.
+    assert!(graph_node(&h, "root").min.x > graph_node(&h, "grotto").min.x);
+    assert!(graph_node(&h, "grotto").min.x > graph_node(&h, "blob").min.x);
+    // An edit of the file shows in both at once.
+    edit::set_param(&paths[0], "blob.name", "\"bubble\"").unwrap();
+    h.run_steps(2);
+    graph_node(&h, "bubble");
+}

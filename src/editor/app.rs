@@ -54,6 +54,8 @@ pub struct Editor {
     pub place_offset: f32,
     /// What the viewport shows of its images.
     pub look: Look,
+    /// Whether the node graph is shown under the viewport.
+    pub graph: bool,
     /// The control point being dragged and where it is now.
     point_drag: Option<(Handle, glam::Vec3)>,
     /// The texture shows the latest image in this look.
@@ -119,6 +121,7 @@ impl Editor {
             place_radius: 20.0,
             place_offset: 0.0,
             look: Look::Shaded,
+            graph: false,
             point_drag: None,
             texture_look: None,
             preview,
@@ -275,6 +278,16 @@ impl Editor {
         egui::Panel::right("inspector")
             .default_size(340.0)
             .show(ui, |ui| self.inspector(ui));
+        if self.graph {
+            egui::Panel::bottom("graph")
+                .resizable(true)
+                .default_size(240.0)
+                .show(ui, |ui| {
+                    if let Some(scene) = &self.scene {
+                        super::graph::show(ui, scene, &mut self.selected);
+                    }
+                });
+        }
         egui::CentralPanel::default().show(ui, |ui| self.viewport_ui(ui));
         // The file is watched for outside edits.
         ctx.request_repaint_after(Duration::from_millis(500));
@@ -326,6 +339,7 @@ impl Editor {
             ui.selectable_value(&mut self.look, Look::Shaded, "shaded");
             ui.selectable_value(&mut self.look, Look::Cost, "cost");
             ui.selectable_value(&mut self.look, Look::Normals, "normals");
+            ui.toggle_value(&mut self.graph, "graph");
             ui.separator();
             super::palette::show(self, ui);
         });

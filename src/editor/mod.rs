@@ -9,7 +9,9 @@
 //!
 //! * [`app`]: the editor's state and frame; undo/redo; reloading on outside edits.
 //! * [`history`]: edits as `tree` operations, undo byte for byte.
-//! * [`outline`] and [`inspector`]: the tree and the selected node's typed parameters.
+//! * [`outline`] and [`inspector`]: the tree and the selected node's typed parameters;
+//!   [`graph`]: the same tree as a node graph (toggled from the toolbar), in sync with the
+//!   outline.
 //! * [`preview`]: the orbit camera and the progressive background renderer (fast pass,
 //!   then the full image band by band; cost and normal views).
 //! * [`placement`]: the surface point under a pixel, and the nodes placed there.
@@ -17,6 +19,7 @@
 //! * [`palette`]: add, remove, duplicate, instance; mesh and picture exports.
 
 pub mod app;
+pub mod graph;
 pub mod history;
 pub mod inspector;
 pub mod outline;
