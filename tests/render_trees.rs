@@ -451,12 +451,15 @@ fn sea_level_shows_water_and_the_geology_colours_the_rock() {
 /// (thin or wide along each axis, 0.5 m to 500 m).
 fn job_view_boxes(tree: &Tree, cam: &Camera, p: &TraceParams, rng: &mut common::Rng) -> Vec<Aabb> {
     let support = tree.support();
-    let (tx, ty) = (cam.width.div_ceil(16), cam.height.div_ceil(16));
+    let (tx, ty) = (
+        cam.width.div_ceil(cpu::TILE),
+        cam.height.div_ceil(cpu::TILE),
+    );
     let mut boxes = Vec::new();
     for k in 0..tx * ty {
-        let (x0, y0) = ((k % tx) * 16, (k / tx) * 16);
-        let spans: Vec<_> = (y0..(y0 + 16).min(cam.height))
-            .flat_map(|j| (x0..(x0 + 16).min(cam.width)).map(move |i| (i, j)))
+        let (x0, y0) = ((k % tx) * cpu::TILE, (k / tx) * cpu::TILE);
+        let spans: Vec<_> = (y0..(y0 + cpu::TILE).min(cam.height))
+            .flat_map(|j| (x0..(x0 + cpu::TILE).min(cam.width)).map(move |i| (i, j)))
             .filter_map(|(i, j)| {
                 let r = cam.pixel_ray(i, j);
                 r.clip(&support).map(|sp| (r, sp))
@@ -506,7 +509,7 @@ fn job_view_boxes(tree: &Tree, cam: &Camera, p: &TraceParams, rng: &mut common::
 /// The main job's tree, node by node (heightfield with detail, the Feature Volumes' S
 /// fields, the Replace transitions, the carves), and the tree pruned to each box's
 /// neighbourhood as the render prunes it: values sampled in the boxes of
-/// [`job_view_boxes`] (uniformly, and densely on the boxes' diagonals) lie in the intervals
+/// [`job_view_boxes`] (uniformly, and densely on each box's diagonal) lie in the intervals
 /// over the boxes. The render's beam skips every box whose interval is below `T`: an
 /// unsound interval there starts rays past the ground.
 #[test]
