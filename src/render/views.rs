@@ -112,7 +112,11 @@ fn fit(probe: &Camera, points: &[Vec3], at: &[Vec3], q: f32, fill: f32) -> (Vec3
         us.push(d.dot(right) / z);
         vs.push(d.dot(up) / z);
     }
-    let depth = at.iter().map(|p| (*p - probe.eye).dot(forward)).sum::<f32>() / at.len() as f32;
+    let depth = at
+        .iter()
+        .map(|p| (*p - probe.eye).dot(forward))
+        .sum::<f32>()
+        / at.len() as f32;
     let range = |v: &mut Vec<f32>| {
         v.sort_by(f32::total_cmp);
         let at = |x: f32| v[((v.len() - 1) as f32 * x).round() as usize];
