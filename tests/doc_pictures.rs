@@ -44,6 +44,10 @@ const MAX_TOTAL: u64 = 1536 * 1024;
 /// Widest picture, in pixels: renders are made at twice this and halved.
 const MAX_WIDTH: u32 = 480;
 
+/// Pictures kept at the size their command wrote: screenshots of the editor, whose text
+/// would not survive halving.
+const KEPT_AT_SIZE: &[&str] = &["editor.png"];
+
 /// The commands that make the pictures, run in a sandbox after [`prepare`] wrote the
 /// variants of the main job's tree they read. Renders are 960 × 540 (the job's preview
 /// size and `render`'s default).
@@ -82,6 +86,7 @@ karstic render trees/jacksboro_canyon.ron -o jacksboro_canyon.png --quiet
 karstic geology section trees/jacksboro_canyon.ron --plane 5350 6450 5950 6450 --z 280 560 --width 960 --outline -o canyon_section.png
 karstic sample trees/strata_islands.ron --box 330 455 40 490 455.5 135 --res 480 2 286 -o islands_caves.npy
 karstic render trees/strata_islands.ron -o islands_cave_mouth.png --camera 392 424 138 416 450 104 --fov 60 --size 640 360 --quiet
+karstic edit trees/jacksboro_caves.ron --screenshot editor.png --size 900 540 --select arch --graph --cpu
 ";
 
 /// What [`COMMANDS`] write that becomes a picture, and the picture's name in `docs/img/`.
@@ -89,6 +94,7 @@ karstic render trees/strata_islands.ron -o islands_cave_mouth.png --camera 392 4
 /// own name: the main job's preview, and the views `karstic run` writes beside it.
 const PICTURES: &[(&str, &str)] = &[
     ("out/jacksboro_caves*.png", ""),
+    ("editor.png", "editor.png"),
     ("bare/jacksboro_bare.png", "jacksboro_bare.png"),
     ("cave_section.npy", "cave_section.png"),
     ("cave_plan.npy", "cave_plan.png"),
@@ -223,7 +229,9 @@ fn prepare(trees: &Path) {
 fn writes(command: &str, output: &str) -> bool {
     let target = output.split('/').next().unwrap_or(output);
     let words: Vec<&str> = command.split_whitespace().collect();
-    words.windows(2).any(|w| w[0] == "-o" && w[1] == target)
+    words
+        .windows(2)
+        .any(|w| (w[0] == "-o" || w[0] == "--screenshot") && w[1] == target)
 }
 
 /// Makes the pictures into `docs/img/`: all of them (the folder emptied first) when `only`
@@ -281,7 +289,11 @@ fn regenerate(only: Option<&BTreeSet<String>>) {
                     .unwrap_or_else(|e| panic!("{}: {e}", from.display()))
                     .to_rgb8(),
             };
-            let factor = full.width().div_ceil(MAX_WIDTH).max(1);
+            let factor = if KEPT_AT_SIZE.contains(&name.as_str()) {
+                1
+            } else {
+                full.width().div_ceil(MAX_WIDTH).max(1)
+            };
             let (w, h) = (full.width() / factor, full.height() / factor);
             let picture = image::imageops::resize(&full, w, h, FilterType::Triangle);
             write_indexed(&picture, &img.join(name));

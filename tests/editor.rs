@@ -228,6 +228,7 @@ fn editor_viewport_shows_the_tracers_image() {
     let how = Headless {
         size: (900, 500),
         select: None,
+        graph: false,
         backend: Backend::Cpu,
         timeout: Duration::from_secs(120),
     };
@@ -289,6 +290,7 @@ fn editor_refines_the_viewport_on_the_gpu_when_asked() {
     let how = Headless {
         size: (700, 260),
         select: None,
+        graph: false,
         backend: Backend::Gpu,
         timeout: Duration::from_secs(300),
     };

@@ -17,6 +17,9 @@ pub(super) struct EditArgs {
     /// Select the node of this name (its parameters in the inspector).
     #[arg(long)]
     select: Option<String>,
+    /// Show the node graph under the viewport (the toolbar's `graph` button).
+    #[arg(long)]
+    graph: bool,
     /// Size of the screenshot in pixels.
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [1400, 820])]
     size: Vec<u32>,
@@ -50,6 +53,7 @@ pub(super) fn run(args: EditArgs) -> anyhow::Result<()> {
             let how = Headless {
                 size: (args.size[0], args.size[1]),
                 select: args.select.as_deref(),
+                graph: args.graph,
                 backend,
                 timeout: Duration::from_secs_f64(args.timeout),
             };
@@ -64,6 +68,8 @@ pub(super) fn run(args: EditArgs) -> anyhow::Result<()> {
             );
             Ok(())
         }
-        None => karstic::editor::run_window(&args.tree, args.select.as_deref(), backend),
+        None => {
+            karstic::editor::run_window(&args.tree, args.select.as_deref(), args.graph, backend)
+        }
     }
 }

@@ -9,8 +9,9 @@ use egui::{Color32, Pos2, Rect, RichText, Stroke, Ui, Vec2, epaint::CubicBezierS
 use crate::scene::{NodeSpec, Scene};
 
 /// Size of a node's box, points.
-const NODE: Vec2 = Vec2::new(130.0, 32.0);
-/// Distance between columns and between rows, points.
+const NODE: Vec2 = Vec2::new(130.0, 24.0);
+/// Distance between columns and between rows, points (a node's kind is written in the
+/// gap above its box).
 const STEP: Vec2 = Vec2::new(160.0, 40.0);
 
 /// One node of the laid-out graph.
@@ -100,47 +101,63 @@ fn height(node: &NodeSpec) -> usize {
 /// Shows the graph of `scene`; a click on a named node sets `selected` to its name.
 pub fn show(ui: &mut Ui, scene: &Scene, selected: &mut Option<String>) {
     let layout = Layout::of(scene);
-    egui::ScrollArea::both().show(ui, |ui| {
-        let size = (0..layout.nodes.len())
-            .map(|k| layout.rect(k).max.to_vec2())
-            .fold(Vec2::ZERO, Vec2::max);
-        let (area, _) = ui.allocate_exact_size(size + Vec2::splat(8.0), egui::Sense::hover());
-        let origin = area.min.to_vec2();
-        let wire = Stroke::new(1.5, ui.visuals().weak_text_color());
-        for (k, n) in layout.nodes.iter().enumerate() {
-            let Some(p) = n.parent else { continue };
-            let (from, to) = (layout.rect(k), layout.rect(p));
-            let a = from.right_center() + origin;
-            let b = to.left_center() + origin;
-            let bend = Vec2::new(0.5 * (b.x - a.x), 0.0);
-            ui.painter().add(CubicBezierShape::from_points_stroke(
-                [a, a + bend, b - bend, b],
-                false,
-                Color32::TRANSPARENT,
-                wire,
-            ));
-        }
-        for (k, n) in layout.nodes.iter().enumerate() {
-            let rect = layout.rect(k).translate(origin);
-            let kind = RichText::new(n.node.kind()).small().weak();
-            match n.node.name() {
-                Some(name) => {
-                    let on = selected.as_deref() == Some(name);
-                    let button = egui::Button::selectable(on, name).right_text(kind);
-                    if ui.put(rect, button).clicked() {
-                        *selected = Some(name.to_string());
+    egui::ScrollArea::both()
+        .stick_to_right(true)
+        .show(ui, |ui| {
+            let size = (0..layout.nodes.len())
+                .map(|k| layout.rect(k).max.to_vec2())
+                .fold(Vec2::ZERO, Vec2::max);
+            // Room above the first row for its kinds.
+            let margin = Vec2::new(4.0, 14.0);
+            let (area, _) = ui.allocate_exact_size(size + 2.0 * margin, egui::Sense::hover());
+            let origin = area.min.to_vec2() + margin;
+            let wire = Stroke::new(1.5, ui.visuals().weak_text_color());
+            for (k, n) in layout.nodes.iter().enumerate() {
+                let Some(p) = n.parent else { continue };
+                let (from, to) = (layout.rect(k), layout.rect(p));
+                let a = from.right_center() + origin;
+                let b = to.left_center() + origin;
+                let bend = Vec2::new(0.5 * (b.x - a.x), 0.0);
+                ui.painter().add(CubicBezierShape::from_points_stroke(
+                    [a, a + bend, b - bend, b],
+                    false,
+                    Color32::TRANSPARENT,
+                    wire,
+                ));
+            }
+            let small = egui::TextStyle::Small.resolve(ui.style());
+            let weak = ui.visuals().weak_text_color();
+            for (k, n) in layout.nodes.iter().enumerate() {
+                let rect = layout.rect(k).translate(origin);
+                let kind = n.node.kind();
+                ui.painter().text(
+                    rect.left_top() + Vec2::new(2.0, -1.0),
+                    egui::Align2::LEFT_BOTTOM,
+                    kind,
+                    small.clone(),
+                    weak,
+                );
+                match n.node.name() {
+                    Some(name) => {
+                        let on = selected.as_deref() == Some(name);
+                        if ui.put(rect, egui::Button::selectable(on, name)).clicked() {
+                            *selected = Some(name.to_string());
+                        }
+                    }
+                    None => {
+                        let frame = ui.visuals().widgets.noninteractive;
+                        ui.painter().rect_stroke(
+                            rect,
+                            4.0,
+                            frame.bg_stroke,
+                            egui::StrokeKind::Inside,
+                        );
+                        ui.put(rect, egui::Label::new(RichText::new("(unnamed)").weak()))
+                            .on_hover_text("name a node in the file to edit it here");
                     }
                 }
-                None => {
-                    let frame = ui.visuals().widgets.noninteractive;
-                    ui.painter()
-                        .rect_stroke(rect, 4.0, frame.bg_stroke, egui::StrokeKind::Inside);
-                    ui.put(rect, egui::Label::new(kind))
-                        .on_hover_text("name a node in the file to edit it here");
-                }
             }
-        }
-    });
+        });
 }
 
 #[cfg(test)]

@@ -36,10 +36,17 @@ pub use history::{Edit, History};
 pub use preview::Backend;
 
 /// Opens the editor's window on the tree file at `path` (with the node named `select`
-/// selected, the viewport refined by `backend`) until it is closed.
-pub fn run_window(path: &Path, select: Option<&str>, backend: Backend) -> anyhow::Result<()> {
+/// selected, the node graph shown if `graph`, the viewport refined by `backend`) until it
+/// is closed.
+pub fn run_window(
+    path: &Path,
+    select: Option<&str>,
+    graph: bool,
+    backend: Backend,
+) -> anyhow::Result<()> {
     let mut editor = Editor::open_with(path, backend);
     editor.select(select.map(str::to_string));
+    editor.graph = graph;
     let title = format!("karstic edit {}", path.display());
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default().with_inner_size([1400.0, 820.0]),
@@ -62,14 +69,17 @@ impl eframe::App for Window {
     }
 }
 
-/// How to draw the editor headless: its window's size, the node selected, the viewport's
-/// [`Backend`], and the longest wait for the viewport to settle.
+/// How to draw the editor headless: its window's size, the node selected, whether the
+/// node graph shows, the viewport's [`Backend`], and the longest wait for the viewport to
+/// settle.
 #[derive(Clone, Copy, Debug)]
 pub struct Headless<'a> {
     /// Window size, pixels.
     pub size: (u32, u32),
     /// The name of the node selected.
     pub select: Option<&'a str>,
+    /// Whether the node graph is shown under the viewport.
+    pub graph: bool,
     /// The tracer of the viewport's refined images.
     pub backend: Backend,
     /// The longest wait for the viewport to settle.
@@ -93,6 +103,7 @@ pub fn headless(
         );
         editor.select(Some(name.to_string()));
     }
+    editor.graph = how.graph;
     let mut harness = egui_kittest::Harness::builder()
         .with_size(egui::vec2(width as f32, height as f32))
         .wgpu()
