@@ -252,6 +252,7 @@ pub(crate) struct Lattice4 {
 }
 
 /// The multipliers of the axes of the lattice hash.
+#[cfg(target_arch = "x86_64")]
 const MULTIPLIERS: [u32; 3] = [HASH_X, HASH_Y, HASH_Z];
 
 #[cfg(target_arch = "x86_64")]
