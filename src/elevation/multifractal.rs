@@ -24,11 +24,12 @@
 //! `λ = amplitude / Σ(u_k − l_k) · Σ b_k L_k` — Génevaux et al. 2015 §7.3.1's
 //! `Σ a_i λ_η / s_i`, filtered by the level of detail.
 
-use glam::{Vec2, Vec4};
+use glam::Vec2;
 
 use super::lod::Lod;
 use crate::field::Interval;
-use crate::field::noise::{Fbm, GAIN, LACUNARITY, MAX_OCTAVES, SIMPLEX_LIPSCHITZ};
+use crate::field::lanes::Lanes;
+use crate::field::noise::{Fbm, GAIN, LACUNARITY, MAX_OCTAVES, NoiseLanes, SIMPLEX_LIPSCHITZ};
 
 /// The hybrid multifractal's offset (Musgrave's 0.7).
 const HYBRID_OFFSET: f32 = 0.7;
@@ -133,14 +134,32 @@ impl Multifractal {
         }
     }
 
-    /// Visits each octave's contribution `c_k(p)` with its table entry.
+    /// How many octaves `lod` keeps: those before the first whose filter is 0 (the
+    /// wavelengths fall with `k`, so every later filter is 0 too). A cut octave `k` adds
+    /// the middle `m_k` of its range, and its noise is not evaluated.
     #[inline(always)]
-    fn octaves(&self, p: Vec2, mut visit: impl FnMut(f32, &Octave)) {
+    fn live(&self, lod: &Lod) -> usize {
+        self.octaves
+            .iter()
+            .position(|o| lod.filter(o.wavelength) == 0.0)
+            .unwrap_or(self.octaves.len())
+    }
+
+    /// `Σ m_k` over the octaves that `lod` cuts, from octave `live` on.
+    #[inline(always)]
+    fn cut_mids(&self, live: usize) -> f32 {
+        self.octaves[live..].iter().map(|o| o.range.mid()).sum()
+    }
+
+    /// Visits each octave's contribution `c_k(p)` with its table entry, for the first
+    /// `live` octaves.
+    #[inline(always)]
+    fn octaves(&self, p: Vec2, live: usize, mut visit: impl FnMut(f32, &Octave)) {
         // The octaves' noises first, four at a time (they are independent), then their
         // combination, in order.
         let mut noise = [0.0f32; MAX_OCTAVES as usize];
         let mut q = (p * self.noise.inv_wavelength()).extend(0.0);
-        for (k0, chunk) in noise[..self.octaves.len().next_multiple_of(4)]
+        for (k0, chunk) in noise[..live.next_multiple_of(4)]
             .chunks_exact_mut(4)
             .enumerate()
         {
@@ -148,7 +167,7 @@ impl Multifractal {
             q *= LACUNARITY.powi(4);
         }
         let mut w = 1.0f32;
-        for (k, (o, &n)) in self.octaves.iter().zip(&noise).enumerate() {
+        for (k, (o, &n)) in self.octaves[..live].iter().zip(&noise).enumerate() {
             let a = o.amp;
             let c = match self.kind {
                 Kind::Fbm => a * n,
@@ -176,8 +195,9 @@ impl Multifractal {
     /// `h(p)` at level of detail `lod`.
     #[inline]
     pub fn value(&self, p: Vec2, lod: &Lod) -> f32 {
+        let live = self.live(lod);
         let mut sum = 0.0;
-        self.octaves(p, |c, o| {
+        self.octaves(p, live, |c, o| {
             let b = lod.filter(o.wavelength);
             sum += if b == 1.0 {
                 c
@@ -185,34 +205,39 @@ impl Multifractal {
                 b * c + (1.0 - b) * o.range.mid()
             };
         });
+        if live < self.octaves.len() {
+            sum += self.cut_mids(live);
+        }
         self.base + self.scale * (sum - self.lo)
     }
 
-    /// `h` at four points, `(x, y)[l]` on lane `l`: each lane is [`Multifractal::value`]
+    /// `h` at `L::N` points, `(x, y)[l]` on lane `l`: each lane is [`Multifractal::value`]
     /// bit for bit — the same operations in the same order on the lanes, the noise one
-    /// octave of the four points at a time ([`Fbm::octave4`]) instead of four octaves of
+    /// octave of the points at a time ([`Fbm::octave_lanes`]) instead of four octaves of
     /// one point, so no lane is idle when there are fewer than four octaves.
-    #[inline]
-    pub(super) fn values4(&self, x: Vec4, y: Vec4, lod: &Lod) -> Vec4 {
-        let inv = self.noise.inv_wavelength();
-        let mut q = [x * inv, y * inv, Vec4::ZERO];
-        let (mut w, mut sum) = (Vec4::ONE, Vec4::ZERO);
-        for (k, o) in self.octaves.iter().enumerate() {
+    #[inline(always)]
+    pub(super) fn values_lanes<L: NoiseLanes>(&self, x: L, y: L, lod: &Lod) -> L {
+        let live = self.live(lod);
+        let inv = L::splat(self.noise.inv_wavelength());
+        let mut q = [x * inv, y * inv, L::ZERO];
+        let (mut w, mut sum) = (L::ONE, L::ZERO);
+        for (k, o) in self.octaves[..live].iter().enumerate() {
             if k > 0 && k % 4 == 0 {
-                q = q.map(|v| v * LACUNARITY.powi(4));
+                let s = L::splat(LACUNARITY.powi(4));
+                q = [q[0] * s, q[1] * s, q[2] * s];
             }
-            let n = self.noise.octave4(k as u32, q);
-            let a = o.amp;
+            let n = self.noise.octave_lanes(k as u32, q);
+            let a = L::splat(o.amp);
             let c = match self.kind {
                 Kind::Fbm => a * n,
                 Kind::Ridged => {
-                    let r = Vec4::ONE - n.abs();
+                    let r = L::ONE - n.abs();
                     let s = r * r * w;
                     w = clamp01(s);
                     a * s
                 }
                 Kind::Hybrid => {
-                    let s = a * (n + Vec4::splat(HYBRID_OFFSET));
+                    let s = a * (n + L::splat(HYBRID_OFFSET));
                     if k == 0 {
                         w = clamp01(s);
                         s
@@ -227,18 +252,22 @@ impl Multifractal {
             sum += if b == 1.0 {
                 c
             } else {
-                b * c + Vec4::splat((1.0 - b) * o.range.mid())
+                L::splat(b) * c + L::splat((1.0 - b) * o.range.mid())
             };
         }
-        Vec4::splat(self.base) + self.scale * (sum - Vec4::splat(self.lo))
+        if live < self.octaves.len() {
+            sum += L::splat(self.cut_mids(live));
+        }
+        L::splat(self.base) + L::splat(self.scale) * (sum - L::splat(self.lo))
     }
 
     /// A range of `h` over the disc of radius `reach` around `p`: per octave,
     /// `c_k(p) ± L_k · reach` clipped to `[l_k, u_k]`, summed. The coarse octaves are
     /// bounded by their slope, the fine ones by their small amplitude.
     pub fn range_near(&self, p: Vec2, reach: f32, lod: &Lod) -> Interval {
+        let live = self.live(lod);
         let (mut lo, mut hi) = (0.0f32, 0.0f32);
-        self.octaves(p, |c, o| {
+        self.octaves(p, live, |c, o| {
             let b = lod.filter(o.wavelength);
             let r = o.lipschitz * reach;
             let (l, u) = ((c - r).max(o.range.lo), (c + r).min(o.range.hi));
@@ -246,6 +275,10 @@ impl Multifractal {
             lo += b * l + m;
             hi += b * u + m;
         });
+        if live < self.octaves.len() {
+            let m = self.cut_mids(live);
+            (lo, hi) = (lo + m, hi + m);
+        }
         let eps = 1e-5 * (self.base.abs() + self.scale * (hi - lo) + 1.0);
         Interval::new(
             self.base + self.scale * (lo - self.lo) - eps,
@@ -272,9 +305,9 @@ impl Multifractal {
 
 /// `f32::clamp(v, 0, 1)` on each lane, NaN and the sign of a zero included.
 #[inline(always)]
-fn clamp01(v: Vec4) -> Vec4 {
-    let (zero, one) = (Vec4::ZERO, Vec4::ONE);
-    Vec4::select(v.cmplt(zero), zero, Vec4::select(v.cmpgt(one), one, v))
+fn clamp01<L: Lanes>(v: L) -> L {
+    let (zero, one) = (L::ZERO, L::ONE);
+    L::select(v.cmplt(zero), zero, L::select(v.cmpgt(one), one, v))
 }
 
 impl ElevationFn {

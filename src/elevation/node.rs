@@ -24,6 +24,10 @@ use super::index::GridIndex;
 use super::lod::Lod;
 use super::multifractal::ElevationFn;
 use super::primitive::{Disc, Primitive, Sample, disc_weight};
+use crate::field::lanes::Lanes;
+#[cfg(target_arch = "x86_64")]
+use crate::field::lanes::{F8, has_avx2};
+use crate::field::noise::NoiseLanes;
 use crate::field::{Rect, Warp};
 
 /// The blend's weight floor: the threshold `T = ½` of Génevaux et al. 2015 §3.
@@ -101,15 +105,22 @@ impl Blend {
         }
     }
 
-    /// `out[k] = self.eval(points[k], lod).f` bit for bit, four points at a time on the
+    /// `out[k] = self.eval(points[k], lod).f` bit for bit, `L::N` points at a time on the
     /// lanes of SIMD registers. The points are sorted by their cell of the index (a
     /// counting sort), so the points of a cell share its list of candidates: for each
     /// candidate in the list's order, each lane adds its point's term to its sums with the
     /// same operations as [`Blend::eval`] — the candidate's data read once for all the
     /// cell's points, the points' sums in memory. A multifractal disc's elevation is
-    /// evaluated only at the points it weighs at, four such points at a time
-    /// (`Multifractal::values4`).
-    fn heights(&self, ix: &GridIndex, points: &[Vec2], lod: &Lod, out: &mut [f32]) {
+    /// evaluated only at the points it weighs at, `L::N` such points at a time
+    /// (`Multifractal::values_lanes`).
+    #[inline(always)]
+    fn heights_lanes<L: NoiseLanes>(
+        &self,
+        ix: &GridIndex,
+        points: &[Vec2],
+        lod: &Lod,
+        out: &mut [f32],
+    ) {
         // The points off the grid (whose list is empty) go in one more cell.
         let cells = ix.cell_count();
         let keys: Vec<u32> = points
@@ -132,7 +143,8 @@ impl Blend {
             (xs[at], ys[at], order[at]) = (p.x, p.y, k as u32);
             next[c as usize] += 1;
         }
-        let mut lanes = Lanes::default();
+        let mut lanes = CellPoints::<L>::default();
+        let mut f = [0.0f32; MAX_LANES];
         for c in 0..=cells {
             let run = start[c] as usize..start[c + 1] as usize;
             if run.is_empty() {
@@ -143,10 +155,10 @@ impl Blend {
             for &i in list {
                 self.add_terms(i as usize, lod, &mut lanes);
             }
-            for (g, group) in order[run].chunks(4).enumerate() {
+            for (g, group) in order[run].chunks(L::N).enumerate() {
                 let (s, fs) = (lanes.s[g], lanes.fs[g]);
-                let w = s.max(Vec4::splat(BLEND_FLOOR));
-                let f = ((fs + (w - s) * self.base) / w).to_array();
+                let w = s.max(L::splat(BLEND_FLOOR));
+                ((fs + (w - s) * L::splat(self.base)) / w).store(&mut f);
                 for (&k, f) in group.iter().zip(f) {
                     out[k as usize] = f;
                 }
@@ -154,24 +166,37 @@ impl Blend {
         }
     }
 
+    /// [`Blend::heights_lanes`] on the eight lanes of AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn heights_avx2(&self, ix: &GridIndex, points: &[Vec2], lod: &Lod, out: &mut [f32]) {
+        self.heights_lanes::<F8>(ix, points, lod, out)
+    }
+
+    /// [`Blend::heights_lanes`] at the widest lanes this CPU runs: eight with AVX2, four
+    /// otherwise — the same heights.
+    fn heights(&self, ix: &GridIndex, points: &[Vec2], lod: &Lod, out: &mut [f32]) {
+        #[cfg(target_arch = "x86_64")]
+        if has_avx2() {
+            // SAFETY: the CPU has AVX2.
+            return unsafe { self.heights_avx2(ix, points, lod, out) };
+        }
+        self.heights_lanes::<Vec4>(ix, points, lod, out)
+    }
+
     /// Adds child `i`'s terms `(α, α f)` to the sums of the points in `lanes`: a disc of
     /// constant elevation from its entry in `discs`; a multifractal disc where its weight
-    /// is not 0, its elevation at those points four at a time; any other child by
-    /// [`Blend::weigh`] where its entry does not weigh 0.
-    #[inline]
-    fn add_terms(&self, i: usize, lod: &Lod, lanes: &mut Lanes) {
+    /// is not 0, its elevation at those points `L::N` at a time (the last few, four at a
+    /// time); any other child by [`Blend::weigh`] where its entry does not weigh 0.
+    #[inline(always)]
+    fn add_terms<L: NoiseLanes>(&self, i: usize, lod: &Lod, lanes: &mut CellPoints<L>) {
         let d = self.discs[i];
-        let (cx, cy, r2) = (Vec4::splat(d.x), Vec4::splat(d.y), Vec4::splat(d.z));
-        let weight = |x: Vec4, y: Vec4| {
-            let (qx, qy) = (x - cx, y - cy);
-            let t = (Vec4::ONE - (qx * qx + qy * qy) / r2).max(Vec4::ZERO);
-            t * t * t
-        };
+        let (cx, cy, r2) = (L::splat(d.x), L::splat(d.y), L::splat(d.z));
         let n = lanes.x.len();
         if !d.w.is_nan() {
-            let h = Vec4::splat(d.w);
+            let h = L::splat(d.w);
             for g in 0..n {
-                let a = weight(lanes.x[g], lanes.y[g]);
+                let a = disc_weight_lanes(lanes.x[g] - cx, lanes.y[g] - cy, r2);
                 lanes.s[g] += a;
                 lanes.fs[g] += a * h;
             }
@@ -186,45 +211,51 @@ impl Blend {
             })) => Some((*centre, m)),
             _ => None,
         };
-        lanes.a.clear();
+        lanes.a.resize(n * L::N, 0.0);
         lanes.af.clear();
+        lanes.af.resize(n * L::N, 0.0);
         lanes.pending.clear();
+        let (mut x, mut y) = ([0.0f32; MAX_LANES], [0.0f32; MAX_LANES]);
         for g in 0..n {
-            let (x, y) = (lanes.x[g].to_array(), lanes.y[g].to_array());
-            let mut a = weight(lanes.x[g], lanes.y[g]).to_array();
-            let mut af = [0.0f32; 4];
-            for (l, (a, af)) in a.iter_mut().zip(&mut af).enumerate() {
-                if *a > 0.0 {
+            let a = &mut lanes.a[g * L::N..(g + 1) * L::N];
+            disc_weight_lanes(lanes.x[g] - cx, lanes.y[g] - cy, r2).store(a);
+            lanes.x[g].store(&mut x);
+            lanes.y[g].store(&mut y);
+            let af = &mut lanes.af[g * L::N..(g + 1) * L::N];
+            // The lanes that repeat the last point are not evaluated: no output reads them.
+            for l in 0..L::N.min(lanes.len - g * L::N) {
+                if a[l] > 0.0 {
                     let p = Vec2::new(x[l], y[l]);
                     if fractal.is_some() && rect_contains(&child.support, p) {
-                        lanes.pending.push((g, l, p));
+                        lanes.pending.push((g * L::N + l, p));
                     } else {
-                        (*a, *af) = self.weigh(i, p, lod);
+                        (a[l], af[l]) = self.weigh(i, p, lod);
                     }
                 }
             }
-            lanes.a.push(a);
-            lanes.af.push(af);
         }
         if let Some((centre, m)) = fractal {
-            for four in lanes.pending.chunks(4) {
-                let f = if let [(_, _, p)] = four {
-                    [m.value(*p - centre, lod); 4]
-                } else {
-                    let p = |j: usize| four[j.min(four.len() - 1)].2 - centre;
-                    let p: [Vec2; 4] = std::array::from_fn(p);
-                    let (x, y) = (p.map(|p| p.x), p.map(|p| p.y));
-                    m.values4(Vec4::from_array(x), Vec4::from_array(y), lod)
-                        .to_array()
-                };
-                for (&(g, l, _), f) in four.iter().zip(f) {
-                    lanes.af[g][l] = lanes.a[g][l] * f;
+            let mut f = [0.0f32; MAX_LANES];
+            for some in lanes.pending.chunks(L::N) {
+                for (l, (x, y)) in x.iter_mut().zip(&mut y).take(L::N).enumerate() {
+                    let p = some[l.min(some.len() - 1)].1 - centre;
+                    (*x, *y) = (p.x, p.y);
+                }
+                match some.len() {
+                    1 => f[0] = m.value(some[0].1 - centre, lod),
+                    2..=4 => m
+                        .values_lanes(Vec4::from_slice(&x), Vec4::from_slice(&y), lod)
+                        .store(&mut f),
+                    _ => m.values_lanes(L::load(&x), L::load(&y), lod).store(&mut f),
+                }
+                for (&(k, _), f) in some.iter().zip(f) {
+                    lanes.af[k] = lanes.a[k] * f;
                 }
             }
         }
         for g in 0..n {
-            lanes.s[g] += Vec4::from_array(lanes.a[g]);
-            lanes.fs[g] += Vec4::from_array(lanes.af[g]);
+            lanes.s[g] += L::load(&lanes.a[g * L::N..]);
+            lanes.fs[g] += L::load(&lanes.af[g * L::N..]);
         }
     }
 
@@ -244,35 +275,67 @@ impl Blend {
     }
 }
 
-/// The points of one cell of [`Blend::heights`], four to a group (a short last group
-/// repeats its last point), and their sums; one child's terms, and the points where its
-/// elevation is still to be evaluated with their group and lane.
-#[derive(Default)]
-struct Lanes {
-    x: Vec<Vec4>,
-    y: Vec<Vec4>,
-    s: Vec<Vec4>,
-    fs: Vec<Vec4>,
-    a: Vec<[f32; 4]>,
-    af: Vec<[f32; 4]>,
-    pending: Vec<(usize, usize, Vec2)>,
+/// The most lanes of [`Lanes`] a batch uses.
+const MAX_LANES: usize = 8;
+
+/// The disc weight of [`disc_weight`] on the lanes: `(1 − |q|²/r²)₊³` for the offsets
+/// `(qx, qy)` from the centre, with the same operations as the point query.
+#[inline(always)]
+fn disc_weight_lanes<L: Lanes>(qx: L, qy: L, r2: L) -> L {
+    let t = (L::ONE - (qx * qx + qy * qy) / r2).max(L::ZERO);
+    t * t * t
 }
 
-impl Lanes {
+/// The points of one cell of [`Blend::heights_lanes`], `L::N` to a group (a short last
+/// group repeats its last point), and their sums; one child's terms per lane, and the
+/// points where its elevation is still to be evaluated with their lane.
+struct CellPoints<L> {
+    x: Vec<L>,
+    y: Vec<L>,
+    s: Vec<L>,
+    fs: Vec<L>,
+    a: Vec<f32>,
+    af: Vec<f32>,
+    pending: Vec<(usize, Vec2)>,
+    /// How many points (the lanes past them repeat the last one).
+    len: usize,
+}
+
+impl<L> Default for CellPoints<L> {
+    fn default() -> Self {
+        CellPoints {
+            x: Vec::new(),
+            y: Vec::new(),
+            s: Vec::new(),
+            fs: Vec::new(),
+            a: Vec::new(),
+            af: Vec::new(),
+            pending: Vec::new(),
+            len: 0,
+        }
+    }
+}
+
+impl<L: Lanes> CellPoints<L> {
     /// The points `(xs[k], ys[k])` (at least one), with sums of 0.
+    #[inline(always)]
     fn load(&mut self, xs: &[f32], ys: &[f32]) {
-        let group = |v: &[f32], g: usize| {
-            Vec4::from_array(std::array::from_fn(|l| v[(4 * g + l).min(v.len() - 1)]))
-        };
-        let n = xs.len().div_ceil(4);
-        self.x.clear();
-        self.x.extend((0..n).map(|g| group(xs, g)));
-        self.y.clear();
-        self.y.extend((0..n).map(|g| group(ys, g)));
+        let n = xs.len().div_ceil(L::N);
+        let mut v = [0.0f32; MAX_LANES];
+        for (to, from) in [(&mut self.x, xs), (&mut self.y, ys)] {
+            to.clear();
+            for g in 0..n {
+                for (l, v) in v.iter_mut().take(L::N).enumerate() {
+                    *v = from[(L::N * g + l).min(from.len() - 1)];
+                }
+                to.push(L::load(&v));
+            }
+        }
         self.s.clear();
-        self.s.resize(n, Vec4::ZERO);
+        self.s.resize(n, L::ZERO);
         self.fs.clear();
-        self.fs.resize(n, Vec4::ZERO);
+        self.fs.resize(n, L::ZERO);
+        self.len = xs.len();
     }
 }
 
@@ -303,8 +366,8 @@ impl Node {
         }
     }
 
-    /// `out[k] = self.eval(points[k], lod).f`: a blend with an index four points at a time
-    /// ([`Blend::heights`]), any other node point by point.
+    /// `out[k] = self.eval(points[k], lod).f`: a blend with an index on SIMD lanes
+    /// ([`Blend::heights_lanes`]), any other node point by point.
     pub(super) fn heights(&self, points: &[Vec2], lod: &Lod, out: &mut [f32]) {
         match &self.kind {
             Kind::Blend(
@@ -413,6 +476,68 @@ impl Node {
                 }
             }
             Kind::Warp { child, warp } => child.eval(warp.apply(p.extend(0.0)).truncate(), lod),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::elevation::multifractal::{Kind as Fractal, Multifractal};
+
+    /// The batch at four lanes, at the widest lanes this CPU has (eight with AVX2), and
+    /// the point query give the same bits, multifractal discs of every kind and a nested
+    /// blend among the children, at points inside, outside and not finite.
+    #[test]
+    fn every_lane_width_gives_the_point_query_bit_for_bit() {
+        let mut seed = 7u32;
+        let mut f = move || {
+            seed = seed.wrapping_add(0x9e37_79b9);
+            (crate::field::noise::mix32(seed) >> 8) as f32 / (1u32 << 24) as f32
+        };
+        let mut disc = |k: u32| {
+            let centre = Vec2::new(f() * 1000.0, f() * 1000.0);
+            let radius = 40.0 + 120.0 * f();
+            let elevation = match k % 4 {
+                0 => ElevationFn::Fractal(Multifractal::new(Fractal::Fbm, 50.0, 80.0, 90.0, 3, k)),
+                1 => {
+                    ElevationFn::Fractal(Multifractal::new(Fractal::Ridged, 60.0, 90.0, 70.0, 5, k))
+                }
+                2 => {
+                    ElevationFn::Fractal(Multifractal::new(Fractal::Hybrid, 40.0, 70.0, 80.0, 9, k))
+                }
+                _ => ElevationFn::Constant(200.0 * f()),
+            };
+            Node::primitive(Primitive::Disc(Disc {
+                centre,
+                radius,
+                elevation,
+            }))
+        };
+        let mut children: Vec<Node> = (0..80).map(&mut disc).collect();
+        children.insert(9, Node::blend(30.0, (80..88).map(&mut disc).collect()));
+        let root = Node::blend(40.0, children);
+        let Kind::Blend(
+            b @ Blend {
+                index: Some(ix), ..
+            },
+        ) = &root.kind
+        else {
+            panic!("the blend has no index");
+        };
+        let mut points: Vec<Vec2> = (0..30_000)
+            .map(|_| Vec2::new(f() * 1400.0 - 200.0, f() * 1400.0 - 200.0))
+            .collect();
+        points.extend([Vec2::NAN, Vec2::new(f32::INFINITY, 5.0), Vec2::splat(-1e9)]);
+        for lod in [Lod::FULL, Lod::new(3.0)] {
+            let (mut four, mut widest) = (vec![0.0; points.len()], vec![0.0; points.len()]);
+            b.heights_lanes::<Vec4>(ix, &points, &lod, &mut four);
+            root.heights(&points, &lod, &mut widest);
+            for (k, p) in points.iter().enumerate() {
+                let want = root.eval(*p, &lod).f.to_bits();
+                assert_eq!(four[k].to_bits(), want, "4 lanes at {p}");
+                assert_eq!(widest[k].to_bits(), want, "widest lanes at {p}");
+            }
         }
     }
 }

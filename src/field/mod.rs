@@ -13,6 +13,7 @@ pub mod contract;
 mod eval;
 pub mod falloff;
 pub mod grid;
+pub(crate) mod lanes;
 mod line;
 pub mod node;
 pub mod noise;

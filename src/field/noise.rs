@@ -20,6 +20,9 @@ use serde::de::Error as _;
 use serde::{Deserialize, Deserializer, Serialize};
 
 use super::bounds::{Aabb, Interval};
+use super::lanes::Lanes;
+#[cfg(target_arch = "x86_64")]
+use super::lanes::{F8, M8};
 use crate::scene::{NonNegative, Positive};
 
 /// Skew factor to the simplex lattice in 3D: `(√4 − 1) / 3`.
@@ -166,65 +169,96 @@ fn simplex_impl<const GRAD: bool>(seed: u32, p: Vec3) -> (f32, Vec3) {
     (SIMPLEX_SCALE * value, SIMPLEX_SCALE * grad)
 }
 
-/// Four noises at once, one per lane: lane `l` is `simplex(seeds[l], (x, y, z)[l])` bit for
-/// bit — the same operations in the same order on the lanes of SIMD registers (glam's
-/// `Vec4`; no fused multiply-add), the simplex's corners chosen by masks. The octaves of a
-/// multifractal are independent noises, evaluated this way. The lattice hash and the
-/// gradients' dot products run on the lanes too ([`Lattice4`]). With `GRAD`, the
-/// gradients too, per axis, as [`simplex_grad`] gives them bit for bit (zeros otherwise).
+/// Lanes the simplex kernel runs on, with their lattice hash.
+pub(crate) trait NoiseLanes: Lanes {
+    /// The lattice hash of [`gradient`] on these lanes.
+    type Lattice: LatticeLanes<Self>;
+}
+
+/// The lattice hash of [`gradient`] on the lanes of `L`.
+pub(crate) trait LatticeLanes<L: Lanes> {
+    /// The lanes' seeds (`seeds[..N]`) and cells (`ijk`, integer floats).
+    fn new(seeds: &[u32], ijk: [L; 3]) -> Self;
+    /// The gradients the hash picks for the corner `o` (per axis, the lanes that step to
+    /// the upper plane), per axis.
+    fn gradients(&self, o: [L::Mask; 3]) -> [L; 3];
+}
+
+impl NoiseLanes for Vec4 {
+    type Lattice = Lattice4;
+}
+
+#[cfg(target_arch = "x86_64")]
+impl NoiseLanes for F8 {
+    type Lattice = Lattice8;
+}
+
+/// Noises on the lanes, one per lane: lane `l` is `simplex(seeds[l], (x, y, z)[l])` bit for
+/// bit — the same operations in the same order on the lanes of SIMD registers (no fused
+/// multiply-add), the simplex's corners chosen by masks. The octaves of a multifractal are
+/// independent noises, evaluated this way, or one octave at many points. The lattice hash
+/// and the gradients' dot products run on the lanes too ([`LatticeLanes`]). With `GRAD`,
+/// the gradients too, per axis, as [`simplex_grad`] gives them bit for bit (zeros
+/// otherwise).
 #[inline(always)]
-fn simplex4<const GRAD: bool>(seeds: [u32; 4], x: Vec4, y: Vec4, z: Vec4) -> (Vec4, [Vec4; 3]) {
-    let s = (x + y + z) * F3;
+fn simplex_lanes<L: NoiseLanes, const GRAD: bool>(seeds: &[u32], x: L, y: L, z: L) -> (L, [L; 3]) {
+    let s = (x + y + z) * L::splat(F3);
     let (i, j, k) = ((x + s).floor(), (y + s).floor(), (z + s).floor());
-    let t = (i + j + k) * G3;
+    let t = (i + j + k) * L::splat(G3);
     let d0 = [x - (i - t), y - (j - t), z - (k - t)];
     let (xy, yz, xz) = (d0[0].cmpge(d0[1]), d0[1].cmpge(d0[2]), d0[0].cmpge(d0[2]));
-    let (no, yes) = (BVec4A::splat(false), BVec4A::splat(true));
+    let (no, yes) = (L::mask_splat(false), L::mask_splat(true));
     let corners = [
         [no; 3],
         [xy & xz, !xy & yz, !xz & !yz],
         [xy | xz, !xy | yz, !yz | !xz],
         [yes; 3],
     ];
-    let lattice = Lattice4::new(seeds, [i, j, k]);
-    let mut value = Vec4::ZERO;
-    let mut grad = [Vec4::ZERO; 3];
-    for (c, o) in corners.iter().enumerate() {
-        let off = o.map(|m| Vec4::select(m, Vec4::ONE, Vec4::ZERO));
-        let g = Vec4::splat(c as f32 * G3);
-        let d: [Vec4; 3] = std::array::from_fn(|a| d0[a] - off[a] + g);
-        let a = (R2 - (d[0] * d[0] + d[1] * d[1] + d[2] * d[2])).max(Vec4::ZERO);
-        let gd = lattice.dot(*o, d);
+    let lattice = L::Lattice::new(seeds, [i, j, k]);
+    let mut value = L::ZERO;
+    let mut grad = [L::ZERO; 3];
+    for (c, o) in corners.into_iter().enumerate() {
+        let g = L::splat(c as f32 * G3);
+        let mut d = d0;
+        for a in 0..3 {
+            d[a] = d0[a] - L::select(o[a], L::ONE, L::ZERO) + g;
+        }
+        let a = (L::splat(R2) - (d[0] * d[0] + d[1] * d[1] + d[2] * d[2])).max(L::ZERO);
+        let gv = lattice.gradients(o);
+        let gd = gv[0] * d[0] + gv[1] * d[1] + gv[2] * d[2];
         let a2 = a * a;
         value += a2 * a2 * gd;
         if GRAD {
             // a²·a·(a·g − (8·(g · d))·d), in the scalar kernel's order
-            let (a3, gd8) = (a2 * a, Vec4::splat(8.0) * gd);
-            let g = lattice.gradients(*o);
-            for (axis, acc) in grad.iter_mut().enumerate() {
-                *acc += a3 * (a * g[axis] - gd8 * d[axis]);
+            let (a3, gd8) = (a2 * a, L::splat(8.0) * gd);
+            for axis in 0..3 {
+                grad[axis] += a3 * (a * gv[axis] - gd8 * d[axis]);
             }
         }
     }
-    (SIMPLEX_SCALE * value, grad.map(|g| SIMPLEX_SCALE * g))
+    let scale = L::splat(SIMPLEX_SCALE);
+    for g in &mut grad {
+        *g = scale * *g;
+    }
+    (scale * value, grad)
 }
 
 /// The lattice hash of [`gradient`] for four lanes: per axis and lane, the hash's product
 /// of the cell's lower lattice plane (`(i + 1)·m = i·m + m` gives the upper one).
 #[cfg(target_arch = "x86_64")]
-struct Lattice4 {
+pub(crate) struct Lattice4 {
     seeds: std::arch::x86_64::__m128i,
     products: [std::arch::x86_64::__m128i; 3],
 }
 
+/// The multipliers of the axes of the lattice hash.
 #[cfg(target_arch = "x86_64")]
-impl Lattice4 {
-    /// The multipliers of the axes, per lane.
-    const MULTIPLIERS: [u32; 3] = [HASH_X, HASH_Y, HASH_Z];
+const MULTIPLIERS: [u32; 3] = [HASH_X, HASH_Y, HASH_Z];
 
-    /// The lanes' seeds and cells (`ijk`, integer floats).
+#[cfg(target_arch = "x86_64")]
+impl LatticeLanes<Vec4> for Lattice4 {
     #[inline(always)]
-    fn new(seeds: [u32; 4], ijk: [Vec4; 3]) -> Lattice4 {
+    fn new(seeds: &[u32], ijk: [Vec4; 3]) -> Lattice4 {
         use std::arch::x86_64::*;
         // SAFETY: SSE2 is part of the x86-64 baseline; no memory is accessed.
         unsafe {
@@ -240,7 +274,7 @@ impl Lattice4 {
                     _mm_and_si128(over, _mm_set1_epi32(i32::MAX)),
                 );
                 let t = _mm_and_si128(t, _mm_castps_si128(_mm_cmpord_ps(f, f)));
-                products[a] = mul32(t, Self::MULTIPLIERS[a]);
+                products[a] = mul32(t, MULTIPLIERS[a]);
             }
             Lattice4 {
                 seeds: _mm_set_epi32(
@@ -254,10 +288,9 @@ impl Lattice4 {
         }
     }
 
-    /// The gradients the hash picks for the corner `o`, per axis: the rows of
-    /// [`GRADIENTS`] decoded on the lanes. Rows 0–7 start with x, 8–15 with y; the second
-    /// term is y for rows 0–3, x for rows 12 and 14, z otherwise; bit 0 of the row flips
-    /// the first, bit 1 the second.
+    /// The rows of [`GRADIENTS`] decoded on the lanes. Rows 0–7 start with x, 8–15 with
+    /// y; the second term is y for rows 0–3, x for rows 12 and 14, z otherwise; bit 0 of
+    /// the row flips the first, bit 1 the second.
     #[inline(always)]
     fn gradients(&self, o: [BVec4A; 3]) -> [Vec4; 3] {
         use std::arch::x86_64::*;
@@ -284,7 +317,10 @@ impl Lattice4 {
             [gx, gy, gz].map(Vec4::from)
         }
     }
+}
 
+#[cfg(target_arch = "x86_64")]
+impl Lattice4 {
     /// The gradient rows (`0..16`) the hash picks for the corner `o`, per lane.
     #[inline(always)]
     fn row(&self, o: [BVec4A; 3]) -> std::arch::x86_64::__m128i {
@@ -292,7 +328,7 @@ impl Lattice4 {
         // SAFETY: SSE2 is part of the x86-64 baseline; no memory is accessed.
         unsafe {
             let mut h = self.seeds;
-            for ((up, p), m) in o.into_iter().zip(self.products).zip(Self::MULTIPLIERS) {
+            for ((up, p), m) in o.into_iter().zip(self.products).zip(MULTIPLIERS) {
                 let up = _mm_castps_si128(__m128::from(up));
                 let m = _mm_set1_epi32(m as i32);
                 h = _mm_xor_si128(h, _mm_add_epi32(p, _mm_and_si128(up, m)));
@@ -305,17 +341,6 @@ impl Lattice4 {
             h = _mm_xor_si128(h, _mm_srli_epi32::<16>(h));
             _mm_srli_epi32::<28>(h)
         }
-    }
-}
-
-impl Lattice4 {
-    /// `g · d` per lane for the corner `o` (per axis, the lanes that step to the upper
-    /// plane), `g` the gradient the hash picks: the scalar kernel's `g.dot(d)`, in its
-    /// order.
-    #[inline(always)]
-    fn dot(&self, o: [BVec4A; 3], d: [Vec4; 3]) -> Vec4 {
-        let [gx, gy, gz] = self.gradients(o);
-        gx * d[0] + gy * d[1] + gz * d[2]
     }
 }
 
@@ -337,19 +362,102 @@ fn mul32(a: std::arch::x86_64::__m128i, m: u32) -> std::arch::x86_64::__m128i {
     }
 }
 
+/// [`Lattice4`] on the eight lanes of [`F8`], with AVX2's 32-bit products: the same
+/// integers, so the same gradients, lane for lane.
+#[cfg(target_arch = "x86_64")]
+pub(crate) struct Lattice8 {
+    seeds: std::arch::x86_64::__m256i,
+    products: [std::arch::x86_64::__m256i; 3],
+}
+
+// SAFETY (every `unsafe` block of this impl): no memory is accessed but the
+// bounds-checked `seeds[..8]`, and `F8` lanes exist only where AVX2 runs
+// (`field::lanes`).
+#[cfg(target_arch = "x86_64")]
+impl LatticeLanes<F8> for Lattice8 {
+    #[inline(always)]
+    fn new(seeds: &[u32], ijk: [F8; 3]) -> Lattice8 {
+        use std::arch::x86_64::*;
+        let seeds = &seeds[..8];
+        unsafe {
+            let mut products = [_mm256_setzero_si256(); 3];
+            for a in 0..3 {
+                // `v as i32` as Rust converts, as in `Lattice4::new`.
+                let f = ijk[a].0;
+                let t = _mm256_cvttps_epi32(f);
+                let big = _mm256_set1_ps(2_147_483_648.0);
+                let over = _mm256_castps_si256(_mm256_cmp_ps::<_CMP_GE_OS>(f, big));
+                let t = _mm256_or_si256(
+                    _mm256_andnot_si256(over, t),
+                    _mm256_and_si256(over, _mm256_set1_epi32(i32::MAX)),
+                );
+                let t = _mm256_and_si256(t, _mm256_castps_si256(_mm256_cmp_ps::<_CMP_ORD_Q>(f, f)));
+                products[a] = _mm256_mullo_epi32(t, _mm256_set1_epi32(MULTIPLIERS[a] as i32));
+            }
+            Lattice8 {
+                seeds: _mm256_loadu_si256(seeds.as_ptr().cast()),
+                products,
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn gradients(&self, o: [M8; 3]) -> [F8; 3] {
+        use std::arch::x86_64::*;
+        unsafe {
+            let mut h = self.seeds;
+            for a in 0..3 {
+                let up = _mm256_castps_si256(o[a].0);
+                let m = _mm256_set1_epi32(MULTIPLIERS[a] as i32);
+                h = _mm256_xor_si256(
+                    h,
+                    _mm256_add_epi32(self.products[a], _mm256_and_si256(up, m)),
+                );
+            }
+            // mix32, on the lanes.
+            h = _mm256_xor_si256(h, _mm256_srli_epi32::<16>(h));
+            h = _mm256_mullo_epi32(h, _mm256_set1_epi32(0x7feb_352d));
+            h = _mm256_xor_si256(h, _mm256_srli_epi32::<15>(h));
+            h = _mm256_mullo_epi32(h, _mm256_set1_epi32(0x846c_a68b_u32 as i32));
+            h = _mm256_xor_si256(h, _mm256_srli_epi32::<16>(h));
+            let row = _mm256_srli_epi32::<28>(h);
+            // The rows decoded as in `Lattice4::gradients`.
+            let int = _mm256_set1_epi32;
+            let one = _mm256_set1_ps(1.0);
+            let b1 = _mm256_slli_epi32::<31>(_mm256_and_si256(row, int(1)));
+            let b2 = _mm256_slli_epi32::<30>(_mm256_and_si256(row, int(2)));
+            let s1 = _mm256_xor_ps(one, _mm256_castsi256_ps(b1));
+            let s2 = _mm256_xor_ps(one, _mm256_castsi256_ps(b2));
+            let first_x = _mm256_castsi256_ps(_mm256_cmpgt_epi32(int(8), row));
+            let second_y = _mm256_castsi256_ps(_mm256_cmpgt_epi32(int(4), row));
+            let second_x =
+                _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_or_si256(row, int(2)), int(14)));
+            let second_z = _mm256_andnot_ps(
+                _mm256_or_ps(second_y, second_x),
+                _mm256_castsi256_ps(int(-1)),
+            );
+            let gx = _mm256_add_ps(_mm256_and_ps(first_x, s1), _mm256_and_ps(second_x, s2));
+            let gy = _mm256_add_ps(_mm256_andnot_ps(first_x, s1), _mm256_and_ps(second_y, s2));
+            let gz = _mm256_and_ps(second_z, s2);
+            [F8(gx), F8(gy), F8(gz)]
+        }
+    }
+}
+
 /// The lattice hash for four lanes, lane by lane with [`gradient`] (no 32-bit vector
 /// multiply on this target).
 #[cfg(not(target_arch = "x86_64"))]
-struct Lattice4 {
+pub(crate) struct Lattice4 {
     seeds: [u32; 4],
     /// Per axis and lane, the cell's lower lattice plane.
     cells: [[i32; 4]; 3],
 }
 
 #[cfg(not(target_arch = "x86_64"))]
-impl Lattice4 {
+impl LatticeLanes<Vec4> for Lattice4 {
     #[inline(always)]
-    fn new(seeds: [u32; 4], ijk: [Vec4; 3]) -> Lattice4 {
+    fn new(seeds: &[u32], ijk: [Vec4; 3]) -> Lattice4 {
+        let seeds = [seeds[0], seeds[1], seeds[2], seeds[3]];
         let cells = ijk.map(|v| v.to_array().map(|f| f as i32));
         Lattice4 { seeds, cells }
     }
@@ -561,22 +669,21 @@ impl Fbm {
         self.octaves4_impl::<false>(k0, q).0
     }
 
-    /// Octave `k` alone at four points, unweighted: lane `l` is lane `k mod 4` of
+    /// Octave `k` alone at `L::N` points, unweighted: lane `l` is lane `k mod 4` of
     /// [`Fbm::octaves4`]`(k − k mod 4, q_l)` bit for bit, where `q_l = (q[0], q[1], q[2])[l]`
     /// is a point in the lattice units of octave `k − k mod 4` — the same operations, with
     /// one seed on every lane. The elevation trees' multifractals evaluate the octaves of
-    /// four points this way (`crate::elevation`).
-    #[inline]
-    pub(crate) fn octave4(&self, k: u32, q: [Vec4; 3]) -> Vec4 {
-        let seed = self.seed.wrapping_add(k.wrapping_mul(0x9e37_79b9));
-        let scale = Vec4::splat(OCTAVE_SCALES[(k % 4) as usize]);
-        let kf = Vec4::splat(k as f32);
-        let lane = |q: Vec4, c: f32| q * scale + kf * c;
-        simplex4::<false>(
-            [seed; 4],
-            lane(q[0], OCTAVE_SHIFT.x),
-            lane(q[1], OCTAVE_SHIFT.y),
-            lane(q[2], OCTAVE_SHIFT.z),
+    /// many points this way (`crate::elevation`).
+    #[inline(always)]
+    pub(crate) fn octave_lanes<L: NoiseLanes>(&self, k: u32, q: [L; 3]) -> L {
+        let seeds = [self.seed.wrapping_add(k.wrapping_mul(0x9e37_79b9)); 8];
+        let scale = L::splat(OCTAVE_SCALES[(k % 4) as usize]);
+        let kf = L::splat(k as f32);
+        simplex_lanes::<L, false>(
+            &seeds[..L::N],
+            q[0] * scale + kf * L::splat(OCTAVE_SHIFT.x),
+            q[1] * scale + kf * L::splat(OCTAVE_SHIFT.y),
+            q[2] * scale + kf * L::splat(OCTAVE_SHIFT.z),
         )
         .0
     }
@@ -594,8 +701,8 @@ impl Fbm {
         let kf = Vec4::from_array(ks.map(|k| k as f32));
         let scale = Vec4::from_array(OCTAVE_SCALES);
         let lane = |q: f32, c: f32| Vec4::splat(q) * scale + kf * c;
-        simplex4::<GRAD>(
-            seeds,
+        simplex_lanes::<Vec4, GRAD>(
+            &seeds,
             lane(q.x, OCTAVE_SHIFT.x),
             lane(q.y, OCTAVE_SHIFT.y),
             lane(q.z, OCTAVE_SHIFT.z),
@@ -745,7 +852,7 @@ mod tests {
             let f = Fbm::with(rng.0, 1.0, 12);
             let k = n as u32 % 12;
             let lanes = [0, 1, 2].map(|a| Vec4::from_array(q.map(|q| q[a])));
-            let four = f.octave4(k, lanes).to_array();
+            let four = f.octave_lanes(k, lanes).to_array();
             for (v, q) in four.iter().zip(q) {
                 let one = f.octaves4(k - k % 4, q).to_array()[(k % 4) as usize];
                 assert_eq!(
@@ -753,6 +860,49 @@ mod tests {
                     one.to_bits(),
                     "octave {k} at {q}: {v} vs {one}"
                 );
+            }
+        }
+    }
+
+    /// The AVX2 kernel at eight points, where the CPU has AVX2: each lane is the
+    /// four-lane kernel's bit for bit, at points of every scale, lattice vertices and
+    /// faces, and not finite.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn eight_lanes_are_four_lanes_bit_for_bit() {
+        #[target_feature(enable = "avx2")]
+        fn eight(f: &Fbm, k: u32, q: [[f32; 8]; 3]) -> [f32; 8] {
+            let mut out = [0.0; 8];
+            f.octave_lanes(k, q.map(|v| F8::load(&v))).store(&mut out);
+            out
+        }
+        if !super::super::lanes::has_avx2() {
+            return;
+        }
+        let mut rng = Rng(6);
+        let specials = [f32::NAN, f32::INFINITY, -3e9, 1e8, -0.0];
+        for n in 0..5_000 {
+            let q: [Vec3; 8] = std::array::from_fn(|l| match (n + l) % 13 {
+                0 => rng.v(8.0).round(),
+                1 => Vec3::new(specials[(n / 13) % 5], rng.f(), rng.f()),
+                m => rng.v([0.01, 40.0, 3e4][m % 3]),
+            });
+            let f = Fbm::with(rng.0, 1.0, 12);
+            let k = n as u32 % 12;
+            let axes = [0, 1, 2].map(|a| q.map(|q| q[a]));
+            // SAFETY: the CPU has AVX2 (checked above).
+            let got = unsafe { eight(&f, k, axes) };
+            for half in 0..2 {
+                let four = axes.map(|v| Vec4::from_slice(&v[4 * half..]));
+                let want = f.octave_lanes(k, four).to_array();
+                for l in 0..4 {
+                    assert_eq!(
+                        got[4 * half + l].to_bits(),
+                        want[l].to_bits(),
+                        "octave {k} at {}",
+                        q[4 * half + l]
+                    );
+                }
             }
         }
     }
