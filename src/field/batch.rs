@@ -8,43 +8,44 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::contract::Field;
+use super::line::Anywhere;
 use super::node::Node;
 use super::tree::Tree;
 
 /// Points per parallel task.
 const CHUNK: usize = 4096;
 
-/// How many points ahead a batch asks for the entries of a point's cell (and twice as
-/// many for the cell's range).
-const AHEAD: usize = 8;
-
 impl Tree {
-    /// `out[i] = f(pts[i])` for every point: the same values as [`Field::value`], in
-    /// parallel over chunks of points.
+    /// `out[i] = f(pts[i])` for every point: the same values as [`Field::value`], to the
+    /// bit, in parallel over chunks of points.
     ///
     /// # Panics
     /// When `out` and `pts` differ in length (a caller's bug, not user data).
     pub fn values(&self, pts: &[Vec3], out: &mut [f32]) {
         assert_eq!(pts.len(), out.len(), "one value per point");
-        // A root blend with a point index gets its cells asked for ahead: the queries'
-        // cache misses then overlap instead of following one another.
-        let index = match &self.nodes[self.root as usize] {
+        // A root blend with a BVH sums a chunk's points together, so that through its
+        // point index the queries' cache misses overlap instead of following one another.
+        let blend = match &self.nodes[self.root as usize] {
             Node::Blend { bvh: Some(bvh), .. } => Some(bvh),
             _ => None,
         };
         out.par_chunks_mut(CHUNK)
             .zip(pts.par_chunks(CHUNK))
-            .for_each(|(o, p)| {
-                for (i, (o, &q)) in o.iter_mut().zip(p).enumerate() {
-                    if let Some(bvh) = index {
-                        if let Some(&far) = p.get(i + 2 * AHEAD) {
-                            bvh.prefetch(far, true);
-                        }
-                        if let Some(&near) = p.get(i + AHEAD) {
-                            bvh.prefetch(near, false);
+            .for_each(|(o, p)| match blend {
+                // As `value`: the blend's sum inside its support, else 0.
+                Some(bvh) => {
+                    bvh.sums_at(p, o, |c, q| self.value_inside(c, q, Anywhere));
+                    let support = &self.supports[self.root as usize];
+                    for (o, q) in o.iter_mut().zip(p) {
+                        if !support.contains(*q) {
+                            *o = 0.0;
                         }
                     }
-                    *o = self.value(q);
+                }
+                None => {
+                    for (o, &q) in o.iter_mut().zip(p) {
+                        *o = self.value(q);
+                    }
                 }
             });
     }
