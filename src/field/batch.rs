@@ -57,33 +57,46 @@ mod tests {
     use crate::field::TreeBuilder;
     use crate::field::primitive::{Primitive, PrimitiveSpec};
 
+    /// To the bit, through the point index by blocks: spheres alone, then with a segment
+    /// (evaluated through its node) and a constant (a child no box bounds, summed after
+    /// the index); points inside and far outside the support.
     #[test]
     fn batch_values_equal_point_values() {
-        let mut b = TreeBuilder::new();
-        let mut kids = Vec::new();
         let mut rng = crate::landform::Rng::new(1);
         let mut rnd = || rng.unit();
-        for _ in 0..64 {
-            let c = Vec3::new(rnd() * 40.0, rnd() * 40.0, rnd() * 10.0);
-            let spec: PrimitiveSpec = ron::from_str(&format!(
-                "(shape: Sphere(center: ({}, {}, {}), radius: 1.5), falloff: 3.0)",
-                c.x, c.y, c.z
-            ))
-            .unwrap();
-            kids.push(b.primitive(Primitive::from_spec(&spec, 0), None));
-        }
-        let root = b.blend(kids, None);
-        let tree = b.build(root);
-        for n in [10, 20_000] {
-            let pts: Vec<Vec3> = (0..n)
-                .map(|_| Vec3::new(rnd() * 44.0 - 2.0, rnd() * 44.0 - 2.0, rnd() * 14.0 - 2.0))
-                .collect();
-            let mut out = vec![f32::NAN; n];
-            tree.values(&pts, &mut out);
-            let inside = out.iter().filter(|&&v| v > 0.0).count();
-            assert!(inside > n / 20, "{inside} of {n} points see a sphere");
-            for (p, v) in pts.iter().zip(&out) {
-                assert_eq!(*v, tree.value(*p), "at {p}");
+        for others in [false, true] {
+            let mut b = TreeBuilder::new();
+            let mut kids = Vec::new();
+            for i in 0..64 {
+                let c = Vec3::new(rnd() * 40.0, rnd() * 40.0, rnd() * 10.0);
+                let (x, y, z) = (c.x, c.y, c.z);
+                let shape = match i % 4 {
+                    0 if others => {
+                        format!("Segment(a: ({x}, {y}, {z}), b: ({}, {y}, {z}))", x + 3.0)
+                    }
+                    _ => format!("Sphere(center: ({x}, {y}, {z}), radius: 1.5)"),
+                };
+                let spec: PrimitiveSpec =
+                    ron::from_str(&format!("(shape: {shape}, falloff: 3.0)")).unwrap();
+                kids.push(b.primitive(Primitive::from_spec(&spec, 0), None));
+            }
+            if others {
+                kids.push(b.constant(0.125, None));
+            }
+            let root = b.blend(kids, None);
+            let tree = b.build(root);
+            for n in [10, 20_000] {
+                let mut pts: Vec<Vec3> = (0..n)
+                    .map(|_| Vec3::new(rnd() * 44.0 - 2.0, rnd() * 44.0 - 2.0, rnd() * 14.0 - 2.0))
+                    .collect();
+                pts.extend((0..n / 10).map(|_| Vec3::new(rnd(), rnd(), rnd()) * 200.0 - 100.0));
+                let mut out = vec![f32::NAN; pts.len()];
+                tree.values(&pts, &mut out);
+                let inside = out.iter().filter(|&&v| v > 0.125).count();
+                assert!(inside > n / 20, "{inside} of {n} points see a sphere");
+                for (p, v) in pts.iter().zip(&out) {
+                    assert_eq!(v.to_bits(), tree.value(*p).to_bits(), "at {p}");
+                }
             }
         }
     }

@@ -128,10 +128,7 @@ impl Cells {
     #[inline(always)]
     fn axes(&self, p: Vec3) -> [usize; 3] {
         let f = (p - self.bounds.min) * self.inv_step;
-        // Axis by axis, not by `[0, 1, 2].map`, which compiles to a call.
-        let axis = |f: f32, n: usize| (f as usize).min(n - 1);
-        let [nx, ny, nz] = self.dims;
-        [axis(f.x, nx), axis(f.y, ny), axis(f.z, nz)]
+        [0, 1, 2].map(|a| (f[a] as usize).min(self.dims[a] - 1))
     }
 
     /// The index of the cell holding `p`, or `None` outside the bounds (and for NaN).
