@@ -520,11 +520,15 @@ fn blend_point_index_sums_like_the_bvh_to_the_bit() {
         points.extend([s.min, s.max, Vec3::new(s.min.x, s.center().y, s.max.z)]);
     }
     points.extend([Vec3::new(-500.0, 3.0, 3.0), Vec3::new(200.0, 200.0, 1e3)]);
+    // The batch (by blocks through the index) sums as the point query does.
+    let mut batch = vec![f32::NAN; points.len()];
+    t.values(&points, &mut batch);
     let mut nonzero = 0;
-    for p in points {
+    for (p, v) in points.into_iter().zip(batch) {
         let mut want = 0.0f32;
         bvh.at_point(p, |c| want += t.subtree(c).value(p));
         assert_eq!(t.value(p).to_bits(), want.to_bits(), "at {p}");
+        assert_eq!(v.to_bits(), want.to_bits(), "batch at {p}");
         let linear: f32 = ids.iter().map(|&c| t.subtree(c).value(p)).sum();
         assert!((want - linear).abs() < 1e-5, "at {p}: {want} vs {linear}");
         nonzero += (want != 0.0) as usize;

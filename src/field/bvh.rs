@@ -518,15 +518,28 @@ impl ChildBvh {
         sum
     }
 
-    /// Asks the cache for what [`ChildBvh::sum_at`] will read at `p` through the point
-    /// index: `early` the cell's range (call it some queries ahead), else its entries
-    /// (call it nearer, after the early call). Nothing without an index.
-    #[inline(always)]
-    pub(super) fn prefetch(&self, p: Vec3, early: bool) {
-        match &self.grid {
-            Some(g) if early => g.prefetch_cell(p),
-            Some(g) => g.prefetch_groups(p),
-            None => {}
+    /// `out[i]` = [`ChildBvh::sum_at`]`(pts[i], |c| value(c, pts[i]))` for every point, to
+    /// the bit; through the point index, a batch's cache misses overlap (see
+    /// [`PointGrid::sums_at`]).
+    pub(super) fn sums_at(
+        &self,
+        pts: &[Vec3],
+        out: &mut [f32],
+        mut value: impl FnMut(u32, Vec3) -> f32,
+    ) {
+        let Some(grid) = &self.grid else {
+            for (o, &p) in out.iter_mut().zip(pts) {
+                *o = self.sum_at(p, |c| value(c, p));
+            }
+            return;
+        };
+        grid.sums_at(pts, out, &mut value);
+        for (o, &p) in out.iter_mut().zip(pts) {
+            for (b, payload) in &self.huge {
+                if b.contains(p) {
+                    *o += value(*payload, p);
+                }
+            }
         }
     }
 

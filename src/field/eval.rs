@@ -27,7 +27,7 @@ impl Tree {
     }
 
     /// `f(p)` of node `id`, for `p` known to lie in its support.
-    fn value_inside(&self, id: NodeId, p: Vec3, at: impl Candidates) -> f32 {
+    pub(super) fn value_inside(&self, id: NodeId, p: Vec3, at: impl Candidates) -> f32 {
         match &self.nodes[id as usize] {
             Node::Constant(v) => *v,
             Node::Primitive(f) => f.value(p),

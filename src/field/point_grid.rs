@@ -8,8 +8,8 @@
 //! of arrays: round kernels (noise-free points and spheres, the bulk of generated trees)
 //! are evaluated there four lanes at once, so their nodes are never read, and a query
 //! runs without data-dependent branches, which lets the processor overlap the cache misses
-//! of consecutive queries. [`PointGrid::prefetch`] lets a batch of queries ask for their
-//! cells ahead.
+//! of consecutive queries. [`PointGrid::sums_at`] answers a batch of queries by blocks,
+//! asking for a block's cells together.
 //!
 //! **Same sums as the BVH.** A cell lists its items in the order the BVH's point query
 //! visits them, so the sum over the items whose boxes contain the point is done in the
@@ -42,6 +42,9 @@ const ENTRIES_PER_ITEM: usize = 8;
 
 /// Most entries per cell on average; longer lists are the BVH's job.
 const MEAN_LIST: usize = 16;
+
+/// Points whose cells [`PointGrid::sums_at`] looks up together.
+const BLOCK: usize = 32;
 
 /// Four entries of a cell, by lanes: round kernels `[c.x, c.y, c.z, r, R, 1/R, E]`
 /// ([`Round::params`]), and in a lane that holds another child (or nothing) a kernel that
@@ -265,37 +268,64 @@ impl PointGrid {
         })
     }
 
-    /// Asks the cache for the range of the cell of `p`: a batch of queries calls this
-    /// some points ahead, then [`PointGrid::prefetch_groups`] nearer, so that the cache
-    /// misses of many queries overlap.
+    /// The groups of cell `c`.
     #[inline(always)]
-    pub(super) fn prefetch_cell(&self, p: Vec3) {
-        if let Some(c) = self.cells.index(p) {
-            prefetch(&self.first[c]);
-        }
-    }
-
-    /// Asks the cache for the first group of the cell of `p` (reading its range).
-    #[inline(always)]
-    pub(super) fn prefetch_groups(&self, p: Vec3) {
-        if let Some(c) = self.cells.index(p)
-            && let Some(g) = self.groups.get(self.first[c] as usize)
-        {
-            prefetch(g);
-            prefetch(&g.k[4]);
-        }
+    fn run(&self, c: usize) -> Range<usize> {
+        self.first[c] as usize..self.first[c + 1] as usize
     }
 
     /// `Σ value(payload)` over the items whose boxes contain `p`, in the items' order (a
     /// round kernel adds its own value instead).
     #[inline(always)]
-    pub(super) fn sum_at(&self, p: Vec3, mut value: impl FnMut(u32) -> f32) -> f32 {
+    pub(super) fn sum_at(&self, p: Vec3, value: impl FnMut(u32) -> f32) -> f32 {
+        match self.cells.index(p) {
+            Some(c) => self.sum_over(p, self.run(c), value),
+            None => 0.0,
+        }
+    }
+
+    /// [`PointGrid::sum_at`] at every point, into `out`, `value(payload, p)` for the items
+    /// that are not round kernels. The points go by blocks of [`BLOCK`]: the cells of a
+    /// block are computed and their ranges asked for, then the ranges read and the first
+    /// groups asked for, then the sums done, so the cache misses of a block's queries
+    /// overlap (one query alone waits for two dependent misses) and each cell is computed
+    /// once.
+    pub(super) fn sums_at(
+        &self,
+        pts: &[Vec3],
+        out: &mut [f32],
+        mut value: impl FnMut(u32, Vec3) -> f32,
+    ) {
+        for (pts, out) in pts.chunks(BLOCK).zip(out.chunks_mut(BLOCK)) {
+            let mut cells = [None; BLOCK];
+            for (c, &p) in cells.iter_mut().zip(pts) {
+                *c = self.cells.index(p);
+                if let Some(c) = *c {
+                    prefetch(&self.first[c]);
+                }
+            }
+            // A point outside the grid has no groups (its sum is +0).
+            let mut runs = [const { 0..0 }; BLOCK];
+            for (r, c) in runs.iter_mut().zip(&cells[..pts.len()]) {
+                if let Some(c) = *c {
+                    *r = self.run(c);
+                    if let Some(g) = self.groups[r.clone()].first() {
+                        prefetch(g);
+                        prefetch(&g.k[4]);
+                    }
+                }
+            }
+            for ((o, &p), r) in out.iter_mut().zip(pts).zip(runs) {
+                *o = self.sum_over(p, r, |c| value(c, p));
+            }
+        }
+    }
+
+    /// The sum of [`PointGrid::sum_at`] at `p` over the groups `run` of its cell.
+    #[inline(always)]
+    fn sum_over(&self, p: Vec3, run: Range<usize>, mut value: impl FnMut(u32) -> f32) -> f32 {
         let mut sum = 0.0;
-        let Some(c) = self.cells.index(p) else {
-            return sum;
-        };
         let q = [Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)];
-        let run = self.first[c] as usize..self.first[c + 1] as usize;
         for g in &self.groups[run] {
             let v = g.values(&q).to_array();
             if g.child == [0; 4] {
