@@ -312,9 +312,8 @@ fn traced_depth_matches_ray_casting_a_mesh_of_the_surface() {
     );
 }
 
-/// Ground (a thick slab, top at `z = 0`) and a floating slab above it, the union of two
-/// boxes through `σ_R` of their signed distances: exact intervals from the distances (so
-/// shadow rays take the interval strides through the air), for the shadow tests.
+/// Ground (a thick slab, top at `z = 0`) and a floating slab above it: the union of two
+/// boxes through `σ_R` of their signed distances, for the shadow tests.
 struct Overhang {
     ground: Aabb,
     slab: Aabb,
@@ -407,7 +406,7 @@ fn soft_shadows_darken_what_the_sun_disk_ray_of_each_pixel_meets() {
             for i in 0..cam.width {
                 let at = (i + j * cam.width) as usize;
                 let p = cam.pixel_ray(i, j).at(shaded.depth[at]);
-                if !(p.z.abs() < 0.05) {
+                if !shaded.depth[at].is_finite() || p.z.abs() >= 0.05 {
                     continue; // not the ground's top
                 }
                 let sun = s.shading.sun_towards(i, j);

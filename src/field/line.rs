@@ -20,7 +20,7 @@ use std::mem::take;
 
 use glam::Vec3;
 
-use super::bounds::{Aabb, Interval};
+use super::bounds::Aabb;
 use super::bvh::{ChildBvh, RayCursor, SlabRay};
 use super::node::{Node, NodeId};
 use super::profile::LineProfile;
@@ -336,13 +336,6 @@ impl<'t> Line<'t> {
         let on = OnLine { line: self, t0, t1 };
         let tree = self.tree;
         tree.lipschitz_segment_with(tree.root, self.at(t0), self.at(t1), on)
-    }
-
-    /// A range of `f` over the box of the segment between parameters `t0 ≤ t1`: the whole
-    /// tree's [`Tree::interval_at`] there.
-    pub fn interval(&self, t0: f32, t1: f32) -> Interval {
-        let tree = self.tree;
-        tree.interval_at(tree.root, &Aabb::new(self.at(t0), self.at(t1)))
     }
 
     /// Whether the line is (restricted to) the ray `origin + t·dir`.

@@ -23,7 +23,7 @@
 use glam::Vec3;
 
 use super::camera::Ray;
-use crate::field::{Aabb, Field, ISO, Interval, Line, Tree};
+use crate::field::{Field, ISO, Line, Tree};
 
 /// Which step rule to use.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -118,11 +118,7 @@ pub fn trace(field: &dyn Field, ray: &Ray, span: (f32, f32), params: &TraceParam
 }
 
 /// True when the ray meets the surface on `[t0, t1]`: a shadow query. Same march as
-/// [`trace`], but it stops at the first bracketed crossing without locating it, and it
-/// also takes a candidate segment whole when the field's interval over the segment's box
-/// lies on the side the ray started on (no crossing there, however short the Lipschitz
-/// step): far from the surface, where saturated fields keep `|f − T|` at `T` while the
-/// bounds stay steep, shadow rays cross the air in long strides.
+/// [`trace`], but it stops at the first bracketed crossing without locating it.
 pub fn occluded(field: &dyn Field, ray: &Ray, span: (f32, f32), params: &TraceParams) -> bool {
     Tracer::new(field).occluded(ray, span, params)
 }
@@ -189,8 +185,6 @@ trait Along {
     fn value(&mut self, t: f32) -> f32;
     /// A Lipschitz bound on `[t0, t1]`.
     fn lipschitz(&mut self, t0: f32, t1: f32) -> f32;
-    /// A range of `f` over the box of the segment `[t0, t1]`.
-    fn interval(&mut self, t0: f32, t1: f32) -> Interval;
 }
 
 /// Any field, evaluated at the ray's points.
@@ -203,9 +197,6 @@ impl Along for OnRay<'_> {
     fn lipschitz(&mut self, t0: f32, t1: f32) -> f32 {
         self.0.lipschitz_segment(self.1.at(t0), self.1.at(t1))
     }
-    fn interval(&mut self, t0: f32, t1: f32) -> Interval {
-        self.0.interval(&Aabb::new(self.1.at(t0), self.1.at(t1)))
-    }
 }
 
 /// A tree restricted to the ray.
@@ -215,9 +206,6 @@ impl Along for Line<'_> {
     }
     fn lipschitz(&mut self, t0: f32, t1: f32) -> f32 {
         Line::lipschitz(self, t0, t1)
-    }
-    fn interval(&mut self, t0: f32, t1: f32) -> Interval {
-        Line::interval(self, t0, t1)
     }
 }
 
@@ -271,10 +259,7 @@ fn march(
                 let mut len = (t + delta).min(t1) - t;
                 loop {
                     let s = safe_step(e, along.lipschitz(t, t + len));
-                    // A shadow query also takes a candidate whose range shows no crossing:
-                    // far from the surface, where saturated fields leave `|e|` at `T`,
-                    // intervals see air where Lipschitz steps stay short.
-                    if s >= len || (!locate && on_side(along.interval(t, t + len), side)) {
+                    if s >= len {
                         break (len, len * params.grow);
                     }
                     if len * SHRINK <= s.max(tol) {
@@ -289,17 +274,6 @@ fn march(
         delta = next_delta;
     }
     miss(steps)
-}
-
-/// Whether every value of `range` lies strictly on `side` (the sign of `f − T` where the
-/// march started): a segment whose range does has no crossing.
-#[inline]
-fn on_side(range: Interval, side: f32) -> bool {
-    if side > 0.0 {
-        range.lo > ISO
-    } else {
-        range.hi < ISO
-    }
 }
 
 /// `|e| / λ`, infinite where the field is flat.
