@@ -7,7 +7,8 @@ use common::{
 };
 use glam::{Vec2, Vec3};
 use indicatif::ProgressBar;
-use karstic::field::{Aabb, Field};
+use karstic::field::falloff::{sigma, sigma_interval, sigma_max_slope};
+use karstic::field::{Aabb, Field, Interval};
 use karstic::render::camera::Ray;
 use karstic::render::cpu::{self, RenderSettings};
 use karstic::render::raycast::MeshRaycaster;
@@ -308,5 +309,143 @@ fn traced_depth_matches_ray_casting_a_mesh_of_the_surface() {
     assert!(
         bad * 200 <= facing_hits,
         "{bad} of {facing_hits} mesh depths off the sphere"
+    );
+}
+
+/// Ground (a thick slab, top at `z = 0`) and a floating slab above it: the union of two
+/// boxes through `σ_R` of their signed distances, for the shadow tests.
+struct Overhang {
+    ground: Aabb,
+    slab: Aabb,
+    falloff: f32,
+}
+
+fn box_sd(b: &Aabb, p: Vec3) -> f32 {
+    let q = (p - b.center()).abs() - b.size() * 0.5;
+    q.max(Vec3::ZERO).length() + q.max_element().min(0.0)
+}
+
+impl Overhang {
+    /// `min` of the two boxes' signed distances: 1-Lipschitz.
+    fn sd(&self, p: Vec3) -> f32 {
+        box_sd(&self.ground, p).min(box_sd(&self.slab, p))
+    }
+}
+
+impl Field for Overhang {
+    fn value(&self, p: Vec3) -> f32 {
+        sigma(-self.sd(p), self.falloff)
+    }
+    fn value_grad(&self, p: Vec3) -> (f32, Vec3) {
+        let e = 1e-3;
+        let g = Vec3::new(
+            self.value(p + Vec3::X * e) - self.value(p - Vec3::X * e),
+            self.value(p + Vec3::Y * e) - self.value(p - Vec3::Y * e),
+            self.value(p + Vec3::Z * e) - self.value(p - Vec3::Z * e),
+        ) / (2.0 * e);
+        (self.value(p), g)
+    }
+    fn support(&self) -> Aabb {
+        self.ground.union(self.slab).dilate(self.falloff)
+    }
+    fn interval(&self, b: &Aabb) -> Interval {
+        let (d, r) = (self.sd(b.center()), b.radius());
+        sigma_interval(Interval::new(-d - r, -d + r), self.falloff)
+    }
+    fn lipschitz(&self) -> f32 {
+        sigma_max_slope(self.falloff)
+    }
+    fn lipschitz_box(&self, _b: &Aabb) -> f32 {
+        self.lipschitz()
+    }
+}
+
+/// Whether the ray from `o` along `d` crosses `b` over more than `depth` metres of its
+/// length (negative `depth`: passes within `−depth` of it, roughly, by growing the box).
+fn crosses(b: &Aabb, o: Vec3, d: Vec3, depth: f32) -> bool {
+    let g = b.dilate((-depth).max(0.0));
+    let inv = d.recip();
+    let (a, c) = ((g.min - o) * inv, (g.max - o) * inv);
+    let t0 = a.min(c).max_element().max(0.0);
+    let t1 = a.max(c).min_element();
+    t1 - t0 > depth.max(0.0)
+}
+
+#[test]
+fn soft_shadows_darken_what_the_sun_disk_ray_of_each_pixel_meets() {
+    // A slab floating over open ground, seen from above: each ground pixel whose own ray
+    // towards the sun's disk (Shading::sun_towards) runs through the slab is in shadow,
+    // each whose ray clears it is lit — under the overhang and on the open plain alike.
+    // The penumbra, where pixels fall either way, widens with the slab's height.
+    let penumbra_px = |height: f32| {
+        let f = Overhang {
+            ground: Aabb::new(Vec3::new(-60.0, -60.0, -10.0), Vec3::new(60.0, 60.0, 0.0)),
+            slab: Aabb::new(
+                Vec3::new(-8.0, -8.0, height),
+                Vec3::new(8.0, 8.0, height + 3.0),
+            ),
+            falloff: 0.5,
+        };
+        let cam = Camera::look_at(
+            Vec3::new(12.0, -25.0, 70.0),
+            Vec3::new(12.0, 8.0, 0.0),
+            50.0,
+            160,
+            120,
+        )
+        .unwrap();
+        let mut s = RenderSettings::for_scene(&f.support(), &cam, Method::Segment);
+        s.shading.ao_radius = 0.0;
+        s.shading.haze = f32::INFINITY;
+        let bar = ProgressBar::hidden();
+        let shaded = render(&f, &cam, &s, &bar);
+        s.shading.shadows = false;
+        let open = render(&f, &cam, &s, &bar);
+        let (mut dark, mut lit, mut penumbra) = (0, 0, 0);
+        for j in 0..cam.height {
+            for i in 0..cam.width {
+                let at = (i + j * cam.width) as usize;
+                let p = cam.pixel_ray(i, j).at(shaded.depth[at]);
+                if !shaded.depth[at].is_finite() || p.z.abs() >= 0.05 {
+                    continue; // not the ground's top
+                }
+                let sun = s.shading.sun_towards(i, j);
+                let (a, b) = (shaded.rgba[4 * at], open.rgba[4 * at]);
+                // Beyond the shadow ray's tolerance (steps may cross a thinner chord): the
+                // pixel's footprint at the hit, grown by the pixel's cone and the penumbra
+                // per metre up to the slab's top.
+                let t = &s.trace;
+                let reach = (height + 3.0) / sun.z;
+                let tol =
+                    t.epsilon + t.cone * shaded.depth[at] + (t.cone + s.shading.penumbra()) * reach;
+                let margin = 1.5 * tol;
+                // The shadow ray starts two footprints above the ground.
+                let o = p + Vec3::Z * (2.0 * (t.epsilon + t.cone * shaded.depth[at]));
+                if crosses(&f.slab, o, sun, margin) {
+                    assert!(
+                        a + 40 < b,
+                        "pixel ({i}, {j}) under the slab is lit: {a} vs {b}"
+                    );
+                    dark += 1;
+                } else if !crosses(&f.slab, o, sun, -margin) {
+                    assert_eq!(a, b, "pixel ({i}, {j}) in the open is shadowed");
+                    lit += 1;
+                }
+                // Partly hidden disk: the straight sun ray and its disk's rim disagree.
+                let (u, v) = s.shading.sun_disk();
+                let rim = [u, -u, v, -v]
+                    .map(|w| crosses(&f.slab, p, (s.shading.sun + w).normalize(), 0.0));
+                if rim.iter().any(|&x| x) && !rim.iter().all(|&x| x) {
+                    penumbra += 1;
+                }
+            }
+        }
+        assert!(dark > 200 && lit > 2000, "{dark} dark, {lit} lit pixels");
+        penumbra
+    };
+    let (low, high) = (penumbra_px(4.0), penumbra_px(16.0));
+    assert!(
+        high > low + low / 2,
+        "penumbra: {low} pixels at 4 m, {high} at 16 m"
     );
 }

@@ -295,9 +295,7 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
                 };
             }
             let lit = match shadow {
-                Some((r, span)) if shadows.occluded(&r, span, &shadow_params(&s.trace, tr.t)) => {
-                    0.0
-                }
+                Some((r, span)) if shadows.occluded(&r, span, &shadow_params(s, tr.t)) => 0.0,
                 _ => 1.0,
             };
             let p = ray.at(tr.t);
@@ -370,10 +368,14 @@ fn beam_start(field: &dyn Field, rays: &[PixelRay], params: &TraceParams) -> f32
 
 /// The tracing parameters of a shadow ray from a hit at distance `t_hit`: its tolerance
 /// starts at the pixel's footprint there, not at `ε` — finer shadow detail than the pixel
-/// cannot show, and grazing shadow rays no longer crawl along the slope they leave.
-fn shadow_params(primary: &TraceParams, t_hit: f32) -> TraceParams {
+/// cannot show, and grazing shadow rays no longer crawl along the slope they leave — and
+/// grows along the ray with the sun's penumbra ([`Shading::penumbra`]): an occluder
+/// thinner than that cannot hide the sun's disk, so steps may cross it.
+fn shadow_params(s: &RenderSettings, t_hit: f32) -> TraceParams {
+    let primary = &s.trace;
     TraceParams {
         epsilon: primary.epsilon + primary.cone * t_hit,
+        cone: primary.cone + s.shading.penumbra(),
         ..*primary
     }
 }
