@@ -110,10 +110,10 @@ fn march_len(ray: Ray) -> f32 {
 
 // Consumes the evaluation `ev` of a march step: PH_MARCH to go on, PH_REFINE when the
 // sign changed (the bracket is set), PH_END on leaving the segment (a miss).
-// `eps` is the tolerance at the ray's origin and `cone` its growth per metre: ε and the
-// pixel's cone for primary rays; for shadow rays the pixel's footprint at the hit and the
-// pixel's cone plus the sun's penumbra (cpu.rs shadow_params).
-fn march_step(ray: ptr<function, Ray>, ev_in: vec2<f32>, eps: f32, cone: f32) -> u32 {
+// `eps` is the tolerance at the ray's origin: ε for primary rays, the pixel's footprint
+// at the hit for shadow rays (cpu.rs tile).
+fn march_step(ray: ptr<function, Ray>, ev_in: vec2<f32>, eps: f32) -> u32 {
+    let cone = u.box_max.w;
     let segment = u.trace.w == 0.0;
     let len = march_len(*ray);
     var ev = ev_in;
@@ -482,10 +482,7 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
         }
         evals += 1u;
         if phase == PH_MARCH {
-            // shade.rs Shading::penumbra: |disk_u| = tan(sun_radius).
-            let penumbra = 2.0 * length(u.disk_u.xyz);
-            phase = march_step(&ray, ev, select(u.box_min.w, u.box_min.w + u.box_max.w * hit_t, shadow),
-                select(u.box_max.w, u.box_max.w + penumbra, shadow));
+            phase = march_step(&ray, ev, select(u.box_min.w, u.box_min.w + u.box_max.w * hit_t, shadow));
         } else if phase == PH_REFINE {
             if !refine_step(&ray, ev.x - ISO) {
                 phase = PH_END;

@@ -376,13 +376,14 @@ fn soft_shadows_darken_what_the_sun_disk_ray_of_each_pixel_meets() {
     // A slab floating over open ground, seen from above: each ground pixel whose own ray
     // towards the sun's disk (Shading::sun_towards) runs through the slab is in shadow,
     // each whose ray clears it is lit — under the overhang and on the open plain alike.
-    // The penumbra, where pixels fall either way, widens with the slab's height.
-    let penumbra_px = |height: f32| {
+    // The penumbra — pixels the render darkens though the sun's centre is in view —
+    // widens with the slab's height.
+    let penumbra_px = |height: f32, thick: f32| {
         let f = Overhang {
             ground: Aabb::new(Vec3::new(-60.0, -60.0, -10.0), Vec3::new(60.0, 60.0, 0.0)),
             slab: Aabb::new(
                 Vec3::new(-8.0, -8.0, height),
-                Vec3::new(8.0, 8.0, height + 3.0),
+                Vec3::new(8.0, 8.0, height + thick),
             ),
             falloff: 0.5,
         };
@@ -397,6 +398,9 @@ fn soft_shadows_darken_what_the_sun_disk_ray_of_each_pixel_meets() {
         let mut s = RenderSettings::for_scene(&f.support(), &cam, Method::Segment);
         s.shading.ao_radius = 0.0;
         s.shading.haze = f32::INFINITY;
+        // A sun of 5.7° radius (five times the default's), so that its penumbra spans
+        // pixels.
+        s.shading.sun_radius = 0.1;
         let bar = ProgressBar::hidden();
         let shaded = render(&f, &cam, &s, &bar);
         s.shading.shadows = false;
@@ -412,12 +416,11 @@ fn soft_shadows_darken_what_the_sun_disk_ray_of_each_pixel_meets() {
                 let sun = s.shading.sun_towards(i, j);
                 let (a, b) = (shaded.rgba[4 * at], open.rgba[4 * at]);
                 // Beyond the shadow ray's tolerance (steps may cross a thinner chord): the
-                // pixel's footprint at the hit, grown by the pixel's cone and the penumbra
-                // per metre up to the slab's top.
+                // pixel's footprint at the hit, grown by the pixel's cone up to the slab's
+                // top.
                 let t = &s.trace;
-                let reach = (height + 3.0) / sun.z;
-                let tol =
-                    t.epsilon + t.cone * shaded.depth[at] + (t.cone + s.shading.penumbra()) * reach;
+                let reach = (height + thick) / sun.z;
+                let tol = t.epsilon + t.cone * (shaded.depth[at] + reach);
                 let margin = 1.5 * tol;
                 // The shadow ray starts two footprints above the ground.
                 let o = p + Vec3::Z * (2.0 * (t.epsilon + t.cone * shaded.depth[at]));
@@ -431,11 +434,14 @@ fn soft_shadows_darken_what_the_sun_disk_ray_of_each_pixel_meets() {
                     assert_eq!(a, b, "pixel ({i}, {j}) in the open is shadowed");
                     lit += 1;
                 }
-                // Partly hidden disk: the straight sun ray and its disk's rim disagree.
+                // Partly hidden disk (the rim's rays disagree): the render darkens some of
+                // these pixels though the ray to the sun's centre clears the slab, which
+                // only a shadow of the whole disk does.
                 let (u, v) = s.shading.sun_disk();
                 let rim = [u, -u, v, -v]
                     .map(|w| crosses(&f.slab, p, (s.shading.sun + w).normalize(), 0.0));
-                if rim.iter().any(|&x| x) && !rim.iter().all(|&x| x) {
+                let partly = rim.iter().any(|&x| x) && !rim.iter().all(|&x| x);
+                if partly && a + 40 < b && !crosses(&f.slab, o, s.shading.sun, 0.0) {
                     penumbra += 1;
                 }
             }
@@ -443,9 +449,12 @@ fn soft_shadows_darken_what_the_sun_disk_ray_of_each_pixel_meets() {
         assert!(dark > 200 && lit > 2000, "{dark} dark, {lit} lit pixels");
         penumbra
     };
-    let (low, high) = (penumbra_px(4.0), penumbra_px(16.0));
+    let (low, high) = (penumbra_px(4.0, 3.0), penumbra_px(16.0, 3.0));
+    // A thin roof hides the sun's disk as well as a thick one: its shadow is checked
+    // pixel by pixel alike (a tolerance grown by the penumbra stepped through it).
+    penumbra_px(16.0, 1.5);
     assert!(
-        high > low + low / 2,
+        low > 0 && high > low + low / 2,
         "penumbra: {low} pixels at 4 m, {high} at 16 m"
     );
 }

@@ -36,38 +36,36 @@ pub struct Layout<'a> {
 }
 
 impl<'a> Layout<'a> {
-    /// Lays out `scene`: columns by height above the root (the root rightmost), rows by
+    /// Lays out `scene`: columns by depth below the root (the roots rightmost, the deepest leaf leftmost), rows by
     /// leaves in the tree's order, a blank row between graphs.
     pub fn of(scene: &'a Scene) -> Self {
         let mut layout = Layout::default();
         let mut next_row = 0.0;
-        let columns = scene
-            .defs
-            .iter()
-            .chain([&scene.root])
-            .map(height)
-            .max()
-            .unwrap_or(0);
         for root in scene.defs.iter().chain([&scene.root]) {
-            layout.place(root, None, 0, columns, &mut next_row);
+            layout.place(root, None, 0, &mut next_row);
             next_row += 1.0;
+        }
+        // `place` left each node's depth in `column`: the deepest leaf goes leftmost.
+        let deepest = layout.nodes.iter().map(|n| n.column).max().unwrap_or(0);
+        for n in &mut layout.nodes {
+            n.column = deepest - n.column;
         }
         layout
     }
 
-    /// Places `node` (at `depth` below its root) and its subtree; returns its row.
+    /// Places `node` (at `depth` below its root, kept in its `column` until
+    /// [`Layout::of`] turns depths into columns) and its subtree; returns its row.
     fn place(
         &mut self,
         node: &'a NodeSpec,
         parent: Option<usize>,
         depth: usize,
-        columns: usize,
         next_row: &mut f32,
     ) -> f32 {
         let at = self.nodes.len();
         self.nodes.push(Placed {
             node,
-            column: columns - depth,
+            column: depth,
             row: 0.0,
             parent,
         });
@@ -78,7 +76,7 @@ impl<'a> Layout<'a> {
         } else {
             let rows: Vec<f32> = children
                 .into_iter()
-                .map(|c| self.place(c, Some(at), depth + 1, columns, next_row))
+                .map(|c| self.place(c, Some(at), depth + 1, next_row))
                 .collect();
             0.5 * (rows[0] + rows[rows.len() - 1])
         };
@@ -91,11 +89,6 @@ impl<'a> Layout<'a> {
         let n = &self.nodes[k];
         Rect::from_min_size(Pos2::new(n.column as f32 * STEP.x, n.row * STEP.y), NODE)
     }
-}
-
-/// Levels below `node`, itself included.
-fn height(node: &NodeSpec) -> usize {
-    node.children().into_iter().map(height).max().unwrap_or(0) + 1
 }
 
 /// Shows the graph of `scene`; a click on a named node sets `selected` to its name.

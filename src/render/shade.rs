@@ -4,13 +4,10 @@
 //!
 //! * **Soft shadows.** Each pixel's shadow ray aims at a point of the sun's disk drawn from
 //!   a hash of the pixel, so shadow edges fade over the penumbra a sun of
-//!   [`Shading::sun_radius`] casts (dithered, one ray a pixel). The occlusion test is
-//!   exact down to the penumbra: a shadow ray's tolerance grows by the disk's angular
-//!   diameter per metre ([`Shading::penumbra`]), so its steps may cross occluders too
-//!   thin to hide the disk. Estimating penumbrae from the march's safe distances, as
-//!   distance-field renderers do, drew false dark lines here: Lipschitz bounds of
-//!   heightfields and S fields are loose by varying factors, so their safe distances are
-//!   not distances.
+//!   [`Shading::sun_radius`] casts (dithered, one ray a pixel; the occlusion test itself
+//!   is exact). Estimating penumbrae from the march's safe distances, as distance-field
+//!   renderers do, drew false dark lines here: Lipschitz bounds of heightfields and
+//!   S fields are loose by varying factors, so their safe distances are not distances.
 //! * **Ambient occlusion** from the field: at `AO_SAMPLES` points `q_k = p + δ_k n` along
 //!   the normal, the field's drop `T − f(q_k)` is compared with the drop `|∇f(p)|·δ_k`
 //!   (capped at `T`, all a field in `[0, 2T]` can drop in the air) of open ground: over
@@ -127,14 +124,6 @@ impl Shading {
         let (a, b) = self.sun.any_orthonormal_pair();
         let r = self.sun_radius.tan();
         (a * r, b * r)
-    }
-
-    /// Width of the sun's penumbra per metre between an occluder and the surface it
-    /// shades: the disk's angular diameter, `2·tan(sun_radius)`. An occluder thinner
-    /// than that, seen from the surface, cannot hide the whole disk; shadow rays step
-    /// over such detail (their tolerance grows by this much per metre).
-    pub fn penumbra(&self) -> f32 {
-        2.0 * self.sun_radius.tan()
     }
 
     /// The shadow ray's direction at pixel `(i, j)`: a point of the sun's disk, uniform

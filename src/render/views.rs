@@ -152,7 +152,8 @@ const FRAME_QUANTILE: f32 = 0.02;
 /// Candidates are scored by what shows a feature *as 3D*: pixels that see under it
 /// ([`Probe::under`]) count [`UNDER_WEIGHT`] times a pixel of its surface. Without that, a
 /// thin arch seen end-on (a pillar of rock) out-scored the same arch seen across its
-/// opening, and a grotto seen from above (a patch of rock) the view under its roof.
+/// opening. A carve open to the sky (the main job's grotto) has few such pixels from any
+/// eye and is still framed by its surface.
 pub fn feature_view(
     field: &dyn Field,
     feature: &Aabb,
