@@ -2,6 +2,7 @@
 //! and a preview image out, with the time of every stage.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
@@ -12,6 +13,7 @@ use crate::field::{Aabb, Field, Tree};
 use crate::io::progress;
 use crate::mesh::export::{self, ExportOptions, Origin};
 use crate::mesh::{GridSpec, Mesh, MeshOptions, MeshStats, polygonize};
+use crate::render::guide::Guide;
 use crate::render::image::write_contact_sheet;
 use crate::render::{Camera, Frame, Materials, Method, RenderSettings, cpu, views};
 use crate::scene::{self, SceneFile};
@@ -62,6 +64,57 @@ pub struct JobReport {
     pub stages: Vec<(&'static str, Duration)>,
     /// Notices from loading (e.g. DEM units).
     pub notices: Vec<String>,
+}
+
+/// Cell of the backdrop guide, in cells of the region, when the job sets no `full_cell`.
+const BACKDROP_CELLS: f32 = 6.0;
+
+/// The guides of the job's pictures ([`Guide`]): the region's mesh (`mesh` over `grid`),
+/// then, when `camera` sees beyond the region, a mesh at `backdrop_cell` of the box of
+/// the support it sees. Marching near the ground where no mesh is costs most of a
+/// picture's time; the backdrop's meshing and BVH cost a small part of it.
+fn guides(
+    tree: &Tree,
+    mesh: &Mesh,
+    grid: &GridSpec,
+    camera: &Camera,
+    backdrop_cell: f32,
+    budget: u64,
+) -> anyhow::Result<Vec<Arc<Guide>>> {
+    let region = grid.bounds();
+    let mut guides = vec![Arc::new(Guide::from_mesh(
+        mesh,
+        &region,
+        grid.spacing.max_element(),
+        budget,
+    )?)];
+    let support = tree.support();
+    let (w, h) = (camera.width - 1, camera.height - 1);
+    let seen = [(0, 0), (w, 0), (0, h), (w, h)]
+        .into_iter()
+        .map(|(i, j)| camera.pixel_ray(i, j))
+        .filter_map(|r| {
+            r.clip(&support)
+                .map(|(t0, t1)| Aabb::from_points([r.at(t0), r.at(t1)]))
+        })
+        .fold(Aabb::from_points([camera.eye]), Aabb::union)
+        .intersection(support);
+    let beyond = !(region.contains(seen.min) && region.contains(seen.max));
+    if beyond && !seen.is_empty() && backdrop_cell > grid.spacing.max_element() {
+        let coarse = GridSpec::with_cell(&seen, backdrop_cell)?;
+        let opts = MeshOptions {
+            budget,
+            ..MeshOptions::default()
+        };
+        let (backdrop, _) = polygonize(tree, &coarse, &opts)?;
+        guides.push(Arc::new(Guide::from_mesh(
+            &backdrop,
+            &coarse.bounds(),
+            coarse.spacing.max_element(),
+            budget,
+        )?));
+    }
+    Ok(guides)
 }
 
 fn bar(quiet: bool) -> Option<ProgressBar> {
@@ -150,6 +203,20 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         b.finish_and_clear();
     }
     stages.push(("polygonize", t.elapsed()));
+    // The pictures follow the meshes: the region's, then a coarser one of what the
+    // camera sees beyond it (`guide`).
+    let t = Instant::now();
+    let guides = match &camera {
+        Some(camera) => {
+            let backdrop_cell = job
+                .as_ref()
+                .and_then(|j| j.full_cell.map(|c| c.0))
+                .unwrap_or(BACKDROP_CELLS * cell);
+            guides(&tree, &mesh, &grid, camera, backdrop_cell, opts.budget)?
+        }
+        None => Vec::new(),
+    };
+    stages.push(("guides", t.elapsed()));
 
     std::fs::create_dir_all(&opts.out_dir)
         .with_context(|| format!("cannot create the output folder {}", opts.out_dir.display()))?;
@@ -184,6 +251,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
             let t = Instant::now();
             let look = |camera: &Camera| RenderSettings {
                 materials: materials.clone(),
+                guides: guides.clone(),
                 ..RenderSettings::for_scene(&region, camera, Method::Segment)
             };
             let draw = |camera: &Camera, what: &str| {
@@ -212,7 +280,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
                         Some(c) => Some(Camera::look_at(c.eye.0, c.target.0, fov, w, h)?),
                         None => {
                             let feature = tree.info(id).support.intersection(region);
-                            views::feature_view(&tree, &feature, &materials, fov, (w, h))?
+                            views::feature_view(&tree, &guides, &feature, &materials, fov, (w, h))?
                         }
                     };
                     let Some(view) = view else {

@@ -74,7 +74,7 @@ fn main_preview_reads_as_terrain_and_each_feature_gets_a_view() {
             .info(tree.find(name).unwrap())
             .support
             .intersection(r.region);
-        let cam = views::feature_view(tree, &feature, &materials, 40.0, (160, 90))
+        let cam = views::feature_view(tree, &[], &feature, &materials, 40.0, (160, 90))
             .unwrap()
             .unwrap();
         let params = TraceParams::for_scene(Method::Segment, 2.0 * tree.support().radius())

@@ -7,6 +7,7 @@ use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 use super::camera::{Camera, Ray};
+use super::guide::Guide;
 use super::image::Frame;
 use super::material::Materials;
 use super::shade::{AO_SAMPLES, Shading, Water, ambient_occlusion, to_srgb8};
@@ -34,6 +35,9 @@ pub struct RenderSettings {
     pub shading: Shading,
     /// Surface materials.
     pub materials: Materials,
+    /// Meshed regions, finest first, whose meshes guide the march inside them
+    /// ([`Guide`]): set when the picture is of regions already meshed.
+    pub guides: Vec<Arc<Guide>>,
 }
 
 impl RenderSettings {
@@ -45,6 +49,7 @@ impl RenderSettings {
                 .with_pixel_angle(camera.pixel_angle()),
             shading: Shading::for_scene(support),
             materials: Materials::for_scene(support, None),
+            guides: Vec::new(),
         }
     }
 }
@@ -246,7 +251,7 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
     );
     let f = primary.as_deref().unwrap_or(field);
     let start = beam_start(f, rays, &s.trace);
-    let mut tracer = Tracer::new(f);
+    let mut tracer = Tracer::new(f).with_guides(&s.guides);
     // Primary hits with their normals, sky occlusion and shadow rays.
     let hits: Vec<(Trace, Vec3, f32, Option<Segment>)> = rays
         .iter()
@@ -283,7 +288,7 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
         ),
     );
     let fs = shadow_field.as_deref().unwrap_or(field);
-    let mut shadows = Tracer::new(fs);
+    let mut shadows = Tracer::new(fs).with_guides(&s.guides);
     rays.iter()
         .zip(hits)
         .map(|((ray, _, _), (tr, n, ao, shadow))| {
@@ -400,12 +405,22 @@ fn occlusion(field: &dyn Field, p: Vec3, n: Vec3, slope: f32, sh: &Shading) -> f
 /// The depth image of `field` alone (no shading): ray parameters of the hits, `∞` for
 /// misses, with the steps spent. Used to compare tracers and ground truths.
 pub fn depth(field: &dyn Field, camera: &Camera, params: &TraceParams) -> (Vec<f32>, Vec<u32>) {
+    depth_guided(field, &[], camera, params)
+}
+
+/// [`depth`], following the meshes of `guides` inside their grids ([`Guide`]).
+pub fn depth_guided(
+    field: &dyn Field,
+    guides: &[Arc<Guide>],
+    camera: &Camera,
+    params: &TraceParams,
+) -> (Vec<f32>, Vec<u32>) {
     let support = field.support();
     let w = camera.width;
     (0..w * camera.height)
         .into_par_iter()
         .map_init(
-            || Tracer::new(field),
+            || Tracer::new(field).with_guides(guides),
             |tracer, k| {
                 let ray = camera.pixel_ray(k % w, k / w);
                 match ray.clip(&support) {

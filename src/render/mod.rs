@@ -19,6 +19,7 @@ pub mod camera;
 pub mod cpu;
 pub mod fallback;
 pub mod gpu;
+pub mod guide;
 pub mod image;
 pub mod material;
 pub mod raycast;

@@ -40,10 +40,15 @@ impl MeshRaycaster {
 
     /// Distance along `ray` to the nearest face, if any.
     pub fn first_hit(&self, ray: &Ray) -> Option<f32> {
-        if self.triangles.is_empty() {
+        self.first_hit_within(ray, (0.0, f32::INFINITY))
+    }
+
+    /// Distance along `ray` to the nearest face with `t` in `[t0, t1]`, if any.
+    pub fn first_hit_within(&self, ray: &Ray, (t0, t1): (f32, f32)) -> Option<f32> {
+        if self.triangles.is_empty() || !(t0 <= t1) {
             return None;
         }
-        let r = obvhs::ray::Ray::new_inf(Vec3A::from(ray.origin), Vec3A::from(ray.dir));
+        let r = obvhs::ray::Ray::new(Vec3A::from(ray.origin), Vec3A::from(ray.dir), t0, t1);
         let mut hit = RayHit::none();
         self.bvh
             .ray_traverse(r, &mut hit, |r, id| {

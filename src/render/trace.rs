@@ -20,9 +20,12 @@
 //! located by false position (Illinois) to a tenth of the tolerance. Rays that start inside the solid
 //! find where they leave it.
 
+use std::sync::Arc;
+
 use glam::Vec3;
 
 use super::camera::Ray;
+use super::guide::Guide;
 use crate::field::{Field, ISO, Line, Tree};
 
 /// Which step rule to use.
@@ -90,6 +93,10 @@ impl Trace {
     pub fn hit(&self) -> bool {
         self.t.is_finite()
     }
+
+    fn with_steps(self, steps: u32) -> Trace {
+        Trace { steps, ..self }
+    }
 }
 
 /// Most evaluations used to locate a bracketed crossing.
@@ -131,6 +138,8 @@ pub struct Tracer<'f> {
     field: &'f dyn Field,
     /// The field as a tree, when it has blends with BVHs.
     line: Option<Line<'f>>,
+    /// Meshed regions, finest first, where the march follows their meshes ([`Guide`]).
+    guides: &'f [Arc<Guide>],
 }
 
 impl<'f> Tracer<'f> {
@@ -141,7 +150,17 @@ impl<'f> Tracer<'f> {
             .and_then(|a| a.downcast_ref::<Tree>())
             .filter(|t| t.keeps_line_lists())
             .map(Line::new);
-        Tracer { field, line }
+        Tracer {
+            field,
+            line,
+            guides: &[],
+        }
+    }
+
+    /// The same tracer following, inside each guide's grid, that guide's mesh
+    /// ([`Guide`]); where grids overlap, the first one's. Finest first.
+    pub fn with_guides(self, guides: &'f [Arc<Guide>]) -> Self {
+        Tracer { guides, ..self }
     }
 
     /// [`trace`] with this tracer.
@@ -164,7 +183,99 @@ impl<'f> Tracer<'f> {
         self.march(ray, span, params, false).hit()
     }
 
+    /// The march over `span`, guided inside `guide`'s grid ([`Guide`]): the part of the
+    /// span before the grid, the grid's marked runs (those a cell or more before the
+    /// first face are skipped; around the face a bracket of the surface is tried first),
+    /// then the part after, until one of them hits.
     fn march(&mut self, ray: &Ray, span: (f32, f32), params: &TraceParams, locate: bool) -> Trace {
+        self.march_guided(0, ray, span, params, locate)
+    }
+
+    /// [`Self::march`] with the guides from `level` on: the part of the span inside
+    /// guide `level`'s grid follows it, the parts outside go to the next guides.
+    fn march_guided(
+        &mut self,
+        level: usize,
+        ray: &Ray,
+        span: (f32, f32),
+        params: &TraceParams,
+        locate: bool,
+    ) -> Trace {
+        let grid = self
+            .guides
+            .get(level)
+            .map(|g| &**g)
+            .and_then(|g| ray.clip(&g.bounds()).map(|c| (g, c)))
+            .map(|(g, (a, b))| (g, (a.max(span.0), b.min(span.1))))
+            .filter(|(_, (a, b))| a <= b);
+        let Some((guide, (a, b))) = grid else {
+            return match level < self.guides.len() {
+                true => self.march_guided(level + 1, ray, span, params, locate),
+                false => self.march_span(ray, span, params, locate),
+            };
+        };
+        let mut steps = 0;
+        if span.0 < a {
+            let before = self.march_guided(level + 1, ray, (span.0, a), params, locate);
+            steps += before.steps;
+            if before.hit() {
+                return before.with_steps(steps);
+            }
+        }
+        let h = guide.cell();
+        // The first face at or after the current run, once asked.
+        let mut face: Option<Option<f32>> = None;
+        for run in guide.runs(ray, (a, b)) {
+            if face.is_none_or(|f| f.is_some_and(|t| t < run.0)) {
+                face = Some(guide.first_face(ray, (run.0, b)));
+            }
+            let from = match face.flatten() {
+                // The mesher saw no surface in this run.
+                Some(t) if run.1 < t - h => continue,
+                Some(t) => {
+                    let (s0, s1) = (run.0.max(t - h), run.1.min(t + h));
+                    let mut on = OnRay(self.field, ray);
+                    let (e0, e1) = (on.value(s0) - ISO, on.value(s1) - ISO);
+                    steps += 2;
+                    if e0 < 0.0 && e1 > 0.0 {
+                        if !locate {
+                            return Trace { t: s1, steps };
+                        }
+                        let tol = params.epsilon + params.cone * s0;
+                        let (t, n) = refine(&mut on, (s0, e0), (s1, e1), 0.1 * tol);
+                        return Trace {
+                            t,
+                            steps: steps + n,
+                        };
+                    }
+                    // In the solid already: the surface came earlier in the run.
+                    if e0 < 0.0 { s0 } else { run.0 }
+                }
+                None => run.0,
+            };
+            let tr = self.march_span(ray, (from, run.1), params, locate);
+            steps += tr.steps;
+            if tr.hit() {
+                return tr.with_steps(steps);
+            }
+        }
+        if b < span.1 {
+            let after = self.march_guided(level + 1, ray, (b, span.1), params, locate);
+            return after.with_steps(steps + after.steps);
+        }
+        Trace {
+            t: f32::INFINITY,
+            steps,
+        }
+    }
+
+    fn march_span(
+        &mut self,
+        ray: &Ray,
+        span: (f32, f32),
+        params: &TraceParams,
+        locate: bool,
+    ) -> Trace {
         let global = match params.method {
             Method::Sphere => self.field.lipschitz(),
             Method::Segment => 0.0,

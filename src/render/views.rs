@@ -12,11 +12,14 @@
 //!   feature (through the arch, into the mouth). The camera then aims at the centre of
 //!   what the best eye saw and moves in until that fills the frame.
 
+use std::sync::Arc;
+
 use glam::Vec3;
 
 use super::RenderError;
 use super::camera::Camera;
 use super::cpu;
+use super::guide::Guide;
 use super::material::Materials;
 use super::trace::{Method, TraceParams};
 use crate::field::{Aabb, Field, ISO};
@@ -156,6 +159,7 @@ const FRAME_QUANTILE: f32 = 0.02;
 /// eye and is still framed by its surface.
 pub fn feature_view(
     field: &dyn Field,
+    guides: &[Arc<Guide>],
     feature: &Aabb,
     materials: &Materials,
     fov_y: f32,
@@ -178,7 +182,7 @@ pub fn feature_view(
                 continue;
             }
             let cam = Camera::look_at(eye, centre, fov_y, PROBE_WIDTH, probe_h)?;
-            let seen = Probe::of(field, &cam, feature, materials);
+            let seen = Probe::of(field, guides, &cam, feature, materials);
             let score = seen.surface.len() + UNDER_WEIGHT * seen.under.len();
             if seen.surface.len() + seen.under.len() >= MIN_FEATURE_PIXELS
                 && best.as_ref().is_none_or(|b| score > b.0)
@@ -208,17 +212,18 @@ pub fn feature_view(
     Camera::look_at(eye, target, fov_y, width, height).map(Some)
 }
 
-/// The depth image of `camera`'s rays (`∞` where a ray hits nothing).
-fn depth_image(field: &dyn Field, camera: &Camera) -> Vec<f32> {
+/// The depth image of `camera`'s rays (`∞` where a ray hits nothing), marched along
+/// `guides` inside their grids.
+fn depth_image(field: &dyn Field, guides: &[Arc<Guide>], camera: &Camera) -> Vec<f32> {
     let support = field.support();
     let params = TraceParams::for_scene(Method::Segment, 2.0 * support.radius())
         .with_pixel_angle(camera.pixel_angle());
-    cpu::depth(field, camera, &params).0
+    cpu::depth_guided(field, guides, camera, &params).0
 }
 
 /// The hit points of `camera`'s rays.
 fn hit_points(field: &dyn Field, camera: &Camera) -> Vec<Vec3> {
-    depth_image(field, camera)
+    depth_image(field, &[], camera)
         .iter()
         .enumerate()
         .filter(|(_, t)| t.is_finite())
@@ -243,10 +248,16 @@ struct Probe {
 }
 
 impl Probe {
-    fn of(field: &dyn Field, camera: &Camera, feature: &Aabb, m: &Materials) -> Self {
+    fn of(
+        field: &dyn Field,
+        guides: &[Arc<Guide>],
+        camera: &Camera,
+        feature: &Aabb,
+        m: &Materials,
+    ) -> Self {
         let box_ = feature.dilate(0.02 * feature.radius());
         let margin = 0.05 * feature.radius();
-        let depth = depth_image(field, camera);
+        let depth = depth_image(field, guides, camera);
         let w = camera.width as usize;
         let ray = |k: usize| camera.pixel_ray((k % w) as u32, (k / w) as u32);
         let mut surface = Vec::new();
