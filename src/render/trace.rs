@@ -223,6 +223,32 @@ impl<'f> Tracer<'f> {
             }
         }
         let h = guide.cell();
+        if !locate {
+            // A shadow query: past its first cell (where the faces are those of the
+            // surface it leaves), any face of the mesh occludes.
+            let from = match span.0 < a {
+                true => a,
+                false => {
+                    let near = self.march_span(ray, (a, (a + h).min(b)), params, false);
+                    steps += near.steps;
+                    if near.hit() {
+                        return near.with_steps(steps);
+                    }
+                    a + h
+                }
+            };
+            if let Some(t) = guide.first_face(ray, (from, b)) {
+                return Trace { t, steps };
+            }
+            if b < span.1 {
+                let after = self.march_guided(level + 1, ray, (b, span.1), params, false);
+                return after.with_steps(steps + after.steps);
+            }
+            return Trace {
+                t: f32::INFINITY,
+                steps,
+            };
+        }
         // The first face at or after the current run, once asked.
         let mut face: Option<Option<f32>> = None;
         for run in guide.runs(ray, (a, b)) {
