@@ -12,8 +12,9 @@
 //!   a cell before and after; when the two bracket the surface, false position locates
 //!   it (a few evaluations where the march near a surface takes dozens), else the march
 //!   takes over from a cell before the face.
-//! * A shadow ray marches its first cell (the faces there are those of the surface it
-//!   leaves); past it, any face of the mesh occludes, with no march at all.
+//! * A shadow ray marches its first metres (two cells of the finest guide, at most a cell
+//!   of this one: the faces there are those of the surface it leaves); past them, any
+//!   face of the mesh occludes, with no march at all.
 //!
 //! What the tracer finds is the field's own surface (its normals, materials and occlusion
 //! are the field's), at the field's tolerance; what it gives up is what the mesh gives

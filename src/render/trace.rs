@@ -224,17 +224,19 @@ impl<'f> Tracer<'f> {
         }
         let h = guide.cell();
         if !locate {
-            // A shadow query: past its first cell (where the faces are those of the
-            // surface it leaves), any face of the mesh occludes.
+            // A shadow query: past its first metres (two cells of the finest guide,
+            // at most a cell of this one: the faces there are those of the surface it
+            // leaves), any face of the mesh occludes.
             let from = match span.0 < a {
                 true => a,
                 false => {
-                    let near = self.march_span(ray, (a, (a + h).min(b)), params, false);
+                    let reach = h.min(2.0 * self.guides[0].cell());
+                    let near = self.march_span(ray, (a, (a + reach).min(b)), params, false);
                     steps += near.steps;
                     if near.hit() {
                         return near.with_steps(steps);
                     }
-                    a + h
+                    a + reach
                 }
             };
             if let Some(t) = guide.first_face(ray, (from, b)) {
