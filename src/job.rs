@@ -9,7 +9,7 @@ use anyhow::Context;
 use indicatif::ProgressBar;
 
 use crate::analysis::{Masks, Raster, texture_frame};
-use crate::field::{Aabb, Field, Tree};
+use crate::field::{Aabb, Field, Node, NodeId, Tree};
 use crate::io::progress;
 use crate::mesh::export::{self, ExportOptions, Origin};
 use crate::mesh::{GridSpec, Mesh, MeshOptions, MeshStats, polygonize};
@@ -70,9 +70,10 @@ pub struct JobReport {
 const BACKDROP_CELLS: f32 = 6.0;
 
 /// The guides of the job's pictures ([`Guide`]): the region's mesh (`mesh` over `grid`),
-/// then, when `camera` sees beyond the region, a mesh at `backdrop_cell` of the box of
-/// the support it sees. Marching near the ground where no mesh is costs most of a
-/// picture's time; the backdrop's meshing and BVH cost a small part of it.
+/// then, when `camera` sees beyond the region and all the tree has there is terrain
+/// ([`only_terrain_beyond`]), a mesh at `backdrop_cell` of the box of the support it
+/// sees. Marching near the ground where no mesh is costs most of a picture's time; the
+/// backdrop's meshing and BVH cost a small part of it.
 fn guides(
     tree: &Tree,
     mesh: &Mesh,
@@ -99,8 +100,12 @@ fn guides(
         })
         .fold(Aabb::from_points([camera.eye]), Aabb::union)
         .intersection(support);
-    let beyond = !(region.contains(seen.min) && region.contains(seen.max));
-    if beyond && !seen.is_empty() && backdrop_cell > grid.spacing.max_element() {
+    let beyond = !region.contains_box(&seen);
+    if beyond
+        && !seen.is_empty()
+        && backdrop_cell > grid.spacing.max_element()
+        && only_terrain_beyond(tree, tree.root(), &region)
+    {
         let coarse = GridSpec::with_cell(&seen, backdrop_cell)?;
         let opts = MeshOptions {
             budget,
@@ -115,6 +120,32 @@ fn guides(
         )?));
     }
     Ok(guides)
+}
+
+/// True when every part of the subtree `id` whose support reaches outside `region` is a
+/// heightfield leaf: the ground, which a coarse mesh follows to within its detail. A
+/// coarse mesh would lose anything thinner than its cells (a hoodoo's cap, a thin
+/// arch), so the backdrop guide is only used over terrain. Warps and affine maps, whose
+/// children's supports are in their own frames, count as more than terrain.
+fn only_terrain_beyond(tree: &Tree, id: NodeId, region: &Aabb) -> bool {
+    let support = tree.info(id).support;
+    if support.is_empty() || region.contains_box(&support) {
+        return true;
+    }
+    match &tree.nodes()[id as usize] {
+        Node::Leaf(f) => f
+            .as_any()
+            .is_some_and(|a| a.is::<crate::dem::HeightfieldField>()),
+        Node::Blend { .. }
+        | Node::Union(_)
+        | Node::Intersection(_)
+        | Node::Difference { .. }
+        | Node::Replace { .. } => tree.nodes()[id as usize]
+            .children()
+            .into_iter()
+            .all(|c| only_terrain_beyond(tree, c, region)),
+        _ => false,
+    }
 }
 
 fn bar(quiet: bool) -> Option<ProgressBar> {

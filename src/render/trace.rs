@@ -257,27 +257,36 @@ impl<'f> Tracer<'f> {
             if face.is_none_or(|f| f.is_some_and(|t| t < run.0)) {
                 face = Some(guide.first_face(ray, (run.0, b)));
             }
-            let from = match face.flatten() {
-                // The mesher saw no surface in this run.
-                Some(t) if run.1 < t - h => continue,
+            let skip = face.flatten().is_none_or(|t| run.1 < t - h);
+            if skip {
+                // The mesher saw no surface in this run: the ray is in the air at its
+                // end, unless it slipped between two faces into the solid.
+                steps += 1;
+                if OnRay(self.field, ray).value(run.1) <= ISO {
+                    continue;
+                }
+            }
+            let from = match face.flatten().filter(|_| !skip) {
                 Some(t) => {
-                    let (s0, s1) = (run.0.max(t - h), run.1.min(t + h));
-                    let mut on = OnRay(self.field, ray);
-                    let (e0, e1) = (on.value(s0) - ISO, on.value(s1) - ISO);
-                    steps += 2;
-                    if e0 < 0.0 && e1 > 0.0 {
-                        if !locate {
-                            return Trace { t: s1, steps };
+                    let span = (run.0.max(t - h), run.1.min(t + h));
+                    let tol = params.epsilon + params.cone * span.0;
+                    // The line's lists must cover the bracket: the hit's gradient is
+                    // taken through them.
+                    let found = match &mut self.line {
+                        Some(line) => {
+                            line.restrict(ray.origin, ray.dir, span);
+                            bracket(line, span, 0.1 * tol, locate)
                         }
-                        let tol = params.epsilon + params.cone * s0;
-                        let (t, n) = refine(&mut on, (s0, e0), (s1, e1), 0.1 * tol);
-                        return Trace {
-                            t,
-                            steps: steps + n,
-                        };
-                    }
-                    // In the solid already: the surface came earlier in the run.
-                    if e0 < 0.0 { s0 } else { run.0 }
+                        None => bracket(&mut OnRay(self.field, ray), span, 0.1 * tol, locate),
+                    };
+                    let (from, n) = match found {
+                        Bracket::Hit(tr) => return tr.with_steps(steps + tr.steps),
+                        Bracket::Air(n) => (span.0, n),
+                        // In the solid already: the surface came earlier in the run.
+                        Bracket::Solid(n) => (run.0, n),
+                    };
+                    steps += n;
+                    from
                 }
                 None => run.0,
             };
@@ -413,6 +422,32 @@ fn march(
         delta = next_delta;
     }
     miss(steps)
+}
+
+/// What [`bracket`] found.
+enum Bracket {
+    /// The surface, located (its evaluations counted).
+    Hit(Trace),
+    /// No crossing between the ends, the first in the air (evaluations spent).
+    Air(u32),
+    /// The first end in the solid (evaluations spent).
+    Solid(u32),
+}
+
+/// Tries to bracket the surface between the ends of `span`: the first in the air, the
+/// second in the solid. Then it is located by false position to `width` (`locate`), or
+/// the second end is returned.
+fn bracket(along: &mut impl Along, (s0, s1): (f32, f32), width: f32, locate: bool) -> Bracket {
+    let (e0, e1) = (along.value(s0) - ISO, along.value(s1) - ISO);
+    match (e0 < 0.0, e1 > 0.0) {
+        (true, true) if !locate => Bracket::Hit(Trace { t: s1, steps: 2 }),
+        (true, true) => {
+            let (t, n) = refine(along, (s0, e0), (s1, e1), width);
+            Bracket::Hit(Trace { t, steps: 2 + n })
+        }
+        (true, false) => Bracket::Air(2),
+        (false, _) => Bracket::Solid(2),
+    }
 }
 
 /// `|e| / λ`, infinite where the field is flat.
