@@ -32,7 +32,7 @@ impl MeshRaycaster {
             .collect();
         let bvh = obvhs::bvh2::builder::build_bvh2_from_tris(
             &triangles,
-            obvhs::BvhBuildParams::medium_build(),
+            obvhs::BvhBuildParams::fast_build(),
             &mut Duration::default(),
         );
         MeshRaycaster { triangles, bvh }
