@@ -236,18 +236,19 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
     stages.push(("polygonize", t.elapsed()));
     // The pictures follow the meshes: the region's, then a coarser one of what the
     // camera sees beyond it (`guide`).
-    let t = Instant::now();
     let guides = match &camera {
         Some(camera) => {
+            let t = Instant::now();
             let backdrop_cell = job
                 .as_ref()
                 .and_then(|j| j.full_cell.map(|c| c.0))
                 .unwrap_or(BACKDROP_CELLS * cell);
-            guides(&tree, &mesh, &grid, camera, backdrop_cell, opts.budget)?
+            let guides = guides(&tree, &mesh, &grid, camera, backdrop_cell, opts.budget)?;
+            stages.push(("guides", t.elapsed()));
+            guides
         }
         None => Vec::new(),
     };
-    stages.push(("guides", t.elapsed()));
 
     std::fs::create_dir_all(&opts.out_dir)
         .with_context(|| format!("cannot create the output folder {}", opts.out_dir.display()))?;
@@ -349,4 +350,29 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         stages,
         notices,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The backdrop guide is for terrain only: the main job's features all lie in its
+    /// region, the hoodoo field's columns stand beyond it too.
+    #[test]
+    fn only_terrain_beyond_tells_terrain_from_features() {
+        let region_of = |name: &str| {
+            let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("trees")
+                .join(name);
+            let file = scene::load(&path).unwrap();
+            let r = file.scene.job.as_ref().and_then(|j| j.region).unwrap();
+            (file.compile().unwrap().tree, Aabb::new(r.min.0, r.max.0))
+        };
+        let (caves, region) = region_of("jacksboro_caves.ron");
+        assert!(only_terrain_beyond(&caves, caves.root(), &region));
+        let small = Aabb::new(region.min, region.min + 0.5 * region.size());
+        assert!(!only_terrain_beyond(&caves, caves.root(), &small));
+        let (hoodoos, region) = region_of("hoodoo_field.ron");
+        assert!(!only_terrain_beyond(&hoodoos, hoodoos.root(), &region));
+    }
 }

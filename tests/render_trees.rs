@@ -627,3 +627,48 @@ fn guided_traces_find_the_surface_the_field_march_finds() {
         }
     }
 }
+
+/// A guided trace that locates its hit by bracketing the surface around a face must leave
+/// the tracer able to take the hit's gradient: on the hoodoo field (a blend whose tracer
+/// keeps per-ray lists of the children it crosses), the gradient the tracer gives at each
+/// guided hit is the field's there. (Stale lists from an earlier part of the ray gave the
+/// hoodoos' flanks wrong normals.)
+#[test]
+fn guided_hits_keep_the_fields_gradient() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/hoodoo_field.ron");
+    let (compiled, cam, settings) = job_view(&path, 96, 54);
+    let tree = &compiled.tree;
+    assert!(tree.keeps_line_lists());
+    let job = karstic::scene::load(&path).unwrap().scene.job.unwrap();
+    let region = job.region.unwrap();
+    let grid = GridSpec::with_cell(&Aabb::new(region.min.0, region.max.0), 2.0).unwrap();
+    let (mesh, _) = polygonize(tree, &grid, &MeshOptions::default()).unwrap();
+    let guides = vec![std::sync::Arc::new(
+        Guide::from_mesh(&mesh, &grid.bounds(), 2.0, 1 << 30).unwrap(),
+    )];
+    let mut tracer = karstic::render::Tracer::new(tree).with_guides(&guides);
+    let (mut hits, mut off) = (0, Vec::new());
+    for k in 0..cam.width * cam.height {
+        let ray = cam.pixel_ray(k % cam.width, k / cam.width);
+        let Some(span) = ray.clip(&tree.support()) else {
+            continue;
+        };
+        let tr = tracer.trace(&ray, span, &settings.trace);
+        if !tr.hit() {
+            continue;
+        }
+        hits += 1;
+        let g = tracer.gradient(&ray, tr.t);
+        let want = tree.value_grad(ray.at(tr.t)).1;
+        if (g - want).length() > 1e-3 * want.length().max(1e-3) {
+            off.push((k, g, want));
+        }
+    }
+    assert!(hits > 2000, "{hits} hits");
+    assert!(
+        off.is_empty(),
+        "{} of {hits} gradients off: {:?}",
+        off.len(),
+        &off[..off.len().min(3)]
+    );
+}

@@ -78,7 +78,7 @@ impl Guide {
             budget,
         )?;
         let positions: Vec<Vec3> = mesh.positions.iter().map(|p| Vec3::from(*p)).collect();
-        let mut occ = Guide {
+        let mut guide = Guide {
             faces: MeshRaycaster::new(&positions, &mesh.triangles),
             origin,
             cell,
@@ -88,19 +88,19 @@ impl Guide {
         let top = dims.as_ivec3() - IVec3::ONE;
         for t in &mesh.triangles {
             let [a, b, c] = t.map(|v| positions[v as usize]);
-            let lo = occ.cell_of(a.min(b).min(c)) - IVec3::splat(DILATE);
-            let hi = occ.cell_of(a.max(b).max(c)) + IVec3::splat(DILATE);
+            let lo = guide.cell_of(a.min(b).min(c)) - IVec3::splat(DILATE);
+            let hi = guide.cell_of(a.max(b).max(c)) + IVec3::splat(DILATE);
             let (lo, hi) = (lo.clamp(IVec3::ZERO, top), hi.clamp(IVec3::ZERO, top));
             for z in lo.z..=hi.z {
                 for y in lo.y..=hi.y {
                     for x in lo.x..=hi.x {
-                        let k = occ.index(IVec3::new(x, y, z));
-                        occ.bits[k / 64] |= 1 << (k % 64);
+                        let k = guide.index(IVec3::new(x, y, z));
+                        guide.bits[k / 64] |= 1 << (k % 64);
                     }
                 }
             }
         }
-        Ok(occ)
+        Ok(guide)
     }
 
     /// The box the grid covers.
@@ -111,12 +111,6 @@ impl Guide {
     /// Side of a cell, metres.
     pub fn cell(&self) -> f32 {
         self.cell
-    }
-
-    /// Share of the grid's cells that are marked.
-    pub fn fill(&self) -> f32 {
-        let marked: u32 = self.bits.iter().map(|w| w.count_ones()).sum();
-        marked as f32 / (self.dims.x * self.dims.y * self.dims.z) as f32
     }
 
     /// True when the cell holding `p` (inside the grid) is marked.
@@ -153,14 +147,14 @@ impl Guide {
         let top = self.dims.as_ivec3() - IVec3::ONE;
         let start = ray.at(span.0 + 1e-4 * (span.1 - span.0));
         let cell = self.cell_of(start).clamp(IVec3::ZERO, top);
-        let step = IVec3::new(sign(ray.dir.x), sign(ray.dir.y), sign(ray.dir.z));
+        let step = ray.dir.signum().as_ivec3();
         // Parameter of the next cell boundary on each axis, and between boundaries.
         let next_face = self.origin + (cell + step.max(IVec3::ZERO)).as_vec3() * self.cell;
         let inv = ray.dir.recip();
-        let t_next = ((next_face - ray.origin) * inv).select_finite(f32::INFINITY);
-        let t_delta = (self.cell * inv.abs()).select_finite(f32::INFINITY);
+        let t_next = finite_or_infinite((next_face - ray.origin) * inv);
+        let t_delta = finite_or_infinite(self.cell * inv.abs());
         Runs {
-            occ: self,
+            guide: self,
             cell,
             step,
             t_next,
@@ -171,32 +165,15 @@ impl Guide {
     }
 }
 
-fn sign(x: f32) -> i32 {
-    if x > 0.0 {
-        1
-    } else if x < 0.0 {
-        -1
-    } else {
-        0
-    }
-}
-
-/// Per-lane replacement of non-finite values (a ray parallel to an axis never crosses
-/// its boundaries).
-trait SelectFinite {
-    fn select_finite(self, or: f32) -> Self;
-}
-
-impl SelectFinite for Vec3 {
-    fn select_finite(self, or: f32) -> Self {
-        let f = |v: f32| if v.is_finite() { v } else { or };
-        Vec3::new(f(self.x), f(self.y), f(self.z))
-    }
+/// `v` with its non-finite lanes set to `∞` (a ray parallel to an axis never crosses its
+/// boundaries).
+fn finite_or_infinite(v: Vec3) -> Vec3 {
+    Vec3::select(v.is_finite_mask(), v, Vec3::INFINITY)
 }
 
 /// The runs of a ray through an [`Guide`]'s marked cells ([`Guide::runs`]).
 pub struct Runs<'a> {
-    occ: &'a Guide,
+    guide: &'a Guide,
     cell: IVec3,
     step: IVec3,
     t_next: Vec3,
@@ -221,7 +198,7 @@ impl Runs<'_> {
         self.t_next[axis] += self.t_delta[axis];
         self.cell[axis] += self.step[axis];
         let c = self.cell[axis];
-        self.t < self.end && c >= 0 && c < self.occ.dims.as_ivec3()[axis]
+        self.t < self.end && c >= 0 && c < self.guide.dims.as_ivec3()[axis]
     }
 }
 
@@ -233,7 +210,7 @@ impl Iterator for Runs<'_> {
             return None;
         }
         // Skip the air.
-        while !self.occ.is_set(self.cell) {
+        while !self.guide.is_set(self.cell) {
             if !self.advance() {
                 self.t = self.end;
                 return None;
@@ -247,7 +224,7 @@ impl Iterator for Runs<'_> {
                 self.t = end;
                 return Some((start, end));
             }
-            if !self.occ.is_set(self.cell) {
+            if !self.guide.is_set(self.cell) {
                 return Some((start, self.t));
             }
         }
@@ -279,7 +256,10 @@ mod tests {
             Vec3::new(4.2, 4.8, 5.5),
         ];
         let occ = Guide::from_mesh(&mesh(&[tri]), &region, 1.0, 1 << 20).unwrap();
-        assert!((occ.fill() - 27.0 / 1000.0).abs() < 1e-6, "{}", occ.fill());
+        let centres = (0..1000)
+            .map(|k| Vec3::new((k % 10) as f32, (k / 10 % 10) as f32, (k / 100) as f32) + 0.5);
+        let marked = centres.filter(|&c| occ.marked(c)).count();
+        assert_eq!(marked, 27, "the triangle's 3 × 3 × 3 cells");
         assert!(occ.marked(Vec3::new(3.5, 5.9, 6.9)));
         assert!(!occ.marked(Vec3::new(2.9, 4.5, 5.5)));
         // Rays along and across the axes, and a diagonal: each run is exactly the
