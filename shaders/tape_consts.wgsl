@@ -16,6 +16,13 @@ const LACUNARITY: f32 = 2.0;
 const GAIN: f32 = 0.5;
 const OCTAVE_SHIFT: vec3<f32> = vec3<f32>(0.5477, 0.3127, 0.7531);
 
+// Sky occlusion at cave scale (src/render/shade.rs): tilt, ramp, floor; directions, steps.
+const CAVE_TILT: f32 = 0.7853982;
+const CAVE_RAMP: f32 = 0.12;
+const CAVE_FLOOR: f32 = 0.12;
+const CAVE_DIRS: u32 = 5u;
+const CAVE_STEPS: u32 = 3u;
+
 // S-field bricks (src/voxel/sparse.rs): edge, its log2, nodes, a missing brick.
 const SF_BRICK: i32 = 8;
 const SF_BRICK_BITS: u32 = 3u;

@@ -12,7 +12,7 @@ struct Uniforms {
     trace: vec4<f32>,     // x = global Lipschitz, y = grow, z = grad step, w = method (0 segment, 1 sphere)
     sun: vec4<f32>,       // xyz, w = shadows (0 / 1)
     sun_color: vec4<f32>, // w = haze distance
-    zenith: vec4<f32>,
+    zenith: vec4<f32>,    // w = cave-scale occlusion reach
     horizon: vec4<f32>,   // w = occlusion radius
     bounce: vec4<f32>,    // w = exposure
     rock: vec4<f32>,      // w = rock slope lower end
@@ -241,10 +241,14 @@ fn off_ground(p: vec3<f32>) -> f32 {
     return p.z - elevation(u.consts.z, o, p.x, p.y);
 }
 
+// material.rs Materials::feature.
+fn feature_of(p: vec3<f32>) -> f32 {
+    return smooth_step(u.feature.x, u.feature.y, abs(off_ground(p)));
+}
+
 // material.rs Materials::albedo (cover, then albedo_of).
 fn albedo(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    let off = off_ground(p);
-    let feature = smooth_step(u.feature.x, u.feature.y, abs(off));
+    let feature = feature_of(p);
     let wander = simplex(u.consts.x, p / u.snow_line.w);
     let nz = n.z + u.snow_line.z * wander;
     let steep = 1.0 - smooth_step(u.rock.w, u.soil.w, nz);
@@ -313,6 +317,40 @@ fn ao_step(k: u32) -> f32 {
     return u.horizon.w * f32(k + 1u) / f32(u.consts.y);
 }
 
+// shade.rs Shading::cave_offset: the k-th cave-scale sample off a point of normal n.
+fn cave_offset(n: vec3<f32>, k: u32) -> vec3<f32> {
+    let dir = k / CAVE_STEPS;
+    let step = k % CAVE_STEPS;
+    let bent = n + vec3<f32>(0.0, 0.0, 1.0);
+    var b = n;
+    if dot(bent, bent) > 0.01 {
+        b = normalize(bent);
+    }
+    var d = b;
+    if dir > 0u {
+        // glam's Vec3::any_orthonormal_pair.
+        let sign = select(-1.0, 1.0, b.z >= 0.0);
+        let a = -1.0 / (sign + b.z);
+        let c = b.x * b.y * a;
+        let e1 = vec3<f32>(1.0 + sign * b.x * b.x * a, sign * c, -sign * b.x);
+        let e2 = vec3<f32>(c, sign + b.y * b.y * a, -b.y);
+        let phi = 6.2831855 * f32(dir - 1u) / f32(CAVE_DIRS - 1u);
+        d = b * cos(CAVE_TILT) + (e1 * cos(phi) + e2 * sin(phi)) * sin(CAVE_TILT);
+    }
+    return d * (u.zenith.w * f32(step + 1u) / f32(CAVE_STEPS));
+}
+
+// shade.rs cave_closed.
+fn cave_closed(f: f32) -> f32 {
+    return clamp((f - ISO) / CAVE_RAMP, 0.0, 1.0);
+}
+
+// shade.rs cave_sky.
+fn cave_sky(first: f32, all: f32) -> f32 {
+    let open = first + (1.0 - first) * all;
+    return CAVE_FLOOR + (1.0 - CAVE_FLOOR) * open;
+}
+
 // Quantised to 1/4095 before encoding, like the CPU's gamma table (shade.rs::to_srgb8).
 fn srgb8(c: vec3<f32>) -> u32 {
     let q = floor(clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)) * GAMMA_STEPS + 0.5) / GAMMA_STEPS;
@@ -329,7 +367,7 @@ struct Saved {
     bracket: vec4<f32>, // a, ea, b, eb
     refine: vec4<f32>,  // m, last, width, hit_t
     g: vec4<f32>,       // the normal's sum, the occlusion's weighted sum
-    ao: vec4<f32>,      // the occlusion's weights, unused
+    ao: vec4<f32>,      // the occlusion's weights, the cave-scale samples' max, sum, first
     counts: vec4<u32>,  // phase | shadow << 8 | corner << 16 | (kept + 1) << 24, ray.steps, ray.n, hit steps
 }
 
@@ -355,7 +393,8 @@ fn budget_left() -> bool {
 // drives lavapipe's compile time), and diverging invocations of a SIMD group stay on the
 // same code. A pixel whose loop budget runs out (lavapipe) saves its state and is resumed
 // by the next dispatch (pass) of its tile; `progress` tells the host how many are left.
-// `corner` counts the normal's 4 samples, then the occlusion's (cpu.rs occlusion).
+// `corner` counts the normal's 4 samples, then the occlusion's, then the cave-scale ones
+// (cpu.rs occlusion).
 @compute @workgroup_size(8, 8, 1)
 fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     let w = u.dims.x;
@@ -373,6 +412,7 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     let o = u.eye.xyz;
     let d = normalize(u.forward.xyz + u.right.xyz * su + u.up.xyz * sv);
     let ao_end = 4u + select(u.consts.y, 0u, u.horizon.w <= 0.0);
+    let cave_end = ao_end + CAVE_DIRS * CAVE_STEPS;
     var phase = PH_DONE;
     var ray: Ray;
     var shadow = false;
@@ -381,6 +421,9 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     var g = vec3<f32>(0.0);
     var ao_sum = 0.0;
     var ao_norm = 0.0;
+    var cave_max = 0.0;
+    var cave_sum = 0.0;
+    var cave_first = 1.0;
     var corner = 0u;
     let per_pass = atomicLoad(&progress[5]);
     if atomicLoad(&progress[4]) == 0u {
@@ -405,6 +448,9 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
         g = sv.g.xyz;
         ao_sum = sv.g.w;
         ao_norm = sv.ao.x;
+        cave_max = sv.ao.y;
+        cave_sum = sv.ao.z;
+        cave_first = sv.ao.w;
     }
     var p = o + d * hit_t;
     var n = vec3<f32>(0.0, 0.0, 1.0);
@@ -423,7 +469,11 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
         if phase == PH_REFINE && !refine_next(&ray) {
             phase = PH_END;
         }
-        if phase == PH_NORMAL && corner == ao_end {
+        if phase == PH_NORMAL && corner == ao_end && (u.zenith.w <= 0.0 || feature_of(p) <= 0.0) {
+            // No cave-scale samples off the DEM's ground (cpu.rs occlusion).
+            corner = cave_end;
+        }
+        if phase == PH_NORMAL && corner == cave_end {
             // The normal and the occlusion are done: the shadow ray.
             phase = PH_DONE;
             if u.sun.w > 0.0 && dot(n, u.sun.xyz) > 0.0 {
@@ -464,8 +514,11 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
             if corner < 4u {
                 qp = p + normal_offset(corner) * u.trace.z;
                 qc = qp;
-            } else {
+            } else if corner < ao_end {
                 qp = p + n * ao_step(corner - 4u);
+                qc = qp;
+            } else {
+                qp = p + cave_offset(n, corner - ao_end);
                 qc = qp;
             }
         } else if phase == PH_REFINE {
@@ -497,6 +550,23 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
                     n = -grad / slope;
                 }
             }
+        } else if corner >= ao_end {
+            // cpu.rs cave_occlusion: a direction is as open as its most closed sample
+            // allows; while the first (the bent normal) is open, the others are not asked.
+            let k = corner - ao_end;
+            cave_max = max(cave_max, cave_closed(ev.x));
+            if k % CAVE_STEPS == CAVE_STEPS - 1u {
+                let open = 1.0 - cave_max;
+                cave_max = 0.0;
+                cave_sum += open;
+                if k < CAVE_STEPS {
+                    cave_first = open;
+                    if open >= 1.0 {
+                        corner = cave_end - 1u;
+                    }
+                }
+            }
+            corner += 1u;
         } else {
             // cpu.rs occlusion.
             let k = corner - 4u;
@@ -513,7 +583,7 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
         let flags = phase | (u32(shadow) << 8u) | (corner << 16u) | (u32(ray.kept + 1) << 24u);
         saved[slot] = Saved(vec4<f32>(ray.o, ray.t), vec4<f32>(ray.d, ray.t1),
             vec4<f32>(ray.delta, ray.side, ray.prev_t, ray.prev_e), vec4<f32>(ray.a, ray.ea, ray.b, ray.eb),
-            vec4<f32>(ray.m, ray.last, ray.width, hit_t), vec4<f32>(g, ao_sum), vec4<f32>(ao_norm, 0.0, 0.0, 0.0),
+            vec4<f32>(ray.m, ray.last, ray.width, hit_t), vec4<f32>(g, ao_sum), vec4<f32>(ao_norm, cave_max, cave_sum, cave_first),
             vec4<u32>(flags, ray.steps, ray.n, hit_steps));
         atomicAdd(&progress[0], 1u);
         if evals == 0u {
@@ -532,6 +602,9 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     var ao = 1.0;
     if ao_norm > 0.0 {
         ao = ao_sum / ao_norm;
+    }
+    if cave_first < 1.0 {
+        ao *= mix(1.0, cave_sky(cave_first, cave_sum / f32(CAVE_DIRS)), feature_of(p));
     }
     let c = seen(o, d, hit_t, albedo(p, n) * light(n, lit, ao));
     out_rgba[at] = srgb8(display(c));

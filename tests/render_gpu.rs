@@ -4,7 +4,7 @@
 use crate::common;
 
 use common::{
-    Blobs, Rng, SigmaSphere, Terrain, assert_frames_match, assert_probes_match,
+    Blobs, Rng, SigmaSphere, TUNNEL_VIEW, Terrain, assert_frames_match, assert_probes_match,
     check_segment_lipschitz, dem, gpu, tapes,
 };
 use glam::{Affine3A, Quat, Vec3};
@@ -437,4 +437,14 @@ fn gpu_materials_match_the_cpu_on_the_main_job() {
     let gpu = ctx.render(&tape, &cam, &settings).unwrap();
     assert!(cpu.hits() > 1000, "{} hits", cpu.hits());
     assert_frames_match("main job with materials", &cpu, &gpu);
+    // Into the tunnel's mouth: the sky occlusion at cave scale.
+    let (eye, target) = TUNNEL_VIEW;
+    let cam = Camera::look_at(eye, target, 40.0, 64, 36).unwrap();
+    let settings = RenderSettings {
+        trace: settings.trace.with_pixel_angle(cam.pixel_angle()),
+        ..settings
+    };
+    let cpu = render(&tape, &cam, &settings, &ProgressBar::hidden());
+    let gpu = ctx.render(&tape, &cam, &settings).unwrap();
+    assert_frames_match("main job into the tunnel", &cpu, &gpu);
 }

@@ -8,7 +8,7 @@ use crate::common;
 use std::path::{Path, PathBuf};
 
 use crate::tape_conformance::conform;
-use common::{assert_frames_match_within, depth_agreement, gpu};
+use common::{TUNNEL_VIEW, assert_frames_match_within, depth_agreement, gpu};
 use glam::Vec3;
 use indicatif::ProgressBar;
 use karstic::dem::{Heightfield, HeightfieldField, ImplicitParams, Interpolation};
@@ -524,7 +524,7 @@ fn main_job_intervals_are_sound_where_the_render_asks() {
     for b in &boxes {
         let mut points: Vec<Vec3> = (0..96).map(|_| rng.in_box(b)).collect();
         points.extend((0..=64).map(|k| b.min + b.size() * k as f32 / 64.0));
-        let pruned = tree.prune(&b.dilate(2.0 * settings.shading.ao_radius));
+        let pruned = tree.prune(&b.dilate(settings.shading.occlusion_reach()));
         let nodes = (0..tree.nodes().len() as u32).map(|id| {
             let name = tree
                 .info(id)
@@ -670,5 +670,61 @@ fn guided_hits_keep_the_fields_gradient() {
         "{} of {hits} gradients off: {:?}",
         off.len(),
         &off[..off.len().min(3)]
+    );
+}
+
+/// Sky occlusion at cave scale: looking into the main job's tunnel, the surfaces deep in
+/// the rock (a feature's, far below the DEM's ground) lie in shade against the same view
+/// without it, while the open ground around the mouth is lit exactly as before.
+#[test]
+fn cave_interiors_lie_in_shade() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/jacksboro_caves.ron");
+    let (compiled, _, mut settings) = job_view(&path, 96, 54);
+    let (eye, target) = TUNNEL_VIEW;
+    let cam = Camera::look_at(eye, target, 40.0, 96, 54).unwrap();
+    settings.trace = settings.trace.with_pixel_angle(cam.pixel_angle());
+    assert!(
+        settings.shading.cave_reach > 10.0,
+        "{}",
+        settings.shading.cave_reach
+    );
+    let with = render(&compiled.tree, &cam, &settings, &ProgressBar::hidden());
+    settings.shading.cave_reach = 0.0;
+    let without = render(&compiled.tree, &cam, &settings, &ProgressBar::hidden());
+    let luma = |f: &karstic::render::Frame, k: usize| {
+        f.rgba[4 * k..4 * k + 3]
+            .iter()
+            .map(|&c| c as f32)
+            .sum::<f32>()
+    };
+    let (mut deep, mut open) = ((0.0, 0.0, 0), 0);
+    for (k, &t) in with.depth.iter().enumerate() {
+        assert_eq!(t, without.depth[k], "the hits do not move");
+        if !t.is_finite() {
+            continue;
+        }
+        let k32 = k as u32;
+        let p = cam.pixel_ray(k32 % 96, k32 / 96).at(t);
+        let feature = settings.materials.feature(p);
+        if feature >= 1.0 && settings.materials.off_ground(p) < -15.0 {
+            deep = (
+                deep.0 + luma(&with, k),
+                deep.1 + luma(&without, k),
+                deep.2 + 1,
+            );
+        } else if feature <= 0.0 {
+            assert_eq!(with.rgba[4 * k..4 * k + 4], without.rgba[4 * k..4 * k + 4]);
+            open += 1;
+        }
+    }
+    assert!(
+        deep.2 > 200 && open > 50,
+        "{} deep, {open} open pixels",
+        deep.2
+    );
+    let ratio = deep.0 / deep.1;
+    assert!(
+        ratio < 0.75,
+        "deep in the tunnel: {ratio} of the light without"
     );
 }

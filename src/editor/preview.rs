@@ -653,6 +653,7 @@ pub fn settings(
     if quality == Quality::Fast {
         s.shading.shadows = false;
         s.shading.ao_radius = 0.0;
+        s.shading.cave_reach = 0.0;
         s.trace.cone *= FAST_CONE;
     }
     s

@@ -10,7 +10,10 @@ use super::camera::{Camera, Ray};
 use super::guide::Guide;
 use super::image::Frame;
 use super::material::Materials;
-use super::shade::{AO_SAMPLES, Shading, Water, ambient_occlusion, to_srgb8};
+use super::shade::{
+    AO_SAMPLES, CAVE_DIRS, CAVE_STEPS, Shading, Water, ambient_occlusion, cave_closed, cave_sky,
+    to_srgb8,
+};
 use super::trace::{Method, Trace, TraceParams, Tracer, outward};
 use glam::Vec3;
 
@@ -243,11 +246,12 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
         t: f32::INFINITY,
         steps: 0,
     };
-    // Occlusion samples reach `ao_radius` off the hits: the primary field must hold there.
+    // Occlusion samples reach `ao_radius` and `cave_reach` off the hits: the primary
+    // field must hold there.
     let primary = pruned(
         field,
         segments_box(rays.iter().filter_map(|(r, sp, _)| sp.map(|sp| (r, sp))))
-            .map(|b| b.dilate(2.0 * sh.ao_radius)),
+            .map(|b| b.dilate(sh.occlusion_reach())),
     );
     let f = primary.as_deref().unwrap_or(field);
     let start = beam_start(f, rays, &s.trace);
@@ -266,7 +270,7 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
             let p = ray.at(tr.t);
             let g = tracer.gradient(ray, tr.t);
             let n = outward(g);
-            let ao = occlusion(f, p, n, g.length(), sh);
+            let ao = occlusion(f, p, n, g.length(), s.materials.feature(p), sh);
             let shadow = (sh.shadows && n.dot(sh.sun) > 0.0)
                 .then(|| {
                     let tol = s.trace.epsilon + s.trace.cone * tr.t;
@@ -391,15 +395,41 @@ fn shadow_params(primary: &TraceParams, t_hit: f32) -> TraceParams {
 /// gradient norm `slope` ([`super::shade`]): at each sample `q = p + δ n`, the drop
 /// `T − f(q)` over the drop `slope·δ` open ground gives (1 there, less where a wall or a
 /// roof keeps the field high). Fields in `[0, 2T]` cannot drop by more than `T` in the
-/// air: the expected drop is capped there, so a field saturated within `δ` is open.
-fn occlusion(field: &dyn Field, p: Vec3, n: Vec3, slope: f32, sh: &Shading) -> f32 {
-    if sh.ao_radius <= 0.0 || !(slope > 0.0) {
+/// air: the expected drop is capped there, so a field saturated within `δ` is open. Then
+/// scaled by the sky left at cave scale ([`cave_occlusion`]) as much as `p` belongs to a
+/// feature (`feature`, [`Materials::feature`]: the DEM's ground has none).
+fn occlusion(field: &dyn Field, p: Vec3, n: Vec3, slope: f32, feature: f32, sh: &Shading) -> f32 {
+    let near = if sh.ao_radius <= 0.0 || !(slope > 0.0) {
+        1.0
+    } else {
+        ambient_occlusion((0..AO_SAMPLES).map(|k| {
+            let d = sh.ao_step(k);
+            (ISO - field.value(p + n * d)) / (slope * d).min(ISO)
+        }))
+    };
+    if feature <= 0.0 {
+        return near;
+    }
+    near * (1.0 + (cave_occlusion(field, p, n, sh) - 1.0) * feature)
+}
+
+/// The share of the sky light left at cave scale ([`super::shade`]): the bent normal's
+/// samples first; the other directions only when it is not open.
+fn cave_occlusion(field: &dyn Field, p: Vec3, n: Vec3, sh: &Shading) -> f32 {
+    if sh.cave_reach <= 0.0 {
         return 1.0;
     }
-    ambient_occlusion((0..AO_SAMPLES).map(|k| {
-        let d = sh.ao_step(k);
-        (ISO - field.value(p + n * d)) / (slope * d).min(ISO)
-    }))
+    let open = |dir: u32| {
+        1.0 - (0..CAVE_STEPS)
+            .map(|j| cave_closed(field.value(p + sh.cave_offset(n, dir * CAVE_STEPS + j))))
+            .fold(0.0, f32::max)
+    };
+    let first = open(0);
+    if first >= 1.0 {
+        return 1.0;
+    }
+    let all = (first + (1..CAVE_DIRS).map(open).sum::<f32>()) / CAVE_DIRS as f32;
+    cave_sky(first, all)
 }
 
 /// The depth image of `field` alone (no shading): ray parameters of the hits, `∞` for

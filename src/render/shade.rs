@@ -15,6 +15,15 @@
 //!   ratio low. Near samples weigh more
 //!   (the screen-space methods' weighting, here exact in the scene). The radius stays
 //!   well inside the falloff of distance-like fields, where they are close to linear.
+//! * **Sky occlusion at cave scale.** The samples above reach a few metres: a tunnel's
+//!   floor sees its roof as open sky. Farther samples, [`CAVE_STEPS`] along each of
+//!   [`CAVE_DIRS`] directions up to [`Shading::cave_reach`], ask whether rock surrounds the
+//!   point: a sample in the solid (`f ≥ T`, ramped over [`CAVE_RAMP`] so the shading stays
+//!   continuous) closes its direction. The first direction is the bent normal (halfway to
+//!   the zenith, where most of a surface's sky light comes from); while it is open the
+//!   point sees the sky and the others are not asked. The share of open directions scales
+//!   the sky light down to [`CAVE_FLOOR`] of it deep in a cave, so a tunnel darkens from its
+//!   mouth inwards and a grotto's back lies in shade.
 //! * **Aerial perspective.** The colour at distance `t` fades to the horizon's colour by
 //!   `exp(−t / haze)`, with the haze distance a multiple of the scene's size so close-ups
 //!   and overviews read alike.
@@ -31,11 +40,29 @@
 
 use glam::Vec3;
 
-use crate::field::Aabb;
 use crate::field::noise::mix32;
+use crate::field::{Aabb, ISO};
 
 /// Points along the normal sampled for ambient occlusion.
 pub const AO_SAMPLES: u32 = 4;
+
+/// Directions of the cave-scale sky samples: the bent normal, then as many tilted
+/// [`CAVE_TILT`] radians around it.
+pub const CAVE_DIRS: u32 = 5;
+
+/// Samples along each cave-scale direction, evenly out to [`Shading::cave_reach`].
+pub const CAVE_STEPS: u32 = 3;
+
+/// Tilt (radians) of the cave-scale directions after the first, from the bent normal.
+pub const CAVE_TILT: f32 = std::f32::consts::FRAC_PI_4;
+
+/// Field values over which a cave-scale sample goes from open (`T`) to closed
+/// (`T + CAVE_RAMP`): on the solid's side, so the near-`T` air inside Feature Volumes'
+/// caves stays open.
+pub const CAVE_RAMP: f32 = 0.12;
+
+/// The share of the sky light left where every cave-scale direction is closed.
+pub const CAVE_FLOOR: f32 = 0.12;
 
 /// Seed of the hash that picks each pixel's point of the sun's disk.
 pub const SUN_SEED: u32 = 0x5_0a12;
@@ -63,6 +90,8 @@ pub struct Shading {
     pub sun_radius: f32,
     /// Reach (metres) of the ambient occlusion's farthest sample; 0 disables it.
     pub ao_radius: f32,
+    /// Reach (metres) of the cave-scale sky occlusion's samples; 0 disables it.
+    pub cave_reach: f32,
     /// Exposure applied before the tone curve.
     pub exposure: f32,
     /// A water surface, when the scene has one.
@@ -107,15 +136,44 @@ impl Shading {
             shadows: true,
             sun_radius: 0.02,
             ao_radius: 0.006 * r,
+            cave_reach: 0.04 * r,
             exposure: 1.0,
             water: None,
         }
+    }
+
+    /// How far off a surface point the occlusion samples reach (with a margin): the
+    /// field must be whole within it of the hits.
+    pub fn occlusion_reach(&self) -> f32 {
+        2.0 * self.ao_radius.max(self.cave_reach)
     }
 
     /// Distance of the `k`-th occlusion sample from the surface (`k < AO_SAMPLES`).
     #[inline]
     pub fn ao_step(&self, k: u32) -> f32 {
         self.ao_radius * (k + 1) as f32 / AO_SAMPLES as f32
+    }
+
+    /// The `k`-th cave-scale sample (`k < CAVE_DIRS · CAVE_STEPS`, direction by direction)
+    /// off a surface point with unit outward normal `n`: its offset from the point.
+    pub fn cave_offset(&self, n: Vec3, k: u32) -> Vec3 {
+        let (dir, step) = (k / CAVE_STEPS, k % CAVE_STEPS);
+        let bent = n + Vec3::Z;
+        // Facing straight down (a roof) the bent normal vanishes: the normal itself.
+        let b = if bent.length_squared() > 0.01 {
+            bent.normalize()
+        } else {
+            n
+        };
+        let d = if dir == 0 {
+            b
+        } else {
+            let (u, v) = b.any_orthonormal_pair();
+            let phi = std::f32::consts::TAU * (dir - 1) as f32 / (CAVE_DIRS - 1) as f32;
+            let (st, ct) = CAVE_TILT.sin_cos();
+            b * ct + (u * phi.cos() + v * phi.sin()) * st
+        };
+        d * (self.cave_reach * (step + 1) as f32 / CAVE_STEPS as f32)
     }
 
     /// Two vectors spanning the sun's disk seen from the ground: orthogonal to the sun
@@ -213,6 +271,24 @@ pub fn ambient_occlusion(open: impl Iterator<Item = f32>) -> f32 {
         norm += w;
     }
     if norm > 0.0 { sum / norm } else { 1.0 }
+}
+
+/// How much a cave-scale sample with field value `f` closes its direction: 0 in the
+/// air, 1 in the solid, ramped over [`CAVE_RAMP`].
+#[inline]
+pub fn cave_closed(f: f32) -> f32 {
+    ((f - ISO) / CAVE_RAMP).clamp(0.0, 1.0)
+}
+
+/// The share of the sky light a point gets from its cave-scale samples: `first` is how
+/// open the bent normal's direction is (1 − its most closed sample), `all` the mean of
+/// that over the [`CAVE_DIRS`] directions. Open along the bent normal, the point sees the
+/// sky; closed, it gets the share of open directions; in between, a blend, so the
+/// shading stays continuous where the others are not asked.
+#[inline]
+pub fn cave_sky(first: f32, all: f32) -> f32 {
+    let open = first + (1.0 - first) * all;
+    CAVE_FLOOR + (1.0 - CAVE_FLOOR) * open
 }
 
 /// Narkowicz's fit of the ACES filmic tone curve, per channel, to `[0, 1]`.

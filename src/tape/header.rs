@@ -17,6 +17,7 @@ use super::FEATURES;
 use super::format::GROUPS;
 use crate::field::falloff::{ISO, WYVILL_MAX_SLOPE, WYVILL_PEAK_X};
 use crate::field::noise::{F3, G3, GAIN, LACUNARITY, OCTAVE_SHIFT, R2, SIMPLEX_SCALE};
+use crate::render::shade::{CAVE_DIRS, CAVE_FLOOR, CAVE_RAMP, CAVE_STEPS, CAVE_TILT};
 use crate::voxel::sparse::{BRICK, BRICK_NODES, NONE};
 
 /// The header's path in the repository.
@@ -75,6 +76,17 @@ pub fn wgsl_header() -> String {
         "const OCTAVE_SHIFT: vec3<f32> = {};",
         vec3(OCTAVE_SHIFT)
     ));
+    f32s(
+        &mut line,
+        "Sky occlusion at cave scale (src/render/shade.rs): tilt, ramp, floor; directions, steps.",
+        &[
+            ("CAVE_TILT", CAVE_TILT),
+            ("CAVE_RAMP", CAVE_RAMP),
+            ("CAVE_FLOOR", CAVE_FLOOR),
+        ],
+    );
+    line(format!("const CAVE_DIRS: u32 = {CAVE_DIRS}u;"));
+    line(format!("const CAVE_STEPS: u32 = {CAVE_STEPS}u;"));
     line(
         "\n// S-field bricks (src/voxel/sparse.rs): edge, its log2, nodes, a missing brick.".into(),
     );
@@ -138,6 +150,9 @@ mod tests {
             OCTAVE_SHIFT.x,
             OCTAVE_SHIFT.y,
             OCTAVE_SHIFT.z,
+            CAVE_TILT,
+            CAVE_RAMP,
+            CAVE_FLOOR,
             1e30,
             f32::MAX,
         ] {

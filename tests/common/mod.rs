@@ -31,3 +31,10 @@ pub use terrain::Terrain;
 pub use trimesh::{trimesh_import, trimesh_version};
 pub use uv_sphere::uv_sphere;
 pub use z_bands::{check_z_bands, column_crossings_in_bands};
+
+/// The eye and target of the main job's view into its tunnel's mouth (the one
+/// `karstic run trees/jacksboro_caves.ron` frames).
+pub const TUNNEL_VIEW: (glam::Vec3, glam::Vec3) = (
+    glam::Vec3::new(3641.5, 4961.8, 867.7),
+    glam::Vec3::new(3542.5, 4956.4, 854.6),
+);

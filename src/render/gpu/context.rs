@@ -76,7 +76,7 @@ impl Uniforms {
                 [tape.lipschitz(), s.trace.grow, tape.grad_step(), method],
                 v4(sh.sun, if sh.shadows { 1.0 } else { 0.0 }),
                 v4(sh.sun_color, sh.haze),
-                v4(sh.zenith, 0.0),
+                v4(sh.zenith, sh.cave_reach),
                 v4(sh.horizon, sh.ao_radius),
                 v4(sh.bounce, sh.exposure),
                 v4(m.rock, m.rock_slope.0),
