@@ -246,9 +246,8 @@ fn feature_of(p: vec3<f32>) -> f32 {
     return smooth_step(u.feature.x, u.feature.y, abs(off_ground(p)));
 }
 
-// material.rs Materials::albedo (cover, then albedo_of).
-fn albedo(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    let feature = feature_of(p);
+// material.rs Materials::albedo (cover, then albedo_of), with `feature_of(p)`.
+fn albedo(p: vec3<f32>, n: vec3<f32>, feature: f32) -> vec3<f32> {
     let wander = simplex(u.consts.x, p / u.snow_line.w);
     let nz = n.z + u.snow_line.z * wander;
     let steep = 1.0 - smooth_step(u.rock.w, u.soil.w, nz);
@@ -603,10 +602,11 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     if ao_norm > 0.0 {
         ao = ao_sum / ao_norm;
     }
+    let feature = feature_of(p);
     if cave_first < 1.0 {
-        ao *= mix(1.0, cave_sky(cave_first, cave_sum / f32(CAVE_DIRS)), feature_of(p));
+        ao *= mix(1.0, cave_sky(cave_first, cave_sum / f32(CAVE_DIRS)), feature);
     }
-    let c = seen(o, d, hit_t, albedo(p, n) * light(n, lit, ao));
+    let c = seen(o, d, hit_t, albedo(p, n, feature) * light(n, lit, ao));
     out_rgba[at] = srgb8(display(c));
 }
 

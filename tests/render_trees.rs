@@ -524,7 +524,7 @@ fn main_job_intervals_are_sound_where_the_render_asks() {
     for b in &boxes {
         let mut points: Vec<Vec3> = (0..96).map(|_| rng.in_box(b)).collect();
         points.extend((0..=64).map(|k| b.min + b.size() * k as f32 / 64.0));
-        let pruned = tree.prune(&b.dilate(settings.shading.occlusion_reach()));
+        let pruned = tree.prune(&b.dilate(2.0 * settings.shading.ao_radius));
         let nodes = (0..tree.nodes().len() as u32).map(|id| {
             let name = tree
                 .info(id)

@@ -246,12 +246,12 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
         t: f32::INFINITY,
         steps: 0,
     };
-    // Occlusion samples reach `ao_radius` and `cave_reach` off the hits: the primary
-    // field must hold there.
+    // Occlusion samples reach `ao_radius` off the hits: the primary field must hold there.
+    // (The cave-scale samples, on the few features' pixels, ask the whole field.)
     let primary = pruned(
         field,
         segments_box(rays.iter().filter_map(|(r, sp, _)| sp.map(|sp| (r, sp))))
-            .map(|b| b.dilate(sh.occlusion_reach())),
+            .map(|b| b.dilate(2.0 * sh.ao_radius)),
     );
     let f = primary.as_deref().unwrap_or(field);
     let start = beam_start(f, rays, &s.trace);
@@ -270,7 +270,8 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
             let p = ray.at(tr.t);
             let g = tracer.gradient(ray, tr.t);
             let n = outward(g);
-            let ao = occlusion(f, p, n, g.length(), s.materials.feature(p), sh);
+            let ao = occlusion(f, p, n, g.length(), sh)
+                * cave_light(field, p, n, s.materials.feature(p), sh);
             let shadow = (sh.shadows && n.dot(sh.sun) > 0.0)
                 .then(|| {
                     let tol = s.trace.epsilon + s.trace.cone * tr.t;
@@ -395,28 +396,23 @@ fn shadow_params(primary: &TraceParams, t_hit: f32) -> TraceParams {
 /// gradient norm `slope` ([`super::shade`]): at each sample `q = p + δ n`, the drop
 /// `T − f(q)` over the drop `slope·δ` open ground gives (1 there, less where a wall or a
 /// roof keeps the field high). Fields in `[0, 2T]` cannot drop by more than `T` in the
-/// air: the expected drop is capped there, so a field saturated within `δ` is open. Then
-/// scaled by the sky left at cave scale ([`cave_occlusion`]) as much as `p` belongs to a
-/// feature (`feature`, [`Materials::feature`]: the DEM's ground has none).
-fn occlusion(field: &dyn Field, p: Vec3, n: Vec3, slope: f32, feature: f32, sh: &Shading) -> f32 {
-    let near = if sh.ao_radius <= 0.0 || !(slope > 0.0) {
-        1.0
-    } else {
-        ambient_occlusion((0..AO_SAMPLES).map(|k| {
-            let d = sh.ao_step(k);
-            (ISO - field.value(p + n * d)) / (slope * d).min(ISO)
-        }))
-    };
-    if feature <= 0.0 {
-        return near;
+/// air: the expected drop is capped there, so a field saturated within `δ` is open.
+fn occlusion(field: &dyn Field, p: Vec3, n: Vec3, slope: f32, sh: &Shading) -> f32 {
+    if sh.ao_radius <= 0.0 || !(slope > 0.0) {
+        return 1.0;
     }
-    near * (1.0 + (cave_occlusion(field, p, n, sh) - 1.0) * feature)
+    ambient_occlusion((0..AO_SAMPLES).map(|k| {
+        let d = sh.ao_step(k);
+        (ISO - field.value(p + n * d)) / (slope * d).min(ISO)
+    }))
 }
 
-/// The share of the sky light left at cave scale ([`super::shade`]): the bent normal's
-/// samples first; the other directions only when it is not open.
-fn cave_occlusion(field: &dyn Field, p: Vec3, n: Vec3, sh: &Shading) -> f32 {
-    if sh.cave_reach <= 0.0 {
+/// The share of the sky light left at cave scale ([`super::shade`]) at the surface point
+/// `p` with outward normal `n`, as much as `p` belongs to a feature (`feature`,
+/// [`Materials::feature`]: the DEM's ground asks nothing): the bent normal's samples
+/// first, the other directions only when it is not open.
+fn cave_light(field: &dyn Field, p: Vec3, n: Vec3, feature: f32, sh: &Shading) -> f32 {
+    if sh.cave_reach <= 0.0 || feature <= 0.0 {
         return 1.0;
     }
     let open = |dir: u32| {
@@ -429,7 +425,7 @@ fn cave_occlusion(field: &dyn Field, p: Vec3, n: Vec3, sh: &Shading) -> f32 {
         return 1.0;
     }
     let all = (first + (1..CAVE_DIRS).map(open).sum::<f32>()) / CAVE_DIRS as f32;
-    cave_sky(first, all)
+    1.0 + (cave_sky(first, all) - 1.0) * feature
 }
 
 /// The depth image of `field` alone (no shading): ray parameters of the hits, `∞` for

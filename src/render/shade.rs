@@ -142,12 +142,6 @@ impl Shading {
         }
     }
 
-    /// How far off a surface point the occlusion samples reach (with a margin): the
-    /// field must be whole within it of the hits.
-    pub fn occlusion_reach(&self) -> f32 {
-        2.0 * self.ao_radius.max(self.cave_reach)
-    }
-
     /// Distance of the `k`-th occlusion sample from the surface (`k < AO_SAMPLES`).
     #[inline]
     pub fn ao_step(&self, k: u32) -> f32 {
