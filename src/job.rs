@@ -6,6 +6,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
+use glam::Vec3;
 use indicatif::ProgressBar;
 
 use crate::analysis::{Masks, Raster, texture_frame};
@@ -120,6 +121,74 @@ fn guides(
         )?));
     }
     Ok(guides)
+}
+
+/// The guides of a picture of `tree` through `camera` ([`Guide`]), as `karstic run` makes
+/// its pictures: when the scene's `job` has a region the camera sees, the part of it the
+/// camera sees ([`seen_cells`]) meshed on the job's grid, then the backdrop ([`guides`]);
+/// none otherwise. What the mesh gives up (solid thinner than a cell) is what the job's
+/// mesh gives up.
+pub fn view_guides(
+    tree: &Tree,
+    job: Option<&crate::scene::spec::JobSpec>,
+    camera: &Camera,
+    budget: u64,
+    quiet: bool,
+) -> anyhow::Result<Vec<Arc<Guide>>> {
+    let Some(job) = job else {
+        return Ok(Vec::new());
+    };
+    let Some(region) = job.region.map(|r| Aabb::new(r.min.0, r.max.0)) else {
+        return Ok(Vec::new());
+    };
+    let cell = job.cell.0;
+    let Some(seen) = seen_cells(camera, &region, cell) else {
+        return Ok(Vec::new());
+    };
+    let grid = GridSpec::with_cell(&seen, cell)?;
+    let opts = MeshOptions {
+        progress: bar(quiet),
+        budget,
+        ..MeshOptions::default()
+    };
+    if let Some(b) = &opts.progress {
+        b.set_length(crate::mesh::polygonize::progress_steps(&grid));
+        b.set_message("meshing the job's region");
+    }
+    let (mesh, _) = polygonize(tree, &grid, &opts)?;
+    if let Some(b) = &opts.progress {
+        b.finish_and_clear();
+    }
+    let backdrop = job.full_cell.map_or(BACKDROP_CELLS * cell, |c| c.0);
+    guides(tree, &mesh, &grid, camera, backdrop, budget)
+}
+
+/// Rays per side of the image [`seen_cells`] follows.
+const SEEN_RAYS: u32 = 17;
+
+/// The part of `region` that `camera` sees, on the lattice of `cell`-sided cells from the
+/// region's corner, padded by a cell: the box of a grid of pixel rays' spans through the
+/// region; `None` when none crosses it. Rays between the grid's miss a sliver of what the
+/// camera sees, which is then traced without a guide: a guide speeds the march up, the
+/// picture does not depend on where it stops.
+fn seen_cells(camera: &Camera, region: &Aabb, cell: f32) -> Option<Aabb> {
+    let n = SEEN_RAYS - 1;
+    let (w, h) = (camera.width - 1, camera.height - 1);
+    let seen = (0..=n)
+        .flat_map(|a| (0..=n).map(move |b| (a * w / n, b * h / n)))
+        .map(|(i, j)| camera.pixel_ray(i, j))
+        .filter_map(|r| {
+            r.clip(region)
+                .map(|(t0, t1)| Aabb::from_points([r.at(t0), r.at(t1)]))
+        })
+        .fold(Aabb::EMPTY, Aabb::union);
+    if seen.is_empty() {
+        return None;
+    }
+    let lo = ((seen.min - region.min) / cell).floor() - Vec3::ONE;
+    let hi = ((seen.max - region.min) / cell).ceil() + Vec3::ONE;
+    let snapped = Aabb::new(region.min + lo * cell, region.min + hi * cell);
+    Some(snapped.intersection(*region))
 }
 
 /// True when every part of the subtree `id` whose support reaches outside `region` is a

@@ -254,3 +254,53 @@ fn software_adapters_give_way_to_the_cpu_quietly() {
         Err(_) => assert!(err.contains("on the CPU instead"), "{err}"),
     }
 }
+
+/// On a tree whose job has a region, `karstic render` meshes what its camera sees of the
+/// region and follows the mesh (as `karstic run`'s pictures do): on the main job the
+/// picture is the one `--no-guide` traces from the whole field on all but a few grazed
+/// pixels, for under half the evaluations a ray; the summary line says so.
+#[test]
+fn render_follows_the_jobs_mesh_unless_told_not_to() {
+    let dir = tempfile::tempdir().unwrap();
+    let tree = trees().join("jacksboro_caves.ron");
+    let render = |name: &str, extra: &[&str]| {
+        let png = dir.path().join(name);
+        let mut args = vec![
+            "render",
+            tree.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+            "--size",
+            "96",
+            "54",
+        ];
+        args.extend_from_slice(extra);
+        let (ok, err) = karstic(&args);
+        assert!(ok, "{err}");
+        let steps: f64 = err
+            .split(" steps per ray")
+            .next()
+            .and_then(|s| s.rsplit(' ').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap_or_else(|| panic!("no steps in {err:?}"));
+        (image::open(&png).unwrap().to_rgb8(), steps, err)
+    };
+    let (guided, guided_steps, said) = render("guided.png", &[]);
+    let (plain, plain_steps, plain_said) = render("plain.png", &["--no-guide"]);
+    assert!(said.contains("guided by the job's mesh"), "{said}");
+    assert!(!plain_said.contains("guided"), "{plain_said}");
+    assert!(
+        guided_steps < 0.5 * plain_steps,
+        "{guided_steps} steps a ray guided, {plain_steps} not"
+    );
+    let close = guided
+        .pixels()
+        .zip(plain.pixels())
+        .filter(|(a, b)| (0..3).all(|c| a[c].abs_diff(b[c]) <= 6))
+        .count();
+    assert!(
+        close * 100 >= 97 * 96 * 54,
+        "{close} of {} pixels match",
+        96 * 54
+    );
+}

@@ -728,3 +728,66 @@ fn cave_interiors_lie_in_shade() {
         "deep in the tunnel: {ratio} of the light without"
     );
 }
+
+/// `karstic render` meshes the part of the job's region its camera sees to guide the
+/// tracer (`job::view_guides`): the main view's guide spans most of the region, the tunnel
+/// close-up's a small part of it holding every point of the region a fine grid of its
+/// pixel rays crosses; a camera looking away from the region, or a tree without a job, gets
+/// none.
+#[test]
+fn view_guides_cover_what_the_camera_sees_of_the_region() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/jacksboro_caves.ron");
+    let loaded = karstic::scene::load(&path).unwrap();
+    let (compiled, main_cam, _) = job_view(&path, 96, 54);
+    let tree = &compiled.tree;
+    let job = loaded.scene.job.as_ref();
+    let r = job.unwrap().region.unwrap();
+    let region = Aabb::new(r.min.0, r.max.0);
+    let guides = |cam: &Camera| karstic::job::view_guides(tree, job, cam, 1 << 32, true).unwrap();
+    let volume = |b: &Aabb| b.size().x * b.size().y * b.size().z;
+
+    let main = guides(&main_cam);
+    assert!(!main.is_empty());
+    let b = main[0].bounds();
+    assert!(
+        volume(&b) > 0.5 * volume(&region),
+        "main view's guide {b:?}"
+    );
+    assert!(
+        region.dilate(3.0).contains_box(&b),
+        "{b:?} beyond {region:?}"
+    );
+
+    let (eye, target) = TUNNEL_VIEW;
+    let tunnel_cam = Camera::look_at(eye, target, 40.0, 96, 54).unwrap();
+    let tunnel = guides(&tunnel_cam);
+    let b = tunnel[0].bounds();
+    assert!(
+        volume(&b) < 0.2 * volume(&region),
+        "tunnel view's guide {b:?}"
+    );
+    let (mut inside, mut all) = (0, 0);
+    for k in 0..96 * 54 {
+        let ray = tunnel_cam.pixel_ray(k % 96, k / 96);
+        let Some((t0, t1)) = ray.clip(&region) else {
+            continue;
+        };
+        for s in 0..=16 {
+            all += 1;
+            inside += usize::from(b.contains(ray.at(t0 + (t1 - t0) * s as f32 / 16.0)));
+        }
+    }
+    assert!(
+        inside as f64 >= 0.99 * all as f64,
+        "{inside} of {all} points in the guide"
+    );
+
+    let outside = Vec3::new(4900.0, 4380.0, 780.0);
+    let away = Camera::look_at(outside, outside + Vec3::new(1.0, -1.0, 0.2), 40.0, 96, 54).unwrap();
+    assert!(guides(&away).is_empty());
+    assert!(
+        karstic::job::view_guides(tree, None, &main_cam, 1 << 32, true)
+            .unwrap()
+            .is_empty()
+    );
+}
