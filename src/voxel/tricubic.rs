@@ -265,6 +265,52 @@ fn stencil(bricks: &Bricks, s: &[f32], i0: u32) -> Option<[f32; 64]> {
         }
         return Some(v);
     }
+    // Across bricks: on each axis the four (clamped) nodes lie in the first one's brick or
+    // the next, so at most eight bricks are looked up, each once, where 64 nodes were.
+    let top = g.dims - IVec3::ONE;
+    let first: IVec3 = (c - IVec3::ONE).clamp(IVec3::ZERO, top) >> 3;
+    let mut side = [[0usize; 4]; 3];
+    let mut offset = [[0usize; 4]; 3];
+    for a in 0..3 {
+        for k in 0..4 {
+            let n = (c[a] + k as i32 - 1).clamp(0, top[a]);
+            side[a][k] = ((n >> 3) - first[a]) as usize;
+            offset[a][k] = ((n & 7) << (3 * a)) as usize;
+        }
+    }
+    // The stencil is a product of its axes' nodes: it needs every brick of the product of
+    // their sides.
+    let mut base = [0usize; 8];
+    for sz in 0..=side[2][3] {
+        for sy in 0..=side[1][3] {
+            for sx in 0..=side[0][3] {
+                let b = bricks.brick(first + IVec3::new(sx as i32, sy as i32, sz as i32));
+                if b == NONE {
+                    return None;
+                }
+                base[sx + 2 * sy + 4 * sz] = b as usize * BRICK_NODES;
+            }
+        }
+    }
+    for (z, plane) in v.chunks_exact_mut(16).enumerate() {
+        for (y, row) in plane.chunks_exact_mut(4).enumerate() {
+            let at = 2 * side[1][y] + 4 * side[2][z];
+            let start = offset[1][y] + offset[2][z];
+            let ends = [base[at] + start, base[at + 1] + start];
+            for (x, e) in row.iter_mut().enumerate() {
+                *e = s[ends[side[0][x]] + offset[0][x]];
+            }
+        }
+    }
+    Some(v)
+}
+
+/// [`stencil`] node by node: the reference its brick-wise gathering is checked against.
+#[cfg(test)]
+fn stencil_by_node(bricks: &Bricks, s: &[f32], i0: u32) -> Option<[f32; 64]> {
+    let g = bricks.geom;
+    let c = bricks.node_coord(i0 as usize);
+    let mut v = [0.0f32; 64];
     for (k, e) in v.iter_mut().enumerate() {
         let d = IVec3::new(k as i32 & 3, (k as i32 >> 2) & 3, k as i32 >> 4) - IVec3::ONE;
         let n = (c + d).clamp(IVec3::ZERO, g.dims - IVec3::ONE);
@@ -329,6 +375,37 @@ fn catmull_rom<const GRAD: bool>(v: &[f32; 64], f: Vec3, h: f32) -> (f32, Vec3) 
 mod tests {
     use super::*;
     use crate::voxel::sparse::LevelGeom;
+
+    /// The brick-wise gathering of a stencil reads the nodes (or finds a brick missing)
+    /// as node-by-node lookups do, at every cell of a level with holes whose size is not
+    /// a whole number of bricks: inside bricks, across their faces, edges and corners, and
+    /// clamped at the domain's faces.
+    #[test]
+    fn stencils_gather_the_nodes_around_the_cell() {
+        let geom = LevelGeom {
+            origin: Vec3::ZERO,
+            h: 1.0,
+            dims: IVec3::new(21, 18, 13),
+        };
+        let coords: Vec<IVec3> = (0..2)
+            .flat_map(|z| (0..3).flat_map(move |y| (0..3).map(move |x| IVec3::new(x, y, z))))
+            .filter(|&c| c != IVec3::new(1, 1, 0))
+            .collect();
+        let bricks = Bricks::new(geom, coords);
+        let s: Vec<f32> = (0..bricks.len() * BRICK_NODES).map(|i| i as f32).collect();
+        let (mut found, mut missing) = (0, 0);
+        for i in 0..bricks.len() * BRICK_NODES {
+            let c = bricks.node_coord(i);
+            if !(c.cmplt(geom.dims - 1).all()) {
+                continue;
+            }
+            let got = stencil(&bricks, &s, i as u32);
+            assert_eq!(got, stencil_by_node(&bricks, &s, i as u32), "cell {c}");
+            found += usize::from(got.is_some());
+            missing += usize::from(got.is_none());
+        }
+        assert!(found > 2000 && missing > 200, "{found} stencils, {missing} missing");
+    }
 
     /// Rough data (zigzags and bumps that make Catmull–Rom overshoot) on a sparse level
     /// with holes: the blended field stays inside the widened value range, its gradient
