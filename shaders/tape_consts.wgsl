@@ -21,7 +21,7 @@ const CAVE_TILT: f32 = 0.7853982;
 const CAVE_RAMP: f32 = 0.12;
 const CAVE_FLOOR: f32 = 0.12;
 const CAVE_DIRS: u32 = 5u;
-const CAVE_STEPS: u32 = 3u;
+const CAVE_STEPS: u32 = 6u;
 
 // S-field bricks (src/voxel/sparse.rs): edge, its log2, nodes, a missing brick.
 const SF_BRICK: i32 = 8;

@@ -50,8 +50,10 @@ pub const AO_SAMPLES: u32 = 4;
 /// [`CAVE_TILT`] radians around it.
 pub const CAVE_DIRS: u32 = 5;
 
-/// Samples along each cave-scale direction, evenly out to [`Shading::cave_reach`].
-pub const CAVE_STEPS: u32 = 3;
+/// Samples along each cave-scale direction, evenly out to [`Shading::cave_reach`]: about
+/// 6 m apart on the main job, closer than its tunnel's roof is thick (at 3, 12 m apart,
+/// samples stepped over the roof into the open air above and lit patches of the floor).
+pub const CAVE_STEPS: u32 = 6;
 
 /// Tilt (radians) of the cave-scale directions after the first, from the bent normal.
 pub const CAVE_TILT: f32 = std::f32::consts::FRAC_PI_4;

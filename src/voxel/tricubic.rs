@@ -404,7 +404,10 @@ mod tests {
             found += usize::from(got.is_some());
             missing += usize::from(got.is_none());
         }
-        assert!(found > 2000 && missing > 200, "{found} stencils, {missing} missing");
+        assert!(
+            found > 2000 && missing > 200,
+            "{found} stencils, {missing} missing"
+        );
     }
 
     /// Rough data (zigzags and bumps that make Catmull–Rom overshoot) on a sparse level
