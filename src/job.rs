@@ -123,11 +123,18 @@ fn guides(
     Ok(guides)
 }
 
+/// The most pixels a cell of the job's mesh may span where the view enters the region for
+/// [`view_guides`] to guide the picture by it.
+pub const GUIDE_MAX_CELL_PIXELS: f32 = 8.0;
+
 /// The guides of a picture of `tree` through `camera` ([`Guide`]), as `karstic run` makes
-/// its pictures: when the scene's `job` has a region the camera sees, the part of it the
-/// camera sees ([`seen_cells`]) meshed on the job's grid, then the backdrop ([`guides`]);
-/// none otherwise. What the mesh gives up (solid thinner than a cell) is what the job's
-/// mesh gives up.
+/// its pictures: when the scene's `job` has a region the camera sees, from far enough that
+/// a cell spans at most [`GUIDE_MAX_CELL_PIXELS`] pixels where the view enters it, the part
+/// of it the camera sees ([`seen_cells`]) meshed on the job's grid, then the backdrop
+/// ([`guides`]); none otherwise. What the mesh gives up (solid thinner than a cell) is what
+/// the job's mesh gives up: a few pixels at most. Closer, the solid a cell misses (a low
+/// bump of a near-`T` field, a grazed ledge) would fill patches of the picture, so the
+/// whole field is traced.
 pub fn view_guides(
     tree: &Tree,
     job: Option<&crate::scene::spec::JobSpec>,
@@ -142,6 +149,10 @@ pub fn view_guides(
         return Ok(Vec::new());
     };
     let cell = job.cell.0;
+    let nearest = region.distance(camera.eye) * camera.pixel_angle();
+    if cell > GUIDE_MAX_CELL_PIXELS * nearest {
+        return Ok(Vec::new());
+    }
     let Some(seen) = seen_cells(camera, &region, cell) else {
         return Ok(Vec::new());
     };
