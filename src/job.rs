@@ -7,7 +7,6 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use glam::Vec3;
-use indicatif::ProgressBar;
 
 use crate::analysis::{Masks, Raster, texture_frame};
 use crate::field::{Aabb, Field, Node, NodeId, Tree};
@@ -157,19 +156,7 @@ pub fn view_guides(
         return Ok(Vec::new());
     };
     let grid = GridSpec::with_cell(&seen, cell)?;
-    let opts = MeshOptions {
-        progress: bar(quiet),
-        budget,
-        ..MeshOptions::default()
-    };
-    if let Some(b) = &opts.progress {
-        b.set_length(crate::mesh::polygonize::progress_steps(&grid));
-        b.set_message("meshing the job's region");
-    }
-    let (mesh, _) = polygonize(tree, &grid, &opts)?;
-    if let Some(b) = &opts.progress {
-        b.finish_and_clear();
-    }
+    let (mesh, _) = mesh_with_bar(tree, &grid, budget, quiet, "meshing the job's region")?;
     let backdrop = job.full_cell.map_or(BACKDROP_CELLS * cell, |c| c.0);
     guides(tree, &mesh, &grid, camera, backdrop, budget)
 }
@@ -228,8 +215,29 @@ fn only_terrain_beyond(tree: &Tree, id: NodeId, region: &Aabb) -> bool {
     }
 }
 
-fn bar(quiet: bool) -> Option<ProgressBar> {
-    (!quiet).then(|| progress(0, "", false))
+/// `tree` meshed over `grid` within `budget`, with a progress bar saying `what` unless
+/// `quiet`.
+fn mesh_with_bar(
+    tree: &Tree,
+    grid: &GridSpec,
+    budget: u64,
+    quiet: bool,
+    what: &'static str,
+) -> anyhow::Result<(Mesh, MeshStats)> {
+    let opts = MeshOptions {
+        progress: (!quiet).then(|| progress(0, "", false)),
+        budget,
+        ..MeshOptions::default()
+    };
+    if let Some(b) = &opts.progress {
+        b.set_length(crate::mesh::polygonize::progress_steps(grid));
+        b.set_message(what);
+    }
+    let out = polygonize(tree, grid, &opts)?;
+    if let Some(b) = &opts.progress {
+        b.finish_and_clear();
+    }
+    Ok(out)
 }
 
 /// Runs the job of the tree file `path`. The job section was validated when the file
@@ -300,19 +308,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
 
     let t = Instant::now();
     let grid = GridSpec::with_cell(&region, cell)?;
-    let mesh_opts = MeshOptions {
-        progress: bar(opts.quiet),
-        budget: opts.budget,
-        ..MeshOptions::default()
-    };
-    if let Some(b) = &mesh_opts.progress {
-        b.set_length(crate::mesh::polygonize::progress_steps(&grid));
-        b.set_message("meshing");
-    }
-    let (mesh, mesh_stats) = polygonize(&tree, &grid, &mesh_opts)?;
-    if let Some(b) = &mesh_opts.progress {
-        b.finish_and_clear();
-    }
+    let (mesh, mesh_stats) = mesh_with_bar(&tree, &grid, opts.budget, opts.quiet, "meshing")?;
     stages.push(("polygonize", t.elapsed()));
     // The pictures follow the meshes: the region's, then a coarser one of what the
     // camera sees beyond it (`guide`).
