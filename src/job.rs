@@ -15,7 +15,7 @@ use crate::mesh::export::{self, ExportOptions, Origin};
 use crate::mesh::{GridSpec, Mesh, MeshOptions, MeshStats, polygonize};
 use crate::render::guide::Guide;
 use crate::render::image::write_contact_sheet;
-use crate::render::{Camera, Frame, Materials, Method, RenderSettings, cpu, views};
+use crate::render::{Camera, Frame, Materials, Method, RenderSettings, Shading, cpu, views};
 use crate::scene::{self, SceneFile};
 
 /// What to run.
@@ -69,16 +69,33 @@ pub struct JobReport {
 /// Cell of the backdrop guide, in cells of the region, when the job sets no `full_cell`.
 const BACKDROP_CELLS: f32 = 6.0;
 
+/// A backdrop level reaches as far from the eye as the next level's cells would span
+/// more than this many pixels (the most a cell of the job's mesh may span in a guided
+/// view, [`GUIDE_MAX_CELL_PIXELS`]).
+const BACKDROP_CELL_PIXELS: f32 = GUIDE_MAX_CELL_PIXELS;
+
+/// Ratio of the cells of successive backdrop levels.
+const BACKDROP_GROWTH: f32 = 4.0;
+
+/// Most backdrop levels; the last one takes all the rest of what the camera sees.
+const BACKDROP_LEVELS: usize = 3;
+
 /// The guides of the job's pictures ([`Guide`]): the region's mesh (`mesh` over `grid`),
 /// then, when `camera` sees beyond the region and all the tree has there is terrain
-/// ([`only_terrain_beyond`]), a mesh at `backdrop_cell` of the box of the support it
-/// sees. Marching near the ground where no mesh is costs most of a picture's time; the
-/// backdrop's meshing and BVH cost a small part of it.
+/// ([`only_terrain_beyond`]), backdrop meshes of the box of the support it sees
+/// ([`seen_box`]) swept along the shadow rays towards `sun` (a unit vector; `None`
+/// without shadows) up to the support's top. The backdrop comes in levels, the first at
+/// `backdrop_cell`, each next [`BACKDROP_GROWTH`] times coarser: a level covers that box
+/// within the distance of the eye where its cells span [`BACKDROP_CELL_PIXELS`] pixels,
+/// the last one (at most [`BACKDROP_LEVELS`]) all of it, so the far hills the view grazes
+/// cost a coarse mesh, not a march. Marching near the ground where no mesh is costs most
+/// of a picture's time; the backdrop's meshing and BVH cost a small part of it.
 fn guides(
     tree: &Tree,
     mesh: &Mesh,
     grid: &GridSpec,
     camera: &Camera,
+    sun: Option<Vec3>,
     backdrop_cell: f32,
     budget: u64,
 ) -> anyhow::Result<Vec<Arc<Guide>>> {
@@ -90,34 +107,50 @@ fn guides(
         budget,
     )?)];
     let support = tree.support();
-    let (w, h) = (camera.width - 1, camera.height - 1);
-    let seen = [(0, 0), (w, 0), (0, h), (w, h)]
-        .into_iter()
-        .map(|(i, j)| camera.pixel_ray(i, j))
-        .filter_map(|r| {
-            r.clip(&support)
-                .map(|(t0, t1)| Aabb::from_points([r.at(t0), r.at(t1)]))
-        })
-        .fold(Aabb::from_points([camera.eye]), Aabb::union)
-        .intersection(support);
+    let seen = seen_box(camera, &support);
+    let seen = match sun {
+        Some(sun) if sun.z > 0.0 && !seen.is_empty() => {
+            let rise = sun * ((support.max.z - seen.min.z) / sun.z);
+            seen.union(Aabb::new(seen.min + rise, seen.max + rise))
+        }
+        _ => seen,
+    }
+    .intersection(support);
     let beyond = !region.contains_box(&seen);
     if beyond
         && !seen.is_empty()
         && backdrop_cell > grid.spacing.max_element()
         && only_terrain_beyond(tree, tree.root(), &region)
     {
-        let coarse = GridSpec::with_cell(&seen, backdrop_cell)?;
         let opts = MeshOptions {
             budget,
             ..MeshOptions::default()
         };
-        let (backdrop, _) = polygonize(tree, &coarse, &opts)?;
-        guides.push(Arc::new(Guide::from_mesh(
-            &backdrop,
-            &coarse.bounds(),
-            coarse.spacing.max_element(),
-            budget,
-        )?));
+        // Each level reaches as far as the next one's cells would span more than
+        // BACKDROP_CELL_PIXELS pixels; the last one takes the rest.
+        let mut cell = backdrop_cell;
+        for level in 0..BACKDROP_LEVELS {
+            let next = cell * BACKDROP_GROWTH;
+            let reach = Vec3::splat(next / (BACKDROP_CELL_PIXELS * camera.pixel_angle()));
+            let near = match level + 1 < BACKDROP_LEVELS {
+                true => seen.intersection(Aabb::new(camera.eye - reach, camera.eye + reach)),
+                false => seen,
+            };
+            if !near.is_empty() {
+                let coarse = GridSpec::with_cell(&near, cell)?;
+                let (backdrop, _) = polygonize(tree, &coarse, &opts)?;
+                guides.push(Arc::new(Guide::from_mesh(
+                    &backdrop,
+                    &coarse.bounds(),
+                    coarse.spacing.max_element(),
+                    budget,
+                )?));
+            }
+            if near.contains_box(&seen) {
+                break;
+            }
+            cell = next;
+        }
     }
     Ok(guides)
 }
@@ -138,6 +171,7 @@ pub fn view_guides(
     tree: &Tree,
     job: Option<&crate::scene::spec::JobSpec>,
     camera: &Camera,
+    sun: Option<Vec3>,
     budget: u64,
     quiet: bool,
 ) -> anyhow::Result<Vec<Arc<Guide>>> {
@@ -158,7 +192,7 @@ pub fn view_guides(
     let grid = GridSpec::with_cell(&seen, cell)?;
     let (mesh, _) = mesh_with_bar(tree, &grid, budget, quiet, "meshing the job's region")?;
     let backdrop = job.full_cell.map_or(BACKDROP_CELLS * cell, |c| c.0);
-    guides(tree, &mesh, &grid, camera, backdrop, budget)
+    guides(tree, &mesh, &grid, camera, sun, backdrop, budget)
 }
 
 /// Rays per side of the image [`seen_cells`] follows.
@@ -170,16 +204,7 @@ const SEEN_RAYS: u32 = 17;
 /// camera sees, which is then traced without a guide: a guide speeds the march up, the
 /// picture does not depend on where it stops.
 fn seen_cells(camera: &Camera, region: &Aabb, cell: f32) -> Option<Aabb> {
-    let n = SEEN_RAYS - 1;
-    let (w, h) = (camera.width - 1, camera.height - 1);
-    let seen = (0..=n)
-        .flat_map(|a| (0..=n).map(move |b| (a * w / n, b * h / n)))
-        .map(|(i, j)| camera.pixel_ray(i, j))
-        .filter_map(|r| {
-            r.clip(region)
-                .map(|(t0, t1)| Aabb::from_points([r.at(t0), r.at(t1)]))
-        })
-        .fold(Aabb::EMPTY, Aabb::union);
+    let seen = seen_box(camera, region);
     if seen.is_empty() {
         return None;
     }
@@ -187,6 +212,21 @@ fn seen_cells(camera: &Camera, region: &Aabb, cell: f32) -> Option<Aabb> {
     let hi = ((seen.max - region.min) / cell).ceil() + Vec3::ONE;
     let snapped = Aabb::new(region.min + lo * cell, region.min + hi * cell);
     Some(snapped.intersection(*region))
+}
+
+/// The box of the spans through `b` of a grid of [`SEEN_RAYS`]² pixel rays of `camera`
+/// (empty when none crosses it): about the part of `b` the camera sees.
+fn seen_box(camera: &Camera, b: &Aabb) -> Aabb {
+    let n = SEEN_RAYS - 1;
+    let (w, h) = (camera.width - 1, camera.height - 1);
+    (0..=n)
+        .flat_map(|a| (0..=n).map(move |c| (a * w / n, c * h / n)))
+        .map(|(i, j)| camera.pixel_ray(i, j))
+        .filter_map(|r| {
+            r.clip(b)
+                .map(|(t0, t1)| Aabb::from_points([r.at(t0), r.at(t1)]))
+        })
+        .fold(Aabb::EMPTY, Aabb::union)
 }
 
 /// True when every part of the subtree `id` whose support reaches outside `region` is a
@@ -319,7 +359,8 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
                 .as_ref()
                 .and_then(|j| j.full_cell.map(|c| c.0))
                 .unwrap_or(BACKDROP_CELLS * cell);
-            let guides = guides(&tree, &mesh, &grid, camera, backdrop_cell, opts.budget)?;
+            let sun = Some(Shading::for_scene(&region).sun);
+            let guides = guides(&tree, &mesh, &grid, camera, sun, backdrop_cell, opts.budget)?;
             stages.push(("guides", t.elapsed()));
             guides
         }

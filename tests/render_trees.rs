@@ -744,7 +744,8 @@ fn view_guides_cover_what_the_camera_sees_of_the_region() {
     let job = loaded.scene.job.as_ref();
     let r = job.unwrap().region.unwrap();
     let region = Aabb::new(r.min.0, r.max.0);
-    let guides = |cam: &Camera| karstic::job::view_guides(tree, job, cam, 1 << 32, true).unwrap();
+    let guides =
+        |cam: &Camera| karstic::job::view_guides(tree, job, cam, None, 1 << 32, true).unwrap();
     let volume = |b: &Aabb| b.size().x * b.size().y * b.size().z;
 
     let main = guides(&main_cam);
@@ -789,8 +790,74 @@ fn view_guides_cover_what_the_camera_sees_of_the_region() {
     let away = Camera::look_at(outside, outside + Vec3::new(1.0, -1.0, 0.2), 40.0, 96, 54).unwrap();
     assert!(guides(&away).is_empty());
     assert!(
-        karstic::job::view_guides(tree, None, &main_cam, 1 << 32, true)
+        karstic::job::view_guides(tree, None, &main_cam, None, 1 << 32, true)
             .unwrap()
             .is_empty()
+    );
+}
+
+/// Beyond the job's region, `job::view_guides` meshes the terrain the camera sees in
+/// backdrop levels four times coarser each, swept towards the sun: on the main view the
+/// points of every primary ray's span in the support and of every shadow ray from its
+/// hit up to the support's top lie in a guide (there the ray follows a mesh instead of
+/// marching the field). Without the sun, the shadow rays leave the guides.
+#[test]
+fn backdrop_guides_cover_the_view_and_its_shadow_rays() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/jacksboro_caves.ron");
+    let loaded = karstic::scene::load(&path).unwrap();
+    let (compiled, cam, settings) = job_view(&path, 128, 72);
+    let tree = &compiled.tree;
+    let job = loaded.scene.job.as_ref();
+    let sun = settings.shading.sun;
+    let support = tree.support();
+    let guides = |sun| karstic::job::view_guides(tree, job, &cam, sun, 1 << 32, true).unwrap();
+    let lit = guides(Some(sun));
+    assert!(
+        lit.len() >= 3,
+        "the region and two backdrop levels: {lit:?}"
+    );
+    for pair in lit[1..].windows(2) {
+        let ratio = pair[1].cell() / pair[0].cell();
+        assert!((3.9..4.1).contains(&ratio), "{lit:?}");
+    }
+    let (depth, _) = cpu::depth_guided(tree, &lit, &cam, &settings.trace);
+    let covered = |guides: &[std::sync::Arc<Guide>], shadow: bool| {
+        let (mut inside, mut all) = (0, 0);
+        for (k, &t) in depth.iter().enumerate() {
+            let ray = cam.pixel_ray(k as u32 % cam.width, k as u32 / cam.width);
+            let ray = match shadow {
+                false => ray,
+                true if t.is_finite() => karstic::render::Ray {
+                    origin: ray.at(t),
+                    dir: sun,
+                },
+                true => continue,
+            };
+            let Some((t0, t1)) = ray.clip(&support) else {
+                continue;
+            };
+            for s in 0..=16 {
+                let p = ray.at(t0 + (t1 - t0) * s as f32 / 16.0);
+                all += 1;
+                inside += usize::from(guides.iter().any(|g| g.bounds().contains(p)));
+            }
+        }
+        assert!(all > 50_000, "{all} points");
+        inside as f64 / all as f64
+    };
+    let primary = covered(&lit, false);
+    let shadows = covered(&lit, true);
+    assert!(
+        primary > 0.99,
+        "{primary} of the primary rays' points in a guide"
+    );
+    assert!(
+        shadows > 0.995,
+        "{shadows} of the shadow rays' points in a guide"
+    );
+    let unlit = covered(&guides(None), true);
+    assert!(
+        unlit < 0.95,
+        "{unlit} of the shadow rays' points without the sun's sweep"
     );
 }

@@ -89,6 +89,7 @@ pub(super) fn run(args: RenderArgs) -> anyhow::Result<()> {
             tree,
             file.scene.job.as_ref(),
             &camera,
+            settings.shading.shadows.then_some(settings.shading.sun),
             args.budget.max_memory,
             args.quiet,
         )

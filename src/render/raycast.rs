@@ -57,6 +57,25 @@ impl MeshRaycaster {
             .then_some(hit.t)
     }
 
+    /// True when `ray` enters the solid through a face with `t` in `[t0, t1]`: a face
+    /// whose outward side (counter-clockwise) faces the ray. Faces the ray leaves the solid
+    /// through are passed: a shadow ray starting a hair under the mesh of the surface it
+    /// leaves is not shadowed by it.
+    pub fn enters_within(&self, ray: &Ray, (t0, t1): (f32, f32)) -> bool {
+        if self.triangles.is_empty() || !(t0 <= t1) {
+            return false;
+        }
+        let dir = Vec3A::from(ray.dir);
+        let r = obvhs::ray::Ray::new(Vec3A::from(ray.origin), dir, t0, t1);
+        !self.bvh.ray_traverse_miss(r, |r, id| {
+            let tri = &self.triangles[self.bvh.primitive_indices[id] as usize];
+            match (tri.v1 - tri.v0).cross(tri.v2 - tri.v0).dot(dir) < 0.0 {
+                true => tri.intersect(r),
+                false => f32::INFINITY,
+            }
+        })
+    }
+
     /// The depth image through `camera`: distance to the nearest face per pixel, `∞` on a
     /// miss (the same layout as [`crate::render::Frame::depth`]).
     pub fn depth(&self, camera: &Camera) -> Vec<f32> {

@@ -107,6 +107,12 @@ const MAX_REFINE: u32 = 12;
 /// `t` is reused, only the bound is asked again.
 const SHRINK: f32 = 0.25;
 
+/// How far from a mesh face, in cells of its mesh, the surface is sought first
+/// ([`bracket`]): a Marching Cubes face lies far closer to the surface than a cell, and
+/// from a quarter of a cell false position has less to do than from a cell (the main
+/// job's view: 5.2 evaluations a ray, from 5.7).
+const BRACKET_NEAR: f32 = 0.25;
+
 /// First candidate segment, as a fraction of the clipped span.
 const FIRST_DELTA: f32 = 1.0 / 16.0;
 
@@ -224,23 +230,12 @@ impl<'f> Tracer<'f> {
         }
         let h = guide.cell();
         if !locate {
-            // A shadow query: past its first metres (two cells of the finest guide,
-            // at most a cell of this one: the faces there are those of the surface it
-            // leaves), any face of the mesh occludes.
-            let from = match span.0 < a {
-                true => a,
-                false => {
-                    let reach = h.min(2.0 * self.guides[0].cell());
-                    let near = self.march_span(ray, (a, (a + reach).min(b)), params, false);
-                    steps += near.steps;
-                    if near.hit() {
-                        return near.with_steps(steps);
-                    }
-                    a + reach
-                }
-            };
-            if let Some(t) = guide.first_face(ray, (from, b)) {
-                return Trace { t, steps };
+            // A shadow query: a face through which the ray enters the mesh's solid
+            // occludes. Faces it leaves through do not: near its start they are those of
+            // the surface it leaves, which the mesh follows to within a cell, above or
+            // below the field's.
+            if guide.enters(ray, (a, b)) {
+                return Trace { t: b, steps };
             }
             if b < span.1 {
                 let after = self.march_guided(level + 1, ray, (b, span.1), params, false);
@@ -275,9 +270,15 @@ impl<'f> Tracer<'f> {
                     let found = match &mut self.line {
                         Some(line) => {
                             line.restrict(ray.origin, ray.dir, span);
-                            bracket(line, span, 0.1 * tol, locate)
+                            bracket(line, t, span, BRACKET_NEAR * h, 0.1 * tol)
                         }
-                        None => bracket(&mut OnRay(self.field, ray), span, 0.1 * tol, locate),
+                        None => bracket(
+                            &mut OnRay(self.field, ray),
+                            t,
+                            span,
+                            BRACKET_NEAR * h,
+                            0.1 * tol,
+                        ),
                     };
                     let (from, n) = match found {
                         Bracket::Hit(tr) => return tr.with_steps(steps + tr.steps),
@@ -434,20 +435,48 @@ enum Bracket {
     Solid(u32),
 }
 
-/// Tries to bracket the surface between the ends of `span`: the first in the air, the
-/// second in the solid. Then it is located by false position to `width` (`locate`), or
-/// the second end is returned.
-fn bracket(along: &mut impl Along, (s0, s1): (f32, f32), width: f32, locate: bool) -> Bracket {
-    let (e0, e1) = (along.value(s0) - ISO, along.value(s1) - ISO);
-    match (e0 < 0.0, e1 > 0.0) {
-        (true, true) if !locate => Bracket::Hit(Trace { t: s1, steps: 2 }),
-        (true, true) => {
-            let (t, n) = refine(along, (s0, e0), (s1, e1), width);
-            Bracket::Hit(Trace { t, steps: 2 + n })
-        }
-        (true, false) => Bracket::Air(2),
-        (false, _) => Bracket::Solid(2),
+/// Tries to bracket the surface around `t`, a mesh face's parameter, within `span`. The
+/// span's start must be in the air (else the surface came earlier: [`Bracket::Solid`]);
+/// then the field at the face tells on which side of it the surface lies, and there it
+/// is sought `near` away first (a mesh's faces lie far closer to the surface than a
+/// cell: a short bracket leaves false position less to do), then at the span's end. A
+/// bracket found is located by false position to `width`.
+fn bracket(along: &mut impl Along, t: f32, (s0, s1): (f32, f32), near: f32, width: f32) -> Bracket {
+    let e0 = along.value(s0) - ISO;
+    if e0 > 0.0 {
+        return Bracket::Solid(1);
     }
+    let t = t.clamp(s0, s1);
+    let e = along.value(t) - ISO;
+    let mut steps = 2;
+    // Solid at the face: the surface lies between the start and the face, `near` before
+    // it first. Air: after it, `near` after it first, else by the span's end.
+    let (mut last, tries) = match e > 0.0 {
+        true => ((s0, e0), [t - near, t]),
+        false => ((t, e), [t + near, s1]),
+    };
+    for s in tries {
+        let s = s.clamp(s0, s1);
+        if s <= last.0 {
+            continue;
+        }
+        let es = match s == t {
+            true => e,
+            false => {
+                steps += 1;
+                along.value(s) - ISO
+            }
+        };
+        if es > 0.0 {
+            let (t, n) = refine(along, last, (s, es), width);
+            return Bracket::Hit(Trace {
+                t,
+                steps: steps + n,
+            });
+        }
+        last = (s, es);
+    }
+    Bracket::Air(steps)
 }
 
 /// `|e| / λ`, infinite where the field is flat.
