@@ -15,10 +15,12 @@
 //!   the surface, false position locates it (a few evaluations where the march near a
 //!   surface takes dozens), else the march takes over from a cell before the face.
 //! * A shadow ray does not march: it is occluded when it enters the mesh's solid through
-//!   a face turned towards it. The faces it leaves through are not asked: near its start,
-//!   they are the mesh's copy of the surface it leaves, which lies within a cell of the
-//!   field's, above or below it. (Marching the first two cells in the field instead, as
-//!   this did before, took a third of the main job's view and drew the same picture.)
+//!   a face turned towards it, or when it starts inside that solid and is still inside
+//!   two cells on. A face it leaves through within those two cells is the mesh's copy of
+//!   the surface it leaves, which lies within a cell of the field's, above or below it;
+//!   still inside beyond them, the ray is going through rock (from the foot of a ledge's
+//!   riser, say). (Marching the first two cells in the field instead, as this did
+//!   before, took a third of the main job's view for the same picture.)
 //!
 //! What the tracer finds is the field's own surface (its normals, materials and occlusion
 //! are the field's), at the field's tolerance; what it gives up is what the mesh gives
@@ -129,10 +131,17 @@ impl Guide {
         self.faces.first_hit_within(ray, span)
     }
 
-    /// True when `ray` enters the mesh's solid with `t` in `span`
-    /// ([`MeshRaycaster::enters_within`]).
-    pub fn enters(&self, ray: &Ray, span: (f32, f32)) -> bool {
-        self.faces.enters_within(ray, span)
+    /// True when the mesh hides the sun from a shadow ray over `span`: the ray enters the
+    /// mesh's solid through a face turned towards it, or it starts inside that solid
+    /// (under the mesh's copy of the surface it leaves, which lies within a cell of the
+    /// field's) and is still inside `reach` further on, going through rock, not
+    /// leaving a surface ([`MeshRaycaster::first_crossing_within`]).
+    pub fn hides(&self, ray: &Ray, span: (f32, f32), reach: f32) -> bool {
+        match self.faces.first_crossing_within(ray, span) {
+            None => false,
+            Some((_, true)) => true,
+            Some((t, false)) => t - span.0 > reach || self.faces.enters_within(ray, (t, span.1)),
+        }
     }
 
     /// The cell holding `p` (unclamped).
@@ -335,57 +344,83 @@ mod tests {
     }
 
     #[test]
-    fn shadow_rays_are_stopped_by_faces_they_enter_through_only() {
+    fn shadow_rays_are_hidden_by_faces_they_enter_through_or_by_rock() {
         // A floor at z = 1 and, 20 m along x, a ledge whose underside is at z = 4 and
-        // top at z = 6, wound counter-clockwise seen from outside (the air).
-        let quad = |z: f32, x0: f32, x1: f32, up: bool| {
-            let [a, b, c, d] = [
-                Vec3::new(x0, -50.0, z),
-                Vec3::new(x1, -50.0, z),
-                Vec3::new(x1, 50.0, z),
-                Vec3::new(x0, 50.0, z),
-            ];
-            match up {
-                true => [[a, b, c], [a, c, d]],
-                false => [[a, c, b], [a, d, c]],
-            }
+        // top at z = 6, wound counter-clockwise seen from outside (the air); at x = 40–45,
+        // y = 30–50, a wall 19 m high standing on the floor.
+        let quad = |[a, b, c, d]: [Vec3; 4]| [[a, b, c], [a, c, d]];
+        let flat = |z: f32, x0: f32, x1: f32, up: bool| {
+            let (a, b) = (Vec3::new(x0, -50.0, z), Vec3::new(x1, -50.0, z));
+            let (c, d) = (Vec3::new(x1, 50.0, z), Vec3::new(x0, 50.0, z));
+            quad(if up { [a, b, c, d] } else { [a, d, c, b] })
         };
-        let faces: Vec<[Vec3; 3]> = [
-            quad(1.0, -50.0, 50.0, true),
-            quad(4.0, 20.0, 30.0, false),
-            quad(6.0, 20.0, 30.0, true),
+        let v = Vec3::new;
+        let wall = [
+            quad([
+                v(40., 30., 1.),
+                v(40., 30., 20.),
+                v(40., 50., 20.),
+                v(40., 50., 1.),
+            ]),
+            quad([
+                v(45., 30., 1.),
+                v(45., 50., 1.),
+                v(45., 50., 20.),
+                v(45., 30., 20.),
+            ]),
+            quad([
+                v(40., 30., 20.),
+                v(45., 30., 20.),
+                v(45., 50., 20.),
+                v(40., 50., 20.),
+            ]),
         ]
         .concat();
+        let faces: Vec<[Vec3; 3]> = [
+            flat(1.0, -50.0, 40.0, true),
+            flat(4.0, 20.0, 30.0, false),
+            flat(6.0, 20.0, 30.0, true),
+        ]
+        .concat()
+        .into_iter()
+        .chain(wall)
+        .collect();
         let region = Aabb::new(Vec3::splat(-50.0), Vec3::splat(50.0));
         let g = Guide::from_mesh(&mesh(&faces), &region, 1.0, 1 << 20).unwrap();
-        let shadow = |origin: Vec3, to: Vec3| {
+        let hidden = |origin: Vec3, to: Vec3| {
             let ray = Ray {
                 origin,
                 dir: (to - origin).normalize(),
             };
-            g.enters(&ray, ray.clip(&g.bounds()).unwrap())
+            g.hides(&ray, ray.clip(&g.bounds()).unwrap(), 2.0)
         };
         // Starting a hair under the floor's face (the mesh of the surface it leaves),
         // a ray climbing away passes out through it: lit.
-        assert!(!shadow(
+        assert!(!hidden(
             Vec3::new(0.0, 0.0, 0.98),
             Vec3::new(-10.0, 0.0, 10.0)
         ));
         // The same ray towards the ledge enters its underside: in shadow.
-        assert!(shadow(Vec3::new(0.0, 0.0, 0.98), Vec3::new(30.0, 0.0, 4.5)));
-        // Over the ledge, or from inside it going up, nothing is entered.
-        assert!(!shadow(
+        assert!(hidden(Vec3::new(0.0, 0.0, 0.98), Vec3::new(30.0, 0.0, 4.5)));
+        // Over the ledge, or from inside it going up out of it, nothing is entered.
+        assert!(!hidden(
             Vec3::new(0.0, 0.0, 1.02),
             Vec3::new(25.0, 0.0, 9.0)
         ));
-        assert!(!shadow(
+        assert!(!hidden(
             Vec3::new(25.0, 0.0, 5.0),
             Vec3::new(26.0, 0.0, 40.0)
         ));
         // From under the ledge straight up: its underside.
-        assert!(shadow(
+        assert!(hidden(
             Vec3::new(25.0, 0.0, 1.02),
             Vec3::new(25.0, 0.0, 40.0)
+        ));
+        // From the foot of the wall, a hair inside the mesh's solid, into the rock: no
+        // face is entered, but the ray leaves the solid only 9 m on, beyond the reach.
+        assert!(hidden(
+            Vec3::new(40.02, 40.0, 0.98),
+            Vec3::new(60.0, 40.0, 30.0)
         ));
     }
 

@@ -57,10 +57,29 @@ impl MeshRaycaster {
             .then_some(hit.t)
     }
 
+    /// The nearest face along `ray` with `t` in `[t0, t1]`, if any: its `t`, and whether
+    /// the ray enters the solid there (the face's outward side, counter-clockwise, faces
+    /// the ray) or leaves it.
+    pub fn first_crossing_within(&self, ray: &Ray, (t0, t1): (f32, f32)) -> Option<(f32, bool)> {
+        if self.triangles.is_empty() || !(t0 <= t1) {
+            return None;
+        }
+        let r = obvhs::ray::Ray::new(Vec3A::from(ray.origin), Vec3A::from(ray.dir), t0, t1);
+        let mut hit = RayHit::none();
+        let found = self.bvh.ray_traverse(r, &mut hit, |r, id| {
+            self.triangles[self.bvh.primitive_indices[id] as usize].intersect(r)
+        });
+        found.then(|| {
+            let tri =
+                &self.triangles[self.bvh.primitive_indices[hit.primitive_id as usize] as usize];
+            let n = (tri.v1 - tri.v0).cross(tri.v2 - tri.v0);
+            (hit.t, n.dot(Vec3A::from(ray.dir)) < 0.0)
+        })
+    }
+
     /// True when `ray` enters the solid through a face with `t` in `[t0, t1]`: a face
     /// whose outward side (counter-clockwise) faces the ray. Faces the ray leaves the solid
-    /// through are passed: a shadow ray starting a hair under the mesh of the surface it
-    /// leaves is not shadowed by it.
+    /// through are passed.
     pub fn enters_within(&self, ray: &Ray, (t0, t1): (f32, f32)) -> bool {
         if self.triangles.is_empty() || !(t0 <= t1) {
             return false;

@@ -230,11 +230,13 @@ impl<'f> Tracer<'f> {
         }
         let h = guide.cell();
         if !locate {
-            // A shadow query: a face through which the ray enters the mesh's solid
-            // occludes. Faces it leaves through do not: near its start they are those of
-            // the surface it leaves, which the mesh follows to within a cell, above or
-            // below the field's.
-            if guide.enters(ray, (a, b)) {
+            // A shadow query, answered by the mesh alone (`Guide::hides`): a face through
+            // which the ray enters the mesh's solid occludes, and so does being inside
+            // it two cells of the finest guide on (at most a cell of this one). Faces it
+            // leaves through before that do not: they are those of the surface it
+            // leaves, which the mesh follows to within a cell, above or below the
+            // field's.
+            if guide.hides(ray, (a, b), h.min(2.0 * self.guides[0].cell())) {
                 return Trace { t: b, steps };
             }
             if b < span.1 {
