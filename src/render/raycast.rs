@@ -47,42 +47,27 @@ impl MeshRaycaster {
     }
 
     /// Distance along `ray` to the nearest face with `t` in `[t0, t1]`, if any.
-    pub fn first_hit_within(&self, ray: &Ray, (t0, t1): (f32, f32)) -> Option<f32> {
-        if self.triangles.is_empty() || !(t0 <= t1) {
-            return None;
-        }
-        let r = obvhs::ray::Ray::new(Vec3A::from(ray.origin), Vec3A::from(ray.dir), t0, t1);
-        let mut hit = RayHit::none();
-        self.bvh
-            .ray_traverse(r, &mut hit, |r, id| {
-                self.triangles[self.bvh.primitive_indices[id] as usize].intersect(r)
-            })
-            .then_some(hit.t)
+    pub fn first_hit_within(&self, ray: &Ray, span: (f32, f32)) -> Option<f32> {
+        self.first_crossing_within(ray, span).map(|(t, _)| t)
     }
 
     /// The nearest face along `ray` with `t` in `[t0, t1]`, if any: its `t`, and whether
-    /// the ray enters the solid there (the face's outward side, counter-clockwise, faces
-    /// the ray) or leaves it.
+    /// the ray enters the solid there ([`enters`]) or leaves it.
     pub fn first_crossing_within(&self, ray: &Ray, (t0, t1): (f32, f32)) -> Option<(f32, bool)> {
         if self.triangles.is_empty() || !(t0 <= t1) {
             return None;
         }
-        let r = obvhs::ray::Ray::new(Vec3A::from(ray.origin), Vec3A::from(ray.dir), t0, t1);
+        let dir = Vec3A::from(ray.dir);
+        let r = obvhs::ray::Ray::new(Vec3A::from(ray.origin), dir, t0, t1);
         let mut hit = RayHit::none();
-        let found = self.bvh.ray_traverse(r, &mut hit, |r, id| {
-            self.triangles[self.bvh.primitive_indices[id] as usize].intersect(r)
-        });
-        found.then(|| {
-            let tri =
-                &self.triangles[self.bvh.primitive_indices[hit.primitive_id as usize] as usize];
-            let n = (tri.v1 - tri.v0).cross(tri.v2 - tri.v0);
-            (hit.t, n.dot(Vec3A::from(ray.dir)) < 0.0)
-        })
+        let found = self
+            .bvh
+            .ray_traverse(r, &mut hit, |r, id| self.face(id).intersect(r));
+        found.then(|| (hit.t, enters(self.face(hit.primitive_id as usize), dir)))
     }
 
-    /// True when `ray` enters the solid through a face with `t` in `[t0, t1]`: a face
-    /// whose outward side (counter-clockwise) faces the ray. Faces the ray leaves the solid
-    /// through are passed.
+    /// True when `ray` enters the solid through a face with `t` in `[t0, t1]` ([`enters`]).
+    /// Faces the ray leaves the solid through are passed.
     pub fn enters_within(&self, ray: &Ray, (t0, t1): (f32, f32)) -> bool {
         if self.triangles.is_empty() || !(t0 <= t1) {
             return false;
@@ -90,12 +75,17 @@ impl MeshRaycaster {
         let dir = Vec3A::from(ray.dir);
         let r = obvhs::ray::Ray::new(Vec3A::from(ray.origin), dir, t0, t1);
         !self.bvh.ray_traverse_miss(r, |r, id| {
-            let tri = &self.triangles[self.bvh.primitive_indices[id] as usize];
-            match (tri.v1 - tri.v0).cross(tri.v2 - tri.v0).dot(dir) < 0.0 {
+            let tri = self.face(id);
+            match enters(tri, dir) {
                 true => tri.intersect(r),
                 false => f32::INFINITY,
             }
         })
+    }
+
+    /// The face at BVH primitive slot `id`.
+    fn face(&self, id: usize) -> &Triangle {
+        &self.triangles[self.bvh.primitive_indices[id] as usize]
     }
 
     /// The depth image through `camera`: distance to the nearest face per pixel, `∞` on a
@@ -110,4 +100,10 @@ impl MeshRaycaster {
             })
             .collect()
     }
+}
+
+/// True when a ray along `dir` crossing `tri` enters the solid: the face's outward side
+/// (counter-clockwise, as the mesher winds faces) faces the ray.
+fn enters(tri: &Triangle, dir: Vec3A) -> bool {
+    (tri.v1 - tri.v0).cross(tri.v2 - tri.v0).dot(dir) < 0.0
 }

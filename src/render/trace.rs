@@ -431,9 +431,9 @@ fn march(
 enum Bracket {
     /// The surface, located (its evaluations counted).
     Hit(Trace),
-    /// No crossing between the ends, the first in the air (evaluations spent).
+    /// No crossing found, the span's start in the air (evaluations spent).
     Air(u32),
-    /// The first end in the solid (evaluations spent).
+    /// The span's start in the solid (evaluations spent).
     Solid(u32),
 }
 
