@@ -1,6 +1,7 @@
 //! The main job (`karstic run`): a tree file in, a mesh of its region, its texture masks
 //! and a preview image out, with the time of every stage.
 
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -80,9 +81,9 @@ const BACKDROP_GROWTH: f32 = 4.0;
 /// Most backdrop levels; the last one takes all the rest of what the camera sees.
 const BACKDROP_LEVELS: usize = 3;
 
-/// The guides of the job's pictures ([`Guide`]): the region's mesh (`mesh` over `grid`),
-/// then, when `camera` sees beyond the region and all the tree has there is terrain
-/// ([`only_terrain_beyond`]), backdrop meshes of the box of the support it sees
+/// The guides of the job's pictures ([`Guide`]): the region's mesh (`region_mesh` over
+/// `grid`), then, when `camera` sees beyond the region and all the tree has there is
+/// terrain ([`only_terrain_beyond`]), backdrop meshes of the box of the support it sees
 /// ([`seen_box`]) swept along the shadow rays towards `sun` (a unit vector; `None`
 /// without shadows) up to the support's top. The backdrop comes in levels, the first at
 /// `backdrop_cell`, each next [`BACKDROP_GROWTH`] times coarser: a level covers that box
@@ -90,9 +91,13 @@ const BACKDROP_LEVELS: usize = 3;
 /// the last one (at most [`BACKDROP_LEVELS`]) all of it, so the far hills the view grazes
 /// cost a coarse mesh, not a march. Marching near the ground where no mesh is costs most
 /// of a picture's time; the backdrop's meshing and BVH cost a small part of it.
-fn guides(
+///
+/// The region's guide (`region_mesh` meshes it or lends the mesh already made) and the
+/// backdrop are made side by side: each ends in a BVH build on one core, which the other
+/// one's meshing overlaps.
+fn guides<'m>(
     tree: &Tree,
-    mesh: &Mesh,
+    region_mesh: impl FnOnce() -> anyhow::Result<Cow<'m, Mesh>> + Send,
     grid: &GridSpec,
     camera: &Camera,
     sun: Option<Vec3>,
@@ -100,12 +105,30 @@ fn guides(
     budget: u64,
 ) -> anyhow::Result<Vec<Arc<Guide>>> {
     let region = grid.bounds();
-    let mut guides = vec![Arc::new(Guide::from_mesh(
-        mesh,
-        &region,
-        grid.spacing.max_element(),
-        budget,
-    )?)];
+    let (first, backdrop) = rayon::join(
+        || -> anyhow::Result<Arc<Guide>> {
+            let mesh = region_mesh()?;
+            let cell = grid.spacing.max_element();
+            Ok(Arc::new(Guide::from_mesh(&mesh, &region, cell, budget)?))
+        },
+        || backdrop_guides(tree, grid, camera, sun, backdrop_cell, budget),
+    );
+    let mut guides = vec![first?];
+    guides.extend(backdrop?);
+    Ok(guides)
+}
+
+/// The backdrop guides of [`guides`] beyond the region of `grid`.
+fn backdrop_guides(
+    tree: &Tree,
+    grid: &GridSpec,
+    camera: &Camera,
+    sun: Option<Vec3>,
+    backdrop_cell: f32,
+    budget: u64,
+) -> anyhow::Result<Vec<Arc<Guide>>> {
+    let region = grid.bounds();
+    let mut guides = Vec::new();
     let support = tree.support();
     let seen = seen_box(camera, &support);
     let seen = match sun {
@@ -190,9 +213,12 @@ pub fn view_guides(
         return Ok(Vec::new());
     };
     let grid = GridSpec::with_cell(&seen, cell)?;
-    let (mesh, _) = mesh_with_bar(tree, &grid, budget, quiet, "meshing the job's region")?;
     let backdrop = job.full_cell.map_or(BACKDROP_CELLS * cell, |c| c.0);
-    guides(tree, &mesh, &grid, camera, sun, backdrop, budget)
+    let mesh = || {
+        let (mesh, _) = mesh_with_bar(tree, &grid, budget, quiet, "meshing the job's region")?;
+        Ok(Cow::Owned(mesh))
+    };
+    guides(tree, mesh, &grid, camera, sun, backdrop, budget)
 }
 
 /// Rays per side of the image [`seen_cells`] follows.
@@ -360,7 +386,16 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
                 .and_then(|j| j.full_cell.map(|c| c.0))
                 .unwrap_or(BACKDROP_CELLS * cell);
             let sun = Some(Shading::for_scene(&region).sun);
-            let guides = guides(&tree, &mesh, &grid, camera, sun, backdrop_cell, opts.budget)?;
+            let region_mesh = || Ok(Cow::Borrowed(&mesh));
+            let guides = guides(
+                &tree,
+                region_mesh,
+                &grid,
+                camera,
+                sun,
+                backdrop_cell,
+                opts.budget,
+            )?;
             stages.push(("guides", t.elapsed()));
             guides
         }

@@ -576,3 +576,52 @@ fn replace_bounds_hold_across_the_transition() {
     assert_eq!(t.lipschitz_box(&outside), 0.0);
     assert_eq!(t.interval(&core), Interval::point(0.9));
 }
+
+/// A replacement whose surface lies above its base's (a ball raised by 3 m): across the
+/// transition the mix crosses `T` between the two children's surfaces, in the gap between
+/// their own z-bands, and the replace node's bands must hold those crossings too. Where
+/// the children agree on the side (inside both balls, above both) the gaps are skipped.
+#[test]
+fn replace_bands_hold_the_mix_between_its_childrens_surfaces() {
+    let mut b = TreeBuilder::new();
+    let ball = |c: Vec3| Arc::new(Ball { c, r: 8.0, e: 1.0 });
+    let base = b.leaf(ball(Vec3::ZERO), None);
+    let by = b.leaf(ball(Vec3::new(0.0, 0.0, 3.0)), None);
+    let region = Aabb::new(Vec3::new(-2.0, -10.0, -20.0), Vec3::new(20.0, 10.0, 20.0));
+    let root = b.replace(base, by, Transition::new(region, 3.0), None);
+    let t = b.build(root);
+    let zr = Interval::new(-20.0, 20.0);
+    let (mut between, mut crossings) = (0, 0);
+    for i in 0..24 {
+        // Columns across the transition at the region's −x face and into its core.
+        let x = -2.5 + 0.25 * i as f32;
+        let fp = Rect::new(glam::Vec2::new(x, 0.0), glam::Vec2::new(x + 0.1, 0.1));
+        let bands_of = |id: NodeId| {
+            let mut bands = ZBands::new();
+            t.z_bands_at(id, &fp, zr, &mut bands);
+            bands
+        };
+        let (bands, own_base, own_by) = (bands_of(root), bands_of(base), bands_of(by));
+        let mut last = t.value(Vec3::new(x, 0.0, zr.lo)) - ISO;
+        for k in 1..=4000 {
+            let z = zr.lo + k as f32 * 0.01;
+            let v = t.value(Vec3::new(x, 0.0, z)) - ISO;
+            if (v > 0.0) != (last > 0.0) {
+                crossings += 1;
+                assert!(
+                    bands.contains(z) || bands.contains(z - 0.01),
+                    "crossing at ({x}, 0, {z}) outside {bands:?}"
+                );
+                if !own_base.contains(z) && !own_by.contains(z) {
+                    between += 1;
+                }
+            }
+            last = v;
+        }
+    }
+    assert!(crossings >= 24, "{crossings}");
+    assert!(
+        between > 0,
+        "no crossing between the children's own bands: the test misses the gaps"
+    );
+}

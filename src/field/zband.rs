@@ -1,7 +1,7 @@
 //! Where the surface can lie over a footprint (Paris et al. 2019 §7): z-bands for the mesher's
 //! pruning, and the heightfield shortcut for direct elevation extraction.
 
-use super::bounds::{Interval, Rect, ZBands};
+use super::bounds::{Aabb, Interval, Rect, ZBands};
 use super::contract::{Elevation, Field, z_bands_by_interval};
 use super::falloff::ISO;
 use super::node::{Node, NodeId};
@@ -167,12 +167,28 @@ impl Tree {
         let mut lo = inside.lo;
         for b in own.as_slice().iter().chain(&[Interval::point(inside.hi)]) {
             let gap = Interval::new(lo, b.lo.max(lo));
-            if gap.width() > 0.0 {
+            if gap.width() > 0.0 && self.children_disagree([base, by], mix, &fp.extrude(gap)) {
                 z_bands_by_interval(&subtree, fp, gap, out);
             }
             lo = lo.max(b.hi);
         }
         out.extend(&own);
+    }
+
+    /// Whether the mix of `base` and `by` can cross `T` in `slab`, a box neither child's
+    /// surface crosses (a gap between their bands): each child then keeps one side of
+    /// `T` over the whole (connected) slab, which its value at the centre tells. Where
+    /// the weight is 0 or 1 all over, the mix is one child, without a surface there; where
+    /// both children are on one side, so is `(1 − w)·f_base + w·f_by`. Only where they
+    /// disagree across the transition can the mix cross `T`.
+    fn children_disagree(&self, [base, by]: [NodeId; 2], mix: &Transition, slab: &Aabb) -> bool {
+        let w = mix.interval(slab);
+        if w.hi <= 0.0 || w.lo >= 1.0 {
+            return false;
+        }
+        let c = slab.center();
+        let side = |id: NodeId| self.value_at(id, c) - ISO;
+        side(base) * side(by) <= 0.0
     }
 
     /// The heightfield that node `id` equals over `fp`, with where that holds.
