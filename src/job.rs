@@ -1,7 +1,6 @@
 //! The main job (`karstic run`): a tree file in, a mesh of its region, its texture masks
 //! and a preview image out, with the time of every stage.
 
-use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -81,9 +80,9 @@ const BACKDROP_GROWTH: f32 = 4.0;
 /// Most backdrop levels; the last one takes all the rest of what the camera sees.
 const BACKDROP_LEVELS: usize = 3;
 
-/// The guides of the job's pictures ([`Guide`]): the region's mesh (`region_mesh` over
-/// `grid`), then, when `camera` sees beyond the region and all the tree has there is
-/// terrain ([`only_terrain_beyond`]), backdrop meshes of the box of the support it sees
+/// The guides of the job's pictures ([`Guide`]): the region's (`region`, a guide of its
+/// mesh over `grid`, [`guide_on`]), then, when `camera` sees beyond the region and all
+/// the tree has there is terrain ([`only_terrain_beyond`]), backdrop meshes of the box of the support it sees
 /// ([`seen_box`]) swept along the shadow rays towards `sun` (a unit vector; `None`
 /// without shadows) up to the support's top. The backdrop comes in levels, the first at
 /// `backdrop_cell`, each next [`BACKDROP_GROWTH`] times coarser: a level covers that box
@@ -92,27 +91,21 @@ const BACKDROP_LEVELS: usize = 3;
 /// cost a coarse mesh, not a march. Marching near the ground where no mesh is costs most
 /// of a picture's time; the backdrop's meshing and BVH cost a small part of it.
 ///
-/// The region's guide (`region_mesh` meshes it or lends the mesh already made) and the
+/// The region's guide (`region` meshes the region or takes the mesh already made) and the
 /// backdrop are made side by side: each ends in a BVH build on one core, which the other
 /// one's meshing overlaps.
-fn guides<'m>(
+fn guides(
     tree: &Tree,
-    region_mesh: impl FnOnce() -> anyhow::Result<Cow<'m, Mesh>> + Send,
+    region: impl FnOnce() -> anyhow::Result<Arc<Guide>> + Send,
     grid: &GridSpec,
     camera: &Camera,
     sun: Option<Vec3>,
     backdrop_cell: f32,
     budget: u64,
 ) -> anyhow::Result<Vec<Arc<Guide>>> {
-    let region = grid.bounds();
-    let (first, backdrop) = rayon::join(
-        || -> anyhow::Result<Arc<Guide>> {
-            let mesh = region_mesh()?;
-            let cell = grid.spacing.max_element();
-            Ok(Arc::new(Guide::from_mesh(&mesh, &region, cell, budget)?))
-        },
-        || backdrop_guides(tree, grid, camera, sun, backdrop_cell, budget),
-    );
+    let (first, backdrop) = rayon::join(region, || {
+        backdrop_guides(tree, grid, camera, sun, backdrop_cell, budget)
+    });
     let mut guides = vec![first?];
     guides.extend(backdrop?);
     Ok(guides)
@@ -162,12 +155,7 @@ fn backdrop_guides(
             if !near.is_empty() {
                 let coarse = GridSpec::with_cell(&near, cell)?;
                 let (backdrop, _) = polygonize(tree, &coarse, &opts)?;
-                guides.push(Arc::new(Guide::from_mesh(
-                    &backdrop,
-                    &coarse.bounds(),
-                    coarse.spacing.max_element(),
-                    budget,
-                )?));
+                guides.push(guide_on(&backdrop, &coarse, budget)?);
             }
             if near.contains_box(&seen) {
                 break;
@@ -176,6 +164,17 @@ fn backdrop_guides(
         }
     }
     Ok(guides)
+}
+
+/// The guide of `mesh`, made over `grid`: its occupancy cells are the grid's.
+fn guide_on(mesh: &Mesh, grid: &GridSpec, budget: u64) -> anyhow::Result<Arc<Guide>> {
+    let cell = grid.spacing.max_element();
+    Ok(Arc::new(Guide::from_mesh(
+        mesh,
+        &grid.bounds(),
+        cell,
+        budget,
+    )?))
 }
 
 /// The most pixels a cell of the job's mesh may span where the view enters the region for
@@ -214,11 +213,11 @@ pub fn view_guides(
     };
     let grid = GridSpec::with_cell(&seen, cell)?;
     let backdrop = job.full_cell.map_or(BACKDROP_CELLS * cell, |c| c.0);
-    let mesh = || {
+    let region = || {
         let (mesh, _) = mesh_with_bar(tree, &grid, budget, quiet, "meshing the job's region")?;
-        Ok(Cow::Owned(mesh))
+        guide_on(&mesh, &grid, budget)
     };
-    guides(tree, mesh, &grid, camera, sun, backdrop, budget)
+    guides(tree, region, &grid, camera, sun, backdrop, budget)
 }
 
 /// Rays per side of the image [`seen_cells`] follows.
@@ -386,10 +385,9 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
                 .and_then(|j| j.full_cell.map(|c| c.0))
                 .unwrap_or(BACKDROP_CELLS * cell);
             let sun = Some(Shading::for_scene(&region).sun);
-            let region_mesh = || Ok(Cow::Borrowed(&mesh));
             let guides = guides(
                 &tree,
-                region_mesh,
+                || guide_on(&mesh, &grid, opts.budget),
                 &grid,
                 camera,
                 sun,

@@ -1,6 +1,7 @@
-//! Ray casting triangle meshes through an obvhs BVH: the independent ground truth the
-//! tracer is checked against (the traced depth of a tree against its Marching Cubes
-//! mesh).
+//! Ray casting triangle meshes through an obvhs BVH: the faces the guided tracer follows
+//! ([`super::guide`]: first faces, and whether a shadow ray enters the mesh's solid), and
+//! the independent ground truth the tracer is checked against (the traced depth of a
+//! tree against its Marching Cubes mesh).
 
 use std::time::Duration;
 
@@ -53,34 +54,40 @@ impl MeshRaycaster {
 
     /// The nearest face along `ray` with `t` in `[t0, t1]`, if any: its `t`, and whether
     /// the ray enters the solid there ([`enters`]) or leaves it.
-    pub fn first_crossing_within(&self, ray: &Ray, (t0, t1): (f32, f32)) -> Option<(f32, bool)> {
-        if self.triangles.is_empty() || !(t0 <= t1) {
-            return None;
-        }
-        let dir = Vec3A::from(ray.dir);
-        let r = obvhs::ray::Ray::new(Vec3A::from(ray.origin), dir, t0, t1);
+    pub fn first_crossing_within(&self, ray: &Ray, span: (f32, f32)) -> Option<(f32, bool)> {
+        let r = self.bvh_ray(ray, span)?;
         let mut hit = RayHit::none();
         let found = self
             .bvh
             .ray_traverse(r, &mut hit, |r, id| self.face(id).intersect(r));
-        found.then(|| (hit.t, enters(self.face(hit.primitive_id as usize), dir)))
+        found.then(|| {
+            (
+                hit.t,
+                enters(self.face(hit.primitive_id as usize), r.direction),
+            )
+        })
     }
 
     /// True when `ray` enters the solid through a face with `t` in `[t0, t1]` ([`enters`]).
     /// Faces the ray leaves the solid through are passed.
-    pub fn enters_within(&self, ray: &Ray, (t0, t1): (f32, f32)) -> bool {
-        if self.triangles.is_empty() || !(t0 <= t1) {
+    pub fn enters_within(&self, ray: &Ray, span: (f32, f32)) -> bool {
+        let Some(r) = self.bvh_ray(ray, span) else {
             return false;
-        }
-        let dir = Vec3A::from(ray.dir);
-        let r = obvhs::ray::Ray::new(Vec3A::from(ray.origin), dir, t0, t1);
+        };
         !self.bvh.ray_traverse_miss(r, |r, id| {
             let tri = self.face(id);
-            match enters(tri, dir) {
+            match enters(tri, r.direction) {
                 true => tri.intersect(r),
                 false => f32::INFINITY,
             }
         })
+    }
+
+    /// `ray` over `[t0, t1]` as obvhs asks it; `None` when there is nothing to cross (no
+    /// face, or an empty span).
+    fn bvh_ray(&self, ray: &Ray, (t0, t1): (f32, f32)) -> Option<obvhs::ray::Ray> {
+        (!self.triangles.is_empty() && t0 <= t1)
+            .then(|| obvhs::ray::Ray::new(Vec3A::from(ray.origin), Vec3A::from(ray.dir), t0, t1))
     }
 
     /// The face at BVH primitive slot `id`.
