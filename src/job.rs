@@ -7,6 +7,8 @@ use std::time::{Duration, Instant};
 
 use anyhow::Context;
 use glam::Vec3;
+use indicatif::ProgressBar;
+use rayon::prelude::*;
 
 use crate::analysis::{Masks, Raster, texture_frame};
 use crate::field::{Aabb, Field, Node, NodeId, Tree};
@@ -69,59 +71,91 @@ pub struct JobReport {
 /// Cell of the backdrop guide, in cells of the region, when the job sets no `full_cell`.
 const BACKDROP_CELLS: f32 = 6.0;
 
-/// A backdrop level reaches as far from the eye as the next level's cells would span
-/// more than this many pixels (the most a cell of the job's mesh may span in a guided
-/// view, [`GUIDE_MAX_CELL_PIXELS`]).
-const BACKDROP_CELL_PIXELS: f32 = GUIDE_MAX_CELL_PIXELS;
-
-/// Ratio of the cells of successive backdrop levels.
-const BACKDROP_GROWTH: f32 = 4.0;
+/// Ratio of the cells of successive levels of a guide ([`levels`]).
+const GUIDE_GROWTH: f32 = 2.0;
 
 /// Most backdrop levels; the last one takes all the rest of what the camera sees.
 const BACKDROP_LEVELS: usize = 3;
 
-/// The guides of the job's pictures ([`Guide`]): the region's (`region`, a guide of its
-/// mesh over `grid`, [`guide_on`]), then, when `camera` sees beyond the region and all
-/// the tree has there is terrain ([`only_terrain_beyond`]), backdrop meshes of the box of the support it sees
-/// ([`seen_box`]) swept along the shadow rays towards `sun` (a unit vector; `None`
-/// without shadows) up to the support's top. The backdrop comes in levels, the first at
-/// `backdrop_cell`, each next [`BACKDROP_GROWTH`] times coarser: a level covers that box
-/// within the distance of the eye where its cells span [`BACKDROP_CELL_PIXELS`] pixels,
-/// the last one (at most [`BACKDROP_LEVELS`]) all of it, so the far hills the view grazes
-/// cost a coarse mesh, not a march. Marching near the ground where no mesh is costs most
-/// of a picture's time; the backdrop's meshing and BVH cost a small part of it.
+/// Most levels of the region's guide in [`view_guides`]: its cells are at most four of
+/// the job's.
+const REGION_LEVELS: usize = 3;
+
+/// The levels of a guide over `seen` for a picture through `camera`, as `(box, cell)`:
+/// the first at `cell`, each next `growth` times coarser. A level covers the part of
+/// `seen` within the distance of the eye where the next level's cells would span more
+/// than `pixels` pixels; the last one (at most `max`) all the rest. So wherever a level
+/// is the finest one whose box holds a point (outside the finer levels' boxes, which are
+/// centred on the eye), its cells span at most `pixels` pixels there.
+fn levels(
+    camera: &Camera,
+    seen: &Aabb,
+    cell: f32,
+    growth: f32,
+    pixels: f32,
+    max: usize,
+) -> Vec<(Aabb, f32)> {
+    let mut out = Vec::new();
+    let mut cell = cell;
+    for level in 0..max {
+        let next = cell * growth;
+        let reach = Vec3::splat(next / (pixels * camera.pixel_angle()));
+        let near = match level + 1 < max {
+            true => seen.intersection(Aabb::new(camera.eye - reach, camera.eye + reach)),
+            false => *seen,
+        };
+        if !near.is_empty() {
+            out.push((near, cell));
+        }
+        if near.contains_box(seen) {
+            break;
+        }
+        cell = next;
+    }
+    out
+}
+
+/// The guides of the job's pictures ([`Guide`]): the region's (`region` makes them over
+/// `region_box`, finest first, meshed at `cell` or coarser), then, when `camera` sees
+/// beyond that box and all the tree has there is terrain ([`only_terrain_beyond`]),
+/// backdrop meshes of the box of the support it sees ([`seen_box`]) swept along the
+/// shadow rays towards `sun` (a unit vector; `None` without shadows) up to the support's
+/// top, in [`levels`]: the first at `backdrop_cell`, each next [`GUIDE_GROWTH`] times
+/// coarser, so the far hills the view grazes cost a coarse mesh, not a march. Marching
+/// near the ground where no mesh is costs most of a picture's time; the backdrop's
+/// meshing and BVH cost a small part of it.
 ///
-/// The region's guide (`region` meshes the region or takes the mesh already made) and the
-/// backdrop are made side by side: each ends in a BVH build on one core, which the other
-/// one's meshing overlaps.
+/// Every mesh is made side by side with the others: each ends in a BVH build on one
+/// core, which the others' meshing overlaps.
+#[allow(clippy::too_many_arguments)]
 fn guides(
     tree: &Tree,
-    region: impl FnOnce() -> anyhow::Result<Arc<Guide>> + Send,
-    grid: &GridSpec,
+    region: impl FnOnce() -> anyhow::Result<Vec<Arc<Guide>>> + Send,
+    region_box: &Aabb,
+    cell: f32,
     camera: &Camera,
     sun: Option<Vec3>,
     backdrop_cell: f32,
     budget: u64,
 ) -> anyhow::Result<Vec<Arc<Guide>>> {
-    let (first, backdrop) = rayon::join(region, || {
-        backdrop_guides(tree, grid, camera, sun, backdrop_cell, budget)
+    let (guides, backdrop) = rayon::join(region, || {
+        backdrop_guides(tree, region_box, cell, camera, sun, backdrop_cell, budget)
     });
-    let mut guides = vec![first?];
+    let mut guides = guides?;
     guides.extend(backdrop?);
     Ok(guides)
 }
 
-/// The backdrop guides of [`guides`] beyond the region of `grid`.
+/// The backdrop guides of [`guides`] beyond `region` (meshed at `cell`).
 fn backdrop_guides(
     tree: &Tree,
-    grid: &GridSpec,
+    region: &Aabb,
+    cell: f32,
     camera: &Camera,
     sun: Option<Vec3>,
     backdrop_cell: f32,
     budget: u64,
 ) -> anyhow::Result<Vec<Arc<Guide>>> {
-    let region = grid.bounds();
-    let mut guides = Vec::new();
     let support = tree.support();
     let seen = seen_box(camera, &support);
     let seen = match sun {
@@ -132,38 +166,46 @@ fn backdrop_guides(
         _ => seen,
     }
     .intersection(support);
-    let beyond = !region.contains_box(&seen);
-    if beyond
-        && !seen.is_empty()
-        && backdrop_cell > grid.spacing.max_element()
-        && only_terrain_beyond(tree, tree.root(), &region)
+    if seen.is_empty()
+        || region.contains_box(&seen)
+        || backdrop_cell <= cell
+        || !only_terrain_beyond(tree, tree.root(), region)
     {
-        let opts = MeshOptions {
-            budget,
-            ..MeshOptions::default()
-        };
-        // Each level reaches as far as the next one's cells would span more than
-        // BACKDROP_CELL_PIXELS pixels; the last one takes the rest.
-        let mut cell = backdrop_cell;
-        for level in 0..BACKDROP_LEVELS {
-            let next = cell * BACKDROP_GROWTH;
-            let reach = Vec3::splat(next / (BACKDROP_CELL_PIXELS * camera.pixel_angle()));
-            let near = match level + 1 < BACKDROP_LEVELS {
-                true => seen.intersection(Aabb::new(camera.eye - reach, camera.eye + reach)),
-                false => seen,
-            };
-            if !near.is_empty() {
-                let coarse = GridSpec::with_cell(&near, cell)?;
-                let (backdrop, _) = polygonize(tree, &coarse, &opts)?;
-                guides.push(guide_on(&backdrop, &coarse, budget)?);
-            }
-            if near.contains_box(&seen) {
-                break;
-            }
-            cell = next;
-        }
+        return Ok(Vec::new());
     }
-    Ok(guides)
+    let grids = levels(
+        camera,
+        &seen,
+        backdrop_cell,
+        GUIDE_GROWTH,
+        GUIDE_MAX_CELL_PIXELS,
+        BACKDROP_LEVELS,
+    )
+    .into_iter()
+    .map(|(b, c)| GridSpec::with_cell(&b, c))
+    .collect::<Result<Vec<_>, _>>()?;
+    guides_on(tree, &grids, budget, None)
+}
+
+/// The guides of `tree` meshed over each of `grids`, side by side, advancing `progress`.
+fn guides_on(
+    tree: &Tree,
+    grids: &[GridSpec],
+    budget: u64,
+    progress: Option<ProgressBar>,
+) -> anyhow::Result<Vec<Arc<Guide>>> {
+    grids
+        .par_iter()
+        .map(|grid| {
+            let opts = MeshOptions {
+                progress: progress.clone(),
+                budget,
+                ..MeshOptions::default()
+            };
+            let (mesh, _) = polygonize(tree, grid, &opts)?;
+            guide_on(&mesh, grid, budget)
+        })
+        .collect()
 }
 
 /// The guide of `mesh`, made over `grid`: its occupancy cells are the grid's.
@@ -178,17 +220,20 @@ fn guide_on(mesh: &Mesh, grid: &GridSpec, budget: u64) -> anyhow::Result<Arc<Gui
 }
 
 /// The most pixels a cell of the job's mesh may span where the view enters the region for
-/// [`view_guides`] to guide the picture by it.
+/// [`view_guides`] to guide the picture by it, and a cell of the region's guide wherever
+/// it guides.
 pub const GUIDE_MAX_CELL_PIXELS: f32 = 8.0;
 
-/// The guides of a picture of `tree` through `camera` ([`Guide`]), as `karstic run` makes
-/// its pictures: when the scene's `job` has a region the camera sees, from far enough that
-/// a cell spans at most [`GUIDE_MAX_CELL_PIXELS`] pixels where the view enters it, the part
-/// of it the camera sees ([`seen_cells`]) meshed on the job's grid, then the backdrop
-/// ([`guides`]); none otherwise. What the mesh gives up (solid thinner than a cell) is what
-/// the job's mesh gives up: a few pixels at most. Closer, the solid a cell misses (a low
-/// bump of a near-`T` field, a grazed ledge) would fill patches of the picture, so the
-/// whole field is traced.
+/// The guides of a picture of `tree` through `camera` ([`Guide`]): when the scene's `job`
+/// has a region the camera sees, from far enough that a cell spans at most
+/// [`GUIDE_MAX_CELL_PIXELS`] pixels where the view enters it, the part of it the camera
+/// sees ([`seen_cells`]) meshed in [`levels`] on the job's lattice: at the job's cell
+/// near the eye, then [`GUIDE_GROWTH`] times coarser each (at most [`REGION_LEVELS`])
+/// where those cells still span at most [`GUIDE_MAX_CELL_PIXELS`] pixels; then the
+/// backdrop ([`guides`]); none otherwise. What a guide gives up (solid thinner than its
+/// cell) is a few pixels at most. Closer, the solid a cell misses (a low bump of a
+/// near-`T` field, a grazed ledge) would fill patches of the picture, so the whole field
+/// is traced.
 pub fn view_guides(
     tree: &Tree,
     job: Option<&crate::scene::spec::JobSpec>,
@@ -211,13 +256,35 @@ pub fn view_guides(
     let Some(seen) = seen_cells(camera, &region, cell) else {
         return Ok(Vec::new());
     };
-    let grid = GridSpec::with_cell(&seen, cell)?;
+    let grids = levels(
+        camera,
+        &seen,
+        cell,
+        GUIDE_GROWTH,
+        GUIDE_MAX_CELL_PIXELS,
+        REGION_LEVELS,
+    )
+    .into_iter()
+    .map(|(b, c)| GridSpec::with_cell(&on_lattice(&b, &region, c), c))
+    .collect::<Result<Vec<_>, _>>()?;
     let backdrop = job.full_cell.map_or(BACKDROP_CELLS * cell, |c| c.0);
     let region = || {
-        let (mesh, _) = mesh_with_bar(tree, &grid, budget, quiet, "meshing the job's region")?;
-        guide_on(&mesh, &grid, budget)
+        let bar = (!quiet).then(|| progress(0, "meshing the job's region", false));
+        if let Some(b) = &bar {
+            b.set_length(
+                grids
+                    .iter()
+                    .map(crate::mesh::polygonize::progress_steps)
+                    .sum(),
+            );
+        }
+        let guides = guides_on(tree, &grids, budget, bar.clone());
+        if let Some(b) = &bar {
+            b.finish_and_clear();
+        }
+        guides
     };
-    guides(tree, region, &grid, camera, sun, backdrop, budget)
+    guides(tree, region, &seen, cell, camera, sun, backdrop, budget)
 }
 
 /// Rays per side of the image [`seen_cells`] follows.
@@ -230,13 +297,15 @@ const SEEN_RAYS: u32 = 17;
 /// picture does not depend on where it stops.
 fn seen_cells(camera: &Camera, region: &Aabb, cell: f32) -> Option<Aabb> {
     let seen = seen_box(camera, region);
-    if seen.is_empty() {
-        return None;
-    }
-    let lo = ((seen.min - region.min) / cell).floor() - Vec3::ONE;
-    let hi = ((seen.max - region.min) / cell).ceil() + Vec3::ONE;
-    let snapped = Aabb::new(region.min + lo * cell, region.min + hi * cell);
-    Some(snapped.intersection(*region))
+    (!seen.is_empty()).then(|| on_lattice(&seen, region, cell))
+}
+
+/// The box `b` grown to the lattice of `cell`-sided cells from `region`'s corner and
+/// padded by a cell, inside `region`.
+fn on_lattice(b: &Aabb, region: &Aabb, cell: f32) -> Aabb {
+    let lo = ((b.min - region.min) / cell).floor() - Vec3::ONE;
+    let hi = ((b.max - region.min) / cell).ceil() + Vec3::ONE;
+    Aabb::new(region.min + lo * cell, region.min + hi * cell).intersection(*region)
 }
 
 /// The box of the spans through `b` of a grid of [`SEEN_RAYS`]² pixel rays of `camera`
@@ -387,8 +456,9 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
             let sun = Some(Shading::for_scene(&region).sun);
             let guides = guides(
                 &tree,
-                || guide_on(&mesh, &grid, opts.budget),
-                &grid,
+                || Ok(vec![guide_on(&mesh, &grid, opts.budget)?]),
+                &grid.bounds(),
+                cell,
                 camera,
                 sun,
                 backdrop_cell,

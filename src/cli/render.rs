@@ -47,8 +47,8 @@ pub(super) struct RenderArgs {
     #[arg(long)]
     no_shadows: bool,
     /// Trace the whole field without first meshing the job's region to guide the rays
-    /// (several times slower; draws solid thinner than the job's cell, which the job's
-    /// mesh and pictures leave out).
+    /// (several times slower; draws solid thinner than the guides' cells, which the
+    /// job's mesh and pictures leave out).
     #[arg(long)]
     no_guide: bool,
     /// Memory budget.

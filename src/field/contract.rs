@@ -107,16 +107,28 @@ pub struct Elevation<'a> {
     pub z: Interval,
 }
 
-/// Depth of the generic z-band search: bands are resolved to `z.width() / 2^depth`.
+/// Depth of the generic z-band search: bands are resolved to `z.width() / 2^depth` at
+/// most.
 const Z_BAND_DEPTH: u32 = 6;
 
-/// Sound z-bands by interval subdivision: keeps every slab whose interval contains `T`.
+/// The generic z-band search stops halving a slab once it is at most this many times as
+/// tall as the footprint is wide. The mesher's footprints are one cell wide, so its bands
+/// come in slabs of up to this many cells: an interval query of a Feature Volume costs
+/// several evaluations (its bricks' bounds, the noise's, a value at the centre), and its
+/// bounds on a cell-sized box are loose by the displacement noise's amplitude anyway, so
+/// halving slabs down to a cell cost more queries than the evaluations it saved (on the
+/// main view's feature cells, 0.20 s of bands for 0.03 s of values; at 8, 0.05 s each).
+const Z_BAND_ASPECT: f32 = 8.0;
+
+/// Sound z-bands by interval subdivision: keeps every slab whose interval contains `T`,
+/// halved while it is taller than [`Z_BAND_ASPECT`] footprints (and [`Z_BAND_DEPTH`]
+/// times at most).
 pub fn z_bands_by_interval<F: Field + ?Sized>(f: &F, fp: &Rect, z: Interval, out: &mut ZBands) {
     fn rec<F: Field + ?Sized>(f: &F, fp: &Rect, z: Interval, depth: u32, out: &mut ZBands) {
         if !f.interval(&fp.extrude(z)).contains(ISO) {
             return;
         }
-        if depth == 0 {
+        if depth == 0 || z.width() <= Z_BAND_ASPECT * (fp.max - fp.min).max_element() {
             out.push(z);
             return;
         }

@@ -493,7 +493,9 @@ fn safe_step(e: f32, lambda: f32) -> f32 {
 
 /// Locates the crossing of `T` between `a` and `b` (field offsets `e = f − T` of opposite
 /// signs) by false position with the Illinois modification, until the bracket or the
-/// last move is below `width`; returns `t` and the evaluations spent.
+/// next move is below `width` (the point that move reaches is returned without being
+/// evaluated: it lies within `width` of the last point evaluated, and its value would
+/// only confirm it); returns `t` and the evaluations spent.
 fn refine(
     along: &mut impl Along,
     (mut a, mut ea): (f32, f32),
@@ -512,11 +514,11 @@ fn refine(
             0.5 * (a + b)
         };
         m = m.clamp(a, b);
-        let e = along.value(m) - ISO;
-        n += 1;
         if (m - last).abs() < width {
             break;
         }
+        let e = along.value(m) - ISO;
+        n += 1;
         last = m;
         // Illinois: when the same end is kept twice in a row, halve its weight.
         if (e > 0.0) == (ea > 0.0) {
