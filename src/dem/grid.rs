@@ -1,6 +1,6 @@
 //! The [`Heightfield`]: a regular grid of f32 elevations in a local metric frame.
 
-use glam::Vec2;
+use glam::{Vec2, Vec4};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -31,6 +31,12 @@ pub struct Heightfield {
     origin: Vec2,
     cell: Vec2,
     z: Vec<f32>,
+}
+
+/// The rows of a bicubic stencil weighed by `w` across them: `Σ_b w[b]·rows[b]`.
+#[inline]
+fn weigh(rows: &[Vec4; 4], w: [f32; 4]) -> Vec4 {
+    rows[0] * w[0] + rows[1] * w[1] + rows[2] * w[2] + rows[3] * w[3]
 }
 
 impl Heightfield {
@@ -169,12 +175,24 @@ impl Heightfield {
         ))
     }
 
-    /// The sample at `(i + di, j + dj)` with indices clamped to the grid (bicubic stencils).
+    /// The bicubic stencil of cell `(i, j)`: its 4 × 4 samples around the cell as rows of
+    /// increasing `y`, indices clamped to the grid.
     #[inline]
-    fn clamped(&self, i: usize, j: usize, di: isize, dj: isize) -> f32 {
-        let ii = (i as isize + di).clamp(0, self.nx as isize - 1) as usize;
-        let jj = (j as isize + dj).clamp(0, self.ny as isize - 1) as usize;
-        self.at(ii, jj)
+    fn stencil_rows(&self, i: usize, j: usize) -> [Vec4; 4] {
+        if i >= 1 && j >= 1 && i + 2 < self.nx && j + 2 < self.ny {
+            std::array::from_fn(|b| {
+                let at = i - 1 + self.nx * (j - 1 + b);
+                Vec4::from_slice(&self.z[at..at + 4])
+            })
+        } else {
+            let clamp = |v: isize, n: usize| v.clamp(0, n as isize - 1) as usize;
+            std::array::from_fn(|b| {
+                let jj = clamp(j as isize + b as isize - 1, self.ny);
+                Vec4::from_array(std::array::from_fn(|a| {
+                    self.at(clamp(i as isize + a as isize - 1, self.nx), jj)
+                }))
+            })
+        }
     }
 
     /// `h(xy)`; NaN outside the valid cells.
@@ -192,31 +210,9 @@ impl Heightfield {
                 let hi = c + (d - c) * t;
                 lo + (hi - lo) * s
             }
+            // The rows weighed along `y` first, four lanes at a time, then along `x`.
             Interpolation::Bicubic => {
-                let (wx, wy) = (cr_weights(t), cr_weights(s));
-                let mut v = 0.0;
-                if i >= 1 && j >= 1 && i + 2 < self.nx && j + 2 < self.ny {
-                    // Interior cell: the 4×4 stencil without clamping, same sums in the
-                    // same order as below.
-                    for (b, wyb) in wy.iter().enumerate() {
-                        let at = i - 1 + self.nx * (j - 1 + b);
-                        let z: &[f32; 4] = self.z[at..at + 4].try_into().expect("4 samples");
-                        let mut row = 0.0;
-                        for (wxa, za) in wx.iter().zip(z) {
-                            row += wxa * za;
-                        }
-                        v += wyb * row;
-                    }
-                    return v;
-                }
-                for (b, wyb) in wy.iter().enumerate() {
-                    let mut row = 0.0;
-                    for (a, wxa) in wx.iter().enumerate() {
-                        row += wxa * self.clamped(i, j, a as isize - 1, b as isize - 1);
-                    }
-                    v += wyb * row;
-                }
-                v
+                weigh(&self.stencil_rows(i, j), cr_weights(s)).dot(Vec4::from(cr_weights(t)))
             }
         }
     }
@@ -239,21 +235,11 @@ impl Heightfield {
                 (lo + (hi - lo) * s, dt, hi - lo)
             }
             Interpolation::Bicubic => {
-                let (wx, wy) = (cr_weights(t), cr_weights(s));
-                let (dwx, dwy) = (cr_weights_d(t), cr_weights_d(s));
-                let (mut v, mut dt, mut ds) = (0.0, 0.0, 0.0);
-                for b in 0..4 {
-                    let (mut row, mut drow) = (0.0, 0.0);
-                    for a in 0..4 {
-                        let p = self.clamped(i, j, a as isize - 1, b as isize - 1);
-                        row += wx[a] * p;
-                        drow += dwx[a] * p;
-                    }
-                    v += wy[b] * row;
-                    dt += wy[b] * drow;
-                    ds += dwy[b] * row;
-                }
-                (v, dt, ds)
+                let rows = self.stencil_rows(i, j);
+                let (wx, dwx) = (Vec4::from(cr_weights(t)), Vec4::from(cr_weights_d(t)));
+                let across = weigh(&rows, cr_weights(s));
+                let d_across = weigh(&rows, cr_weights_d(s));
+                (across.dot(wx), across.dot(dwx), d_across.dot(wx))
             }
         };
         (v, Vec2::new(dt, ds) / self.cell)
