@@ -82,24 +82,17 @@ const BACKDROP_LEVELS: usize = 3;
 const REGION_LEVELS: usize = 3;
 
 /// The levels of a guide over `seen` for a picture through `camera`, as `(box, cell)`:
-/// the first at `cell`, each next `growth` times coarser. A level covers the part of
-/// `seen` within the distance of the eye where the next level's cells would span more
-/// than `pixels` pixels; the last one (at most `max`) all the rest. So wherever a level
-/// is the finest one whose box holds a point (outside the finer levels' boxes, which are
-/// centred on the eye), its cells span at most `pixels` pixels there.
-fn levels(
-    camera: &Camera,
-    seen: &Aabb,
-    cell: f32,
-    growth: f32,
-    pixels: f32,
-    max: usize,
-) -> Vec<(Aabb, f32)> {
+/// the first at `cell`, each next [`GUIDE_GROWTH`] times coarser. A level covers the part
+/// of `seen` within the distance of the eye where the next level's cells would span more
+/// than [`GUIDE_MAX_CELL_PIXELS`] pixels; the last one (at most `max`) all the rest. So
+/// every level but the first guides only where its cells span at most that many pixels:
+/// outside the finer levels' boxes, which are centred on the eye.
+fn levels(camera: &Camera, seen: &Aabb, cell: f32, max: usize) -> Vec<(Aabb, f32)> {
     let mut out = Vec::new();
     let mut cell = cell;
     for level in 0..max {
-        let next = cell * growth;
-        let reach = Vec3::splat(next / (pixels * camera.pixel_angle()));
+        let next = cell * GUIDE_GROWTH;
+        let reach = Vec3::splat(next / (GUIDE_MAX_CELL_PIXELS * camera.pixel_angle()));
         let near = match level + 1 < max {
             true => seen.intersection(Aabb::new(camera.eye - reach, camera.eye + reach)),
             false => *seen,
@@ -116,7 +109,7 @@ fn levels(
 }
 
 /// The guides of the job's pictures ([`Guide`]): the region's (`region` makes them over
-/// `region_box`, finest first, meshed at `cell` or coarser), then, when `camera` sees
+/// `grid`'s box, finest first, at `grid`'s cell or coarser), then, when `camera` sees
 /// beyond that box and all the tree has there is terrain ([`only_terrain_beyond`]),
 /// backdrop meshes of the box of the support it sees ([`seen_box`]) swept along the
 /// shadow rays towards `sun` (a unit vector; `None` without shadows) up to the support's
@@ -127,30 +120,27 @@ fn levels(
 ///
 /// Every mesh is made side by side with the others: each ends in a BVH build on one
 /// core, which the others' meshing overlaps.
-#[allow(clippy::too_many_arguments)]
 fn guides(
     tree: &Tree,
     region: impl FnOnce() -> anyhow::Result<Vec<Arc<Guide>>> + Send,
-    region_box: &Aabb,
-    cell: f32,
+    grid: &GridSpec,
     camera: &Camera,
     sun: Option<Vec3>,
     backdrop_cell: f32,
     budget: u64,
 ) -> anyhow::Result<Vec<Arc<Guide>>> {
     let (guides, backdrop) = rayon::join(region, || {
-        backdrop_guides(tree, region_box, cell, camera, sun, backdrop_cell, budget)
+        backdrop_guides(tree, grid, camera, sun, backdrop_cell, budget)
     });
     let mut guides = guides?;
     guides.extend(backdrop?);
     Ok(guides)
 }
 
-/// The backdrop guides of [`guides`] beyond `region` (meshed at `cell`).
+/// The backdrop guides of [`guides`] beyond the region of `grid`.
 fn backdrop_guides(
     tree: &Tree,
-    region: &Aabb,
-    cell: f32,
+    grid: &GridSpec,
     camera: &Camera,
     sun: Option<Vec3>,
     backdrop_cell: f32,
@@ -166,24 +156,18 @@ fn backdrop_guides(
         _ => seen,
     }
     .intersection(support);
+    let region = grid.bounds();
     if seen.is_empty()
         || region.contains_box(&seen)
-        || backdrop_cell <= cell
-        || !only_terrain_beyond(tree, tree.root(), region)
+        || backdrop_cell <= grid.spacing.max_element()
+        || !only_terrain_beyond(tree, tree.root(), &region)
     {
         return Ok(Vec::new());
     }
-    let grids = levels(
-        camera,
-        &seen,
-        backdrop_cell,
-        GUIDE_GROWTH,
-        GUIDE_MAX_CELL_PIXELS,
-        BACKDROP_LEVELS,
-    )
-    .into_iter()
-    .map(|(b, c)| GridSpec::with_cell(&b, c))
-    .collect::<Result<Vec<_>, _>>()?;
+    let grids = levels(camera, &seen, backdrop_cell, BACKDROP_LEVELS)
+        .into_iter()
+        .map(|(b, c)| GridSpec::with_cell(&b, c))
+        .collect::<Result<Vec<_>, _>>()?;
     guides_on(tree, &grids, budget, None)
 }
 
@@ -256,17 +240,10 @@ pub fn view_guides(
     let Some(seen) = seen_cells(camera, &region, cell) else {
         return Ok(Vec::new());
     };
-    let grids = levels(
-        camera,
-        &seen,
-        cell,
-        GUIDE_GROWTH,
-        GUIDE_MAX_CELL_PIXELS,
-        REGION_LEVELS,
-    )
-    .into_iter()
-    .map(|(b, c)| GridSpec::with_cell(&on_lattice(&b, &region, c), c))
-    .collect::<Result<Vec<_>, _>>()?;
+    let grids = levels(camera, &seen, cell, REGION_LEVELS)
+        .into_iter()
+        .map(|(b, c)| GridSpec::with_cell(&on_lattice(&b, &region, c), c))
+        .collect::<Result<Vec<_>, _>>()?;
     let backdrop = job.full_cell.map_or(BACKDROP_CELLS * cell, |c| c.0);
     let region = || {
         let bar = (!quiet).then(|| progress(0, "meshing the job's region", false));
@@ -284,7 +261,15 @@ pub fn view_guides(
         }
         guides
     };
-    guides(tree, region, &seen, cell, camera, sun, backdrop, budget)
+    guides(
+        tree,
+        region,
+        &GridSpec::with_cell(&seen, cell)?,
+        camera,
+        sun,
+        backdrop,
+        budget,
+    )
 }
 
 /// Rays per side of the image [`seen_cells`] follows.
@@ -457,8 +442,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
             let guides = guides(
                 &tree,
                 || Ok(vec![guide_on(&mesh, &grid, opts.budget)?]),
-                &grid.bounds(),
-                cell,
+                &grid,
                 camera,
                 sun,
                 backdrop_cell,
