@@ -204,8 +204,8 @@ fn guide_on(mesh: &Mesh, grid: &GridSpec, budget: u64) -> anyhow::Result<Arc<Gui
 }
 
 /// The most pixels a cell of the job's mesh may span where the view enters the region for
-/// [`view_guides`] to guide the picture by it, and a cell of the region's guide wherever
-/// it guides.
+/// [`view_guides`] to guide the picture by it, and a cell of any guide's level beyond the
+/// first where that level guides ([`levels`]).
 pub const GUIDE_MAX_CELL_PIXELS: f32 = 8.0;
 
 /// The guides of a picture of `tree` through `camera` ([`Guide`]): when the scene's `job`
