@@ -124,19 +124,28 @@ const Z_BAND_ASPECT: f32 = 8.0;
 /// halved while it is taller than [`Z_BAND_ASPECT`] footprints (and [`Z_BAND_DEPTH`]
 /// times at most).
 pub fn z_bands_by_interval<F: Field + ?Sized>(f: &F, fp: &Rect, z: Interval, out: &mut ZBands) {
-    fn rec<F: Field + ?Sized>(f: &F, fp: &Rect, z: Interval, depth: u32, out: &mut ZBands) {
+    /// Keeps the slabs of `z` taller than `tall` halved, `depth` times at most.
+    fn rec<F: Field + ?Sized>(
+        f: &F,
+        fp: &Rect,
+        z: Interval,
+        tall: f32,
+        depth: u32,
+        out: &mut ZBands,
+    ) {
         if !f.interval(&fp.extrude(z)).contains(ISO) {
             return;
         }
-        if depth == 0 || z.width() <= Z_BAND_ASPECT * (fp.max - fp.min).max_element() {
+        if depth == 0 || z.width() <= tall {
             out.push(z);
             return;
         }
         let m = z.mid();
-        rec(f, fp, Interval::new(z.lo, m), depth - 1, out);
-        rec(f, fp, Interval::new(m, z.hi), depth - 1, out);
+        rec(f, fp, Interval::new(z.lo, m), tall, depth - 1, out);
+        rec(f, fp, Interval::new(m, z.hi), tall, depth - 1, out);
     }
     if !z.is_empty() {
-        rec(f, fp, z, Z_BAND_DEPTH, out);
+        let tall = Z_BAND_ASPECT * (fp.max - fp.min).max_element();
+        rec(f, fp, z, tall, Z_BAND_DEPTH, out);
     }
 }
