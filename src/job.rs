@@ -359,12 +359,47 @@ fn mesh_with_bar(
     Ok(out)
 }
 
+/// The stem of the job's output files: the tree file's, not the scene's `name` (two
+/// trees sharing a name must not overwrite each other's results), `_full` for a full job.
+fn output_stem(path: &Path, opts: &JobOptions) -> String {
+    let stem = path
+        .file_stem()
+        .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+    match opts.full {
+        true => format!("{stem}_full"),
+        false => stem,
+    }
+}
+
+/// Every file the job of `file` (at `path`) may write: the mesh, the preview, a view of
+/// each feature, the contact sheet and the masks. Checked against the job's inputs before
+/// anything is read or written ([`crate::io::check_outputs`]): a tree beside its DEM
+/// `x.png` must not have its preview written over the DEM.
+fn outputs(path: &Path, file: &SceneFile, opts: &JobOptions) -> Vec<PathBuf> {
+    let stem = output_stem(path, opts);
+    let dir = &opts.out_dir;
+    let mut out = vec![dir.join(format!("{stem}.glb"))];
+    if !opts.no_render {
+        out.push(dir.join(format!("{stem}.png")));
+        if !opts.no_views {
+            let names = file.scene.feature_names();
+            out.extend(names.iter().map(|n| dir.join(format!("{stem}_{n}.png"))));
+            out.push(dir.join(format!("{stem}_sheet.png")));
+        }
+    }
+    if opts.masks {
+        out.extend(Masks::files(dir, &stem));
+    }
+    out
+}
+
 /// Runs the job of the tree file `path`. The job section was validated when the file
 /// was loaded; the image is checked against the budget before meshing starts.
 pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
     let mut stages = Vec::new();
     let t = Instant::now();
     let file: SceneFile = scene::load(path)?;
+    crate::io::check_outputs(&file.inputs(), &outputs(path, &file, opts))?;
     let compiled = file.compile_with(opts.budget)?;
     stages.push(("load + compile", t.elapsed()));
     let tree = compiled.tree;
@@ -456,13 +491,8 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
 
     std::fs::create_dir_all(&opts.out_dir)
         .with_context(|| format!("cannot create the output folder {}", opts.out_dir.display()))?;
-    // Named after the file, not the scene's `name`: two trees sharing a name must not
-    // overwrite each other's results.
-    let stem = path
-        .file_stem()
-        .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
-    let suffix = if opts.full { "_full" } else { "" };
-    let mesh_path = opts.out_dir.join(format!("{stem}{suffix}.glb"));
+    let stem = output_stem(path, opts);
+    let mesh_path = opts.out_dir.join(format!("{stem}.glb"));
     let t = Instant::now();
     let export_opts = ExportOptions {
         materials: Some(materials.clone()),
@@ -477,7 +507,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
     if let Some(raster) = raster {
         let t = Instant::now();
         let masks = Masks::compute(&tree, &materials, &raster);
-        mask_paths = masks.write(&opts.out_dir, &format!("{stem}{suffix}"))?;
+        mask_paths = masks.write(&opts.out_dir, &stem)?;
         stages.push(("masks", t.elapsed()));
     }
 
@@ -485,10 +515,11 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         None => None,
         Some(camera) => {
             let t = Instant::now();
+            // The settings `render` and the editor take (water, geology colours, shading
+            // at the scene's scale), with the guides meshed above.
             let look = |camera: &Camera| RenderSettings {
-                materials: materials.clone(),
                 guides: guides.clone(),
-                ..RenderSettings::for_scene(&region, camera, Method::Segment)
+                ..RenderSettings::for_tree(&file.scene, &tree, ground.clone(), camera, Method::Segment)
             };
             let draw = |camera: &Camera, what: &str| {
                 let tiles = camera.width.div_ceil(cpu::TILE) * camera.height.div_ceil(cpu::TILE);
@@ -498,7 +529,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
                 frame
             };
             let frame = draw(&camera, "rendering");
-            let image_path = opts.out_dir.join(format!("{stem}{suffix}.png"));
+            let image_path = opts.out_dir.join(format!("{stem}.png"));
             frame.write_png(&image_path)?;
             stages.push(("render", t.elapsed()));
             if !opts.no_views {
@@ -526,13 +557,13 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
                         continue;
                     };
                     let frame = draw(&view, name);
-                    let path = opts.out_dir.join(format!("{stem}{suffix}_{name}.png"));
+                    let path = opts.out_dir.join(format!("{stem}_{name}.png"));
                     frame.write_png(&path)?;
                     views.push((name.to_string(), path));
                     frames.push(frame);
                 }
                 if frames.len() > 1 {
-                    let path = opts.out_dir.join(format!("{stem}{suffix}_sheet.png"));
+                    let path = opts.out_dir.join(format!("{stem}_sheet.png"));
                     write_contact_sheet(&path, &frames.iter().collect::<Vec<_>>())?;
                     views.push(("sheet".to_string(), path));
                 }

@@ -261,3 +261,90 @@ fn tree_set_takes_tree_file_values() {
     let (ok, err) = karstic(&["tree", "set", s(&tree), "ground.falloff", "NaN"]);
     assert!(!ok && err.contains("found NaN"), "{err}");
 }
+
+/// The data-loss reproducers: a special file as output, `run`, `tree expand` and
+/// `edit --screenshot` writing over their inputs, a mask stem that leaves its folder,
+/// a file's mode lost by `tree set`, and data files' content echoed in errors.
+#[test]
+fn outputs_never_replace_inputs_special_files_or_modes() {
+    let (dir, tree) = with_arch();
+    let original = std::fs::read(&tree).unwrap();
+    // A symlink to a character device: the rename would replace the link with a file
+    // (and, for root writing the device itself, the device node).
+    #[cfg(unix)]
+    {
+        let dev = dir.path().join("dev.png");
+        std::os::unix::fs::symlink("/dev/null", &dev).unwrap();
+        let (ok, err) = karstic(&["render", s(&tree), "-o", s(&dev), "--size", "8", "8"]);
+        assert!(!ok && err.contains("not a regular file"), "{err}");
+        assert!(std::fs::symlink_metadata(&dev).unwrap().file_type().is_symlink());
+    }
+    // `run` with a tree beside its DEM: the preview would be `dem.png`.
+    let dem_tree = dir.path().join("dem.ron");
+    let png = dir.path().join("dem.png");
+    std::fs::write(&png, b"not overwritten").unwrap();
+    std::fs::write(
+        &dem_tree,
+        "(version: 1, root: Heightfield(source: \"dem.png\", falloff: 2))",
+    )
+    .unwrap();
+    let (ok, err) = karstic(&["run", s(&dem_tree), "-o", s(dir.path()), "--quiet"]);
+    assert!(!ok && err.contains("refusing to overwrite"), "{err}");
+    assert_eq!(std::fs::read(&png).unwrap(), b"not overwritten");
+    // A tree named `.glb` run into its own folder.
+    let glb_tree = dir.path().join("t.glb");
+    std::fs::copy(&tree, &glb_tree).unwrap();
+    let (ok, err) = karstic(&["run", s(&glb_tree), "-o", s(dir.path()), "--no-render"]);
+    assert!(!ok && err.contains("refusing to overwrite"), "{err}");
+    assert_eq!(std::fs::read(&glb_tree).unwrap(), original);
+    // `tree expand` and `edit --screenshot` over their tree.
+    for args in [
+        vec!["tree", "expand", s(&tree), "-o", s(&tree)],
+        vec!["edit", s(&tree), "--screenshot", s(&tree)],
+    ] {
+        let (ok, err) = karstic(&args);
+        assert!(
+            !ok && err.contains("refusing to overwrite"),
+            "{args:?}: {err}"
+        );
+        assert_eq!(std::fs::read(&tree).unwrap(), original, "{args:?}");
+    }
+    // A mask stem is a file name, not a path.
+    let out = dir.path().join("masks");
+    let (ok, err) = karstic(&["masks", s(&tree), "-o", s(&out), "--stem", "../../evil"]);
+    assert!(!ok && err.contains("--stem"), "{err}");
+    assert!(!dir.path().join("evil_slope.png").exists());
+    // `tree set` keeps the file's mode on the file and its backup.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&tree, std::fs::Permissions::from_mode(0o600)).unwrap();
+        let (ok, err) = karstic(&["tree", "set", s(&tree), "span.falloff", "6.5"]);
+        assert!(ok, "{err}");
+        for p in [tree.clone(), tree.with_extension("ron.bak")] {
+            let mode = std::fs::metadata(&p).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode, 0o600, "{}", p.display());
+        }
+    }
+}
+
+/// A parse error in a data file names the file and position, never its content (a
+/// source symlinked to a secret must not leak its first line).
+#[test]
+fn data_file_errors_do_not_echo_content() {
+    let dir = tempfile::tempdir().unwrap();
+    let secret = "root:$6$s3cr3tHash:19000:0:99999:7:::";
+    let asc = dir.path().join("d.asc");
+    std::fs::write(&asc, format!("{secret}\nnobody:*:1:2\n")).unwrap();
+    let png = dir.path().join("d.png");
+    std::fs::copy(trees().join("data/jacksboro_crop.asc"), dir.path().join("x.asc")).unwrap();
+    let (ok, err) = karstic(&["dem", "convert", s(&dir.path().join("x.asc")), s(&png)]);
+    assert!(ok, "{err}");
+    std::fs::write(png.with_extension("json"), format!("{{\"cell\": \"{secret}\"}}")).unwrap();
+    for dem in [&asc, &png] {
+        let (ok, err) = karstic(&["dem", "info", s(dem)]);
+        assert!(!ok, "{err}");
+        assert!(!err.contains("s3cr3t") && !err.contains("root:"), "{err}");
+        assert!(err.contains("d."), "names the file: {err}");
+    }
+}

@@ -37,7 +37,10 @@ pub(super) struct EditArgs {
 
 /// Runs `karstic edit`.
 pub(super) fn run(args: EditArgs) -> anyhow::Result<()> {
-    karstic::scene::load(&args.tree)?;
+    let file = karstic::scene::load(&args.tree)?;
+    if let Some(out) = &args.screenshot {
+        karstic::io::check_outputs(&file.inputs(), &[out])?;
+    }
     let backend = match (args.gpu, args.cpu) {
         (true, _) => Backend::Gpu,
         (_, true) => Backend::Cpu,

@@ -45,6 +45,7 @@ pub(super) fn run(args: MasksArgs) -> anyhow::Result<()> {
             .file_stem()
             .map_or("scene".into(), |s| s.to_string_lossy().into_owned())
     });
+    karstic::io::check_file_name(&stem).map_err(|e| anyhow::anyhow!("--stem: {e}"))?;
     let outputs = Masks::files(&args.output, &stem);
     let (file, compiled) = super::load_compiled(&args.tree, args.budget.max_memory, &outputs)?;
     let tree = &compiled.tree;

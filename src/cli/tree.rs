@@ -115,6 +115,7 @@ pub(super) fn run(args: TreeArgs) -> anyhow::Result<()> {
         }
         TreeCommand::Expand { file, output } => {
             let sf = scene::load(&file)?;
+            karstic::io::check_outputs(&sf.inputs(), &[&output])?;
             let expanded = sf
                 .expand()
                 .with_context(|| format!("expanding {}", file.display()))?;

@@ -33,6 +33,20 @@ struct Header {
     nodata: Option<f64>,
 }
 
+/// The keywords of an ESRI ASCII grid's header (any case).
+const HEADER_KEYS: [&str; 10] = [
+    "ncols",
+    "nrows",
+    "xllcorner",
+    "xllcenter",
+    "yllcorner",
+    "yllcenter",
+    "cellsize",
+    "dx",
+    "dy",
+    "nodata_value",
+];
+
 /// Reads an ASCII grid held in memory (`prj`: the text of its `.prj`, if any).
 pub fn read_bytes(
     path: &Path,
@@ -68,6 +82,18 @@ pub fn read_bytes(
         if !k.starts_with(|c: char| c.is_ascii_alphabetic()) || k.eq_ignore_ascii_case("nan") {
             break;
         }
+        // The file may not be a grid at all (a path to a private file): its words are
+        // named only when they are the header's own keywords, never echoed.
+        let k = HEADER_KEYS
+            .iter()
+            .find(|h| h.eq_ignore_ascii_case(k))
+            .ok_or_else(|| {
+                syntax(
+                    ln + 1,
+                    1,
+                    format!("a header keyword ({})", HEADER_KEYS.join(", ")),
+                )
+            })?;
         let v = toks
             .next()
             .ok_or_else(|| syntax(ln + 1, line.len() + 1, format!("a value after `{k}`")))?;
@@ -75,13 +101,7 @@ pub fn read_bytes(
             .parse::<f64>()
             .ok()
             .filter(|x| x.is_finite())
-            .ok_or_else(|| {
-                syntax(
-                    ln + 1,
-                    col_of(line, v),
-                    format!("a number for `{k}`, found `{v}`"),
-                )
-            })?;
+            .ok_or_else(|| syntax(ln + 1, col_of(line, v), format!("a number for `{k}`")))?;
         fields.push((k.to_ascii_lowercase(), num, ln + 1));
         lines.next();
     }
@@ -157,7 +177,7 @@ pub fn read_bytes(
                     syntax(
                         ln + 1,
                         col_of(line, tok),
-                        format!("a finite number (voids use NODATA_value), found `{tok}`"),
+                        "a finite number (voids use NODATA_value)".to_string(),
                     )
                 })?;
             vals.push(v);

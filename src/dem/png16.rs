@@ -220,6 +220,18 @@ struct Sidecar {
     raster_type: RasterType,
 }
 
+/// What kind of JSON value `v` is, for messages that must not echo a file's content.
+fn json_kind(v: &Value) -> &'static str {
+    match v {
+        Value::Null => "null",
+        Value::Bool(_) => "a boolean",
+        Value::Number(_) => "a number out of range",
+        Value::String(_) => "a string",
+        Value::Array(_) => "an array",
+        Value::Object(_) => "an object",
+    }
+}
+
 impl Sidecar {
     fn parse(text: &str, bits: u32) -> Result<Sidecar, String> {
         let v: Value = serde_json::from_str(text).map_err(|e| format!("JSON ({e})"))?;
@@ -230,7 +242,7 @@ impl Sidecar {
                     .as_f64()
                     .filter(|x| x.is_finite())
                     .map(Some)
-                    .ok_or_else(|| format!("a number for \"{k}\", found {x}")),
+                    .ok_or_else(|| format!("a number for \"{k}\", found {}", json_kind(x))),
             }
         };
         let pair = |k: &str| -> Result<Option<[f64; 2]>, String> {
@@ -247,7 +259,9 @@ impl Sidecar {
                     .as_f64()
                     .filter(|x| x.is_finite())
                     .map(|x| Some([x, x]))
-                    .ok_or_else(|| format!("a number or [x, y] for \"{k}\", found {x}")),
+                    .ok_or_else(|| {
+                        format!("a number or [x, y] for \"{k}\", found {}", json_kind(x))
+                    }),
             }
         };
         let maps_key = format!("png_u{bits}_maps");

@@ -15,9 +15,26 @@ use super::IoError;
 /// A temporary file this old whose writer is gone is a leftover.
 pub(crate) const STALE_AFTER: Duration = Duration::from_secs(10);
 
-/// Writes a file atomically (see the module documentation).
+/// Writes a file atomically (see the module documentation). A file it replaces keeps its
+/// permissions (a mode-600 tree stays private).
 pub fn write_atomic(
     path: &Path,
+    write: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+) -> Result<(), IoError> {
+    write_atomic_as(path, None, write)
+}
+
+/// Writes `bytes` to `path` atomically with the permissions of the file `like` (a backup
+/// takes its original's), or of the file it replaces when `like` cannot be read.
+pub fn write_bytes_atomic_like(path: &Path, bytes: &[u8], like: &Path) -> Result<(), IoError> {
+    let perms = std::fs::metadata(like).ok().map(|m| m.permissions());
+    write_atomic_as(path, perms, |w| w.write_all(bytes))
+}
+
+/// [`write_atomic`] with the new file's permissions `perms`, or the replaced file's.
+fn write_atomic_as(
+    path: &Path,
+    perms: Option<std::fs::Permissions>,
     write: impl FnOnce(&mut dyn Write) -> io::Result<()>,
 ) -> Result<(), IoError> {
     let err = |source| IoError::Write {
@@ -32,12 +49,25 @@ pub fn write_atomic(
         .file_name()
         .ok_or_else(|| err(io::Error::other("not a file name")))?
         .to_string_lossy();
+    // Renaming over a device, a FIFO or a folder would replace it with a file.
+    let existing = std::fs::metadata(path).ok();
+    if let Some(meta) = existing.as_ref().filter(|m| !m.is_file()) {
+        return Err(IoError::NotReplaceable {
+            path: path.to_path_buf(),
+            kind: super::file_kind(&meta.file_type()),
+        });
+    }
+    let perms = perms.or_else(|| existing.map(|m| m.permissions()));
     let prefix = format!(".{name}.tmp");
     remove_leftovers(dir, &prefix);
     let tmp = dir.join(format!("{prefix}{}", std::process::id()));
     let result = (|| {
         let file = File::create(&tmp)?;
         file.try_lock().map_err(io::Error::other)?;
+        // Before any byte is written: a private file's content is never readable by others.
+        if let Some(p) = perms {
+            file.set_permissions(p)?;
+        }
         let mut out = io::BufWriter::new(file);
         write(&mut out)?;
         let file = out.into_inner().map_err(|e| e.into_error())?;
@@ -104,6 +134,45 @@ mod tests {
             1,
             "no temp file left"
         );
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn only_regular_files_are_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        // A link to a character device: the rename would replace the device itself.
+        let full = dir.path().join("full.png");
+        std::os::unix::fs::symlink("/dev/null", &full).unwrap();
+        let e = write_bytes_atomic(Path::new("/dev/null"), b"png").unwrap_err();
+        assert!(e.to_string().contains("character device"), "{e}");
+        let e = write_bytes_atomic(&full, b"png").unwrap_err();
+        assert!(matches!(e, IoError::NotReplaceable { .. }), "{e}");
+        assert!(std::fs::symlink_metadata(&full).unwrap().is_symlink());
+        let folder = dir.path().join("out.glb");
+        std::fs::create_dir(&folder).unwrap();
+        let e = write_bytes_atomic(&folder, b"glb").unwrap_err();
+        assert!(e.to_string().contains("directory"), "{e}");
+        assert!(folder.is_dir());
+        let file = dir.path().join("file.png");
+        write_bytes_atomic(&file, b"a").unwrap();
+        write_bytes_atomic(&file, b"b").unwrap();
+        assert_eq!(std::fs::read(&file).unwrap(), b"b");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn replaced_files_and_backups_keep_their_mode() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let tree = dir.path().join("t.ron");
+        write_bytes_atomic(&tree, b"one").unwrap();
+        std::fs::set_permissions(&tree, std::fs::Permissions::from_mode(0o600)).unwrap();
+        write_bytes_atomic(&tree, b"two").unwrap();
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&tree), 0o600);
+        let bak = dir.path().join("t.ron.bak");
+        write_bytes_atomic_like(&bak, b"two", &tree).unwrap();
+        assert_eq!(mode(&bak), 0o600);
     }
 
     #[test]

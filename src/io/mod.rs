@@ -5,8 +5,8 @@ mod atomic;
 mod paths;
 mod size;
 
-pub use atomic::{write_atomic, write_bytes_atomic};
-pub use paths::check_outputs;
+pub use atomic::{write_atomic, write_bytes_atomic, write_bytes_atomic_like};
+pub use paths::{check_file_name, check_outputs};
 pub use size::parse_byte_size;
 
 /// An error and its sources, one line: `outer: cause: root cause`.
@@ -54,6 +54,15 @@ pub enum IoError {
     #[error("{path} is not a regular file ({kind}); refusing to read it")]
     NotAFile {
         /// The path.
+        path: PathBuf,
+        /// What it is instead.
+        kind: &'static str,
+    },
+    /// An output names something that is not a regular file (a device, a FIFO, a
+    /// folder): writing would replace it.
+    #[error("{path} is {kind}, not a regular file; refusing to replace it")]
+    NotReplaceable {
+        /// The output.
         path: PathBuf,
         /// What it is instead.
         kind: &'static str,
@@ -127,7 +136,7 @@ pub fn open_regular(path: &Path, budget: u64) -> Result<(std::fs::File, u64), Io
 }
 
 /// What a file that is not a regular file is, for messages.
-fn file_kind(t: &std::fs::FileType) -> &'static str {
+pub(crate) fn file_kind(t: &std::fs::FileType) -> &'static str {
     #[cfg(unix)]
     {
         use std::os::unix::fs::FileTypeExt;

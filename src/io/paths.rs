@@ -32,6 +32,22 @@ pub fn check_outputs(
     Ok(())
 }
 
+/// Refuses a stem of output files that is not a plain file name: empty, `.`, `..`, or
+/// with a path separator (`../../x` would write outside the output folder).
+pub fn check_file_name(stem: &str) -> Result<(), String> {
+    let bad = stem.is_empty()
+        || stem == "."
+        || stem == ".."
+        || stem.contains(['/', '\\', '\0'])
+        || Path::new(stem).is_absolute();
+    match bad {
+        true => Err(format!(
+            "{stem:?} is not a file name (no folders, `.` or `..`; the output folder says where)"
+        )),
+        false => Ok(()),
+    }
+}
+
 /// True when `a` and `b` name the same file, existing or not.
 fn same_file(a: &Path, b: &Path) -> bool {
     #[cfg(unix)]
@@ -82,6 +98,10 @@ mod tests {
         let npy = dir.path().join("s.json");
         let e = check_outputs(&[&tree], &[&npy, &dir.path().join("s.json")]).unwrap_err();
         assert!(matches!(e, IoError::OutputsCollide { .. }), "{e}");
+        for bad in ["../../evil", "a/b", "..", "", "/abs", "a\\b"] {
+            assert!(check_file_name(bad).is_err(), "{bad:?}");
+        }
+        assert!(check_file_name("jacksboro_full").is_ok());
         let png = dir.path().join("t.png");
         assert!(check_outputs(&[&tree], &[&png, &dir.path().join("c.png")]).is_ok());
     }

@@ -11,7 +11,7 @@ use super::load::{SceneError, load, ron_options, to_ron_text};
 use super::spec::{NodeSpec, Scene};
 use super::splice::{SpliceError, set_field};
 use super::validate::validate;
-use crate::io::{read_regular, write_bytes_atomic};
+use crate::io::{read_regular, write_bytes_atomic, write_bytes_atomic_like};
 
 fn edit_error(path: &Path, message: impl Into<String>) -> SceneError {
     SceneError::Edit {
@@ -40,7 +40,7 @@ fn write_keeping_backup(path: &Path, bytes: &[u8]) -> Result<(), SceneError> {
     let original = read_regular(path, super::load::MAX_TREE_FILE).map_err(SceneError::Read)?;
     let mut bak = path.as_os_str().to_owned();
     bak.push(".bak");
-    write_bytes_atomic(&PathBuf::from(bak), &original).map_err(SceneError::Write)?;
+    write_bytes_atomic_like(&PathBuf::from(bak), &original, path).map_err(SceneError::Write)?;
     write_bytes_atomic(path, bytes).map_err(SceneError::Write)
 }
 
