@@ -519,7 +519,13 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
             // at the scene's scale), with the guides meshed above.
             let look = |camera: &Camera| RenderSettings {
                 guides: guides.clone(),
-                ..RenderSettings::for_tree(&file.scene, &tree, ground.clone(), camera, Method::Segment)
+                ..RenderSettings::for_tree(
+                    &file.scene,
+                    &tree,
+                    ground.clone(),
+                    camera,
+                    Method::Segment,
+                )
             };
             let draw = |camera: &Camera, what: &str| {
                 let tiles = camera.width.div_ceil(cpu::TILE) * camera.height.div_ceil(cpu::TILE);

@@ -277,7 +277,12 @@ fn outputs_never_replace_inputs_special_files_or_modes() {
         std::os::unix::fs::symlink("/dev/null", &dev).unwrap();
         let (ok, err) = karstic(&["render", s(&tree), "-o", s(&dev), "--size", "8", "8"]);
         assert!(!ok && err.contains("not a regular file"), "{err}");
-        assert!(std::fs::symlink_metadata(&dev).unwrap().file_type().is_symlink());
+        assert!(
+            std::fs::symlink_metadata(&dev)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
     }
     // `run` with a tree beside its DEM: the preview would be `dem.png`.
     let dem_tree = dir.path().join("dem.ron");
@@ -337,10 +342,18 @@ fn data_file_errors_do_not_echo_content() {
     let asc = dir.path().join("d.asc");
     std::fs::write(&asc, format!("{secret}\nnobody:*:1:2\n")).unwrap();
     let png = dir.path().join("d.png");
-    std::fs::copy(trees().join("data/jacksboro_crop.asc"), dir.path().join("x.asc")).unwrap();
+    std::fs::copy(
+        trees().join("data/jacksboro_crop.asc"),
+        dir.path().join("x.asc"),
+    )
+    .unwrap();
     let (ok, err) = karstic(&["dem", "convert", s(&dir.path().join("x.asc")), s(&png)]);
     assert!(ok, "{err}");
-    std::fs::write(png.with_extension("json"), format!("{{\"cell\": \"{secret}\"}}")).unwrap();
+    std::fs::write(
+        png.with_extension("json"),
+        format!("{{\"cell\": \"{secret}\"}}"),
+    )
+    .unwrap();
     for dem in [&asc, &png] {
         let (ok, err) = karstic(&["dem", "info", s(dem)]);
         assert!(!ok, "{err}");

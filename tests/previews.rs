@@ -211,3 +211,63 @@ fn render_takes_the_job_camera_and_frames_the_surface_without_one() {
         mid(&rows, 54)
     );
 }
+
+/// One tree, one picture: `run`'s preview of `sea_cliffs` is `render`'s (the job drew no
+/// sea and no geology colours when it built its settings apart).
+#[test]
+fn run_and_render_draw_the_same_picture() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string("trees/sea_cliffs.ron").unwrap();
+    let data = std::fs::canonicalize("trees/data").unwrap();
+    let small = text
+        .replace("image: (960, 540)", "image: (192, 108)")
+        .replace("\"data/", &format!("\"{}/", data.display()));
+    assert_ne!(
+        small, text,
+        "the job's image size is where the test expects it"
+    );
+    let tree = dir.path().join("sea.ron");
+    std::fs::write(&tree, small).unwrap();
+    let opts = JobOptions {
+        out_dir: dir.path().join("out"),
+        full: false,
+        no_render: false,
+        no_views: true,
+        quiet: true,
+        budget: karstic::io::DEFAULT_MEMORY_BUDGET,
+        origin: karstic::mesh::export::Origin::Dem,
+        masks: false,
+    };
+    let report = job::run(&tree, &opts).unwrap();
+    let rendered = dir.path().join("render.png");
+    let (ok, err) = karstic(&[
+        "render",
+        tree.to_str().unwrap(),
+        "-o",
+        rendered.to_str().unwrap(),
+        "--size",
+        "192",
+        "108",
+        "--quiet",
+    ]);
+    assert!(ok, "{err}");
+    let (a, b) = (rgb(&report.image_path.unwrap()), rgb(&rendered));
+    assert_eq!(a.dimensions(), b.dimensions());
+    let diffs: Vec<u8> = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(x, y)| x.abs_diff(*y))
+        .collect();
+    let mean = diffs.iter().map(|&d| d as f64).sum::<f64>() / diffs.len() as f64;
+    let far = diffs.iter().filter(|&&d| d > 24).count() as f64 / diffs.len() as f64;
+    eprintln!(
+        "run vs render: mean {mean:.2}, {:.2}% beyond 24",
+        100.0 * far
+    );
+    assert!(
+        mean < 1.5 && far < 0.03,
+        "mean {mean:.2}, {:.2}% beyond 24",
+        100.0 * far
+    );
+}
