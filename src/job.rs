@@ -547,7 +547,13 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
                 let fov = job.as_ref().map_or(40.0, |j| j.fov.0);
                 let mut frames = vec![frame];
                 for name in file.scene.feature_names() {
-                    let Some(id) = tree.find(name) else { continue };
+                    // A landform's feature is what it generated, not the terrain under it.
+                    let Some(id) = ["-rocks", "-carves", ""]
+                        .iter()
+                        .find_map(|suffix| tree.find(&format!("{name}{suffix}")))
+                    else {
+                        continue;
+                    };
                     let fixed = job.as_ref().and_then(|j| j.views.get(name));
                     let view = match fixed {
                         Some(c) => Some(Camera::look_at(c.eye.0, c.target.0, fov, w, h)?),

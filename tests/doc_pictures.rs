@@ -82,6 +82,7 @@ karstic geology section trees/strata_cliff.ron --plane -100 0 60 0 --z -5 75 --w
 karstic render trees/sea_cliffs.ron -o sea_cliffs.png --quiet
 karstic sample trees/karst_network.ron --box 0 300 -5 396 300.5 75 --res 397 2 161 -o karst_section.npy
 karstic render trees/hoodoo_field.ron -o hoodoo_field.png --size 640 360 --quiet
+karstic render trees/fin_arch.ron -o fin_arch.png --size 640 360 --quiet
 karstic render trees/jacksboro_canyon.ron -o jacksboro_canyon.png --quiet
 karstic geology section trees/jacksboro_canyon.ron --plane 5350 6450 5950 6450 --z 280 560 --width 960 --outline -o canyon_section.png
 karstic sample trees/strata_islands.ron --box 330 455 40 490 455.5 135 --res 480 2 286 -o islands_caves.npy
@@ -125,6 +126,7 @@ const PICTURES: &[(&str, &str)] = &[
     ("sea_cliffs.png", "sea_cliffs.png"),
     ("karst_section.npy", "karst_section.png"),
     ("hoodoo_field.png", "hoodoo_field.png"),
+    ("fin_arch.png", "fin_arch.png"),
     ("jacksboro_canyon.png", "jacksboro_canyon.png"),
     ("canyon_section.png", "canyon_section.png"),
     ("islands_caves.npy", "islands_caves.png"),

@@ -513,3 +513,104 @@ fn the_strata_islands_percolation_caves_open_at_their_sink_and_stay_in_soft_rock
         "the flood from the mouth stops at z = {deepest}, the top is at {top}"
     );
 }
+
+/// A flat ground (top at z = 0) over beds: soft (0.2) below z = 14, hard (0.9) above.
+const ARCH_SCENE: &str = "(version: 1, seed: 3, \
+    geology: (root: Strata(point: (0, 0, -20), normal: (0, 0, 1), profile: Layers(layers: \
+        [(thickness: 34, resistance: 0.2), (thickness: 30, resistance: 0.9)], transition: 1))), \
+    root: Landform(name: \"arch\", seed: 1, cell: 2, region: (min: (-80, -60, -30), max: (80, 60, 30)), \
+        base: Primitive(name: \"ground\", shape: Box(center: (0, 0, -10), half_size: (120, 120, 10)), falloff: 2.0), \
+        generator: Arch(from: (-20, 0), to: (20, 0))))";
+
+fn arch() -> (
+    karstic::landform::ArchShape,
+    Tree,
+    karstic::geology::Geology,
+) {
+    let file = scene_file(ARCH_SCENE);
+    let geology = karstic::geology::Geology::of_scene(&file.scene).unwrap();
+    let NodeSpec::Landform(l) = &file.scene.root else {
+        panic!("a landform")
+    };
+    let GeneratorSpec::Arch(spec) = &l.generator else {
+        panic!("an arch")
+    };
+    let base = scene_file(
+        "(version: 1, root: Primitive(shape: Box(center: (0, 0, -10), \
+         half_size: (120, 120, 10)), falloff: 2.0))",
+    )
+    .compile()
+    .unwrap()
+    .tree;
+    let rho = |p: Vec3| geology.resistance(p);
+    let region = Aabb::new(Vec3::new(-80.0, -60.0, -30.0), Vec3::new(80.0, 60.0, 30.0));
+    let ground = Ground::new(&base, region, 2.0, &rho, l.full_seed(3)).unwrap();
+    let shape = spec.shape(&ground).unwrap();
+    let tree = file.compile().unwrap().tree;
+    (shape, tree, geology)
+}
+
+#[test]
+fn an_arch_opens_in_the_soft_bed_under_a_hard_lintel() {
+    let (s, t, geology) = arch();
+    // The soft bed ends at z = 14: the ceiling is found there.
+    assert!(s.ground.abs() < 1.5, "ground at {}", s.ground);
+    assert!((s.ceiling - 14.0).abs() < 1.5, "ceiling at {}", s.ceiling);
+    assert!((s.span - 40.0).abs() < 1e-3);
+    // Under the middle of the span the opening is open, the lintel above it rock.
+    let (mut open, mut lintel) = (Vec::new(), Vec::new());
+    for i in -6..=6 {
+        let x = i as f32;
+        for k in 0..8 {
+            let z = 2.0 + k as f32 * (s.ceiling - 4.0) / 7.0;
+            open.push(Vec3::new(x, 0.0, z));
+        }
+        for z in [s.ceiling + 1.5, 0.5 * (s.ceiling + s.crest)] {
+            lintel.push(Vec3::new(x, 0.0, z));
+        }
+    }
+    for p in &open {
+        assert!(t.value(*p) < ISO, "rock in the opening at {p}");
+    }
+    for p in &lintel {
+        assert!(t.value(*p) > ISO, "no lintel at {p}");
+    }
+    let mean = |v: &[Vec3]| v.iter().map(|&p| geology.resistance(p)).sum::<f32>() / v.len() as f32;
+    let (soft, hard) = (mean(&open), mean(&lintel));
+    assert!(soft + 0.3 < hard, "opening ρ {soft}, lintel ρ {hard}");
+}
+
+#[test]
+fn an_arch_varies_along_its_span_and_stands_on_rooted_abutments() {
+    let (s, t, _) = arch();
+    // The lintel's section (rock above the ceiling, across the fin) along the span.
+    let areas: Vec<usize> = (-16..=16)
+        .map(|i| {
+            let x = i as f32;
+            let mut n = 0;
+            for j in -40..=40 {
+                for k in 0..=60 {
+                    let p = Vec3::new(x, 0.5 * j as f32, s.ceiling + 0.5 + 0.5 * k as f32);
+                    n += usize::from(t.value(p) > ISO);
+                }
+            }
+            n
+        })
+        .collect();
+    let (lo, hi) = (
+        *areas.iter().min().unwrap() as f32,
+        *areas.iter().max().unwrap() as f32,
+    );
+    assert!(lo > 0.0, "the lintel is whole: {areas:?}");
+    assert!((hi - lo) / hi >= 0.25, "sections {areas:?}");
+    // Each abutment is one rock from below the ground up into the lintel.
+    for x in [-26.0f32, 26.0] {
+        for k in 0..=40 {
+            let z = -3.0 + k as f32 * (s.ceiling + 2.0) / 40.0;
+            let p = Vec3::new(x, 0.0, z);
+            assert!(t.value(p) > ISO, "the abutment is broken at {p}");
+        }
+    }
+    // The same file gives the same arch.
+    assert_eq!(arch().0, s);
+}

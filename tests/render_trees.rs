@@ -49,7 +49,8 @@ fn name(path: &Path) -> String {
     rel.to_string_lossy().into_owned()
 }
 
-/// Scenes whose nodes have no GPU encoding (elevation trees, erosion by a geology):
+/// Scenes whose nodes have no GPU encoding (elevation trees, erosion by a geology, as the
+/// fin arch's weathering):
 /// `tests/elevation_trees.rs` and `tests/geology.rs` check that the tape names the reason.
 /// And the canyon: its 158k carving spheres make a tape of as many instructions, which
 /// the GPU walks in full at every point; lavapipe ends a shader's loop after its
@@ -57,6 +58,7 @@ fn name(path: &Path) -> String {
 /// that skips far children, as the CPU's BVH does, is not built yet).
 const CPU_ONLY: &[&str] = &[
     "elevation_valley",
+    "fin_arch",
     "jacksboro_canyon",
     "strata_cliff",
     "strata_islands",

@@ -11,6 +11,7 @@
 //! sequential and seeded from the node's `seed`: the same file gives the same primitives,
 //! byte for byte, on any number of threads.
 
+mod arch;
 mod canyon;
 mod hoodoo;
 mod karst;
@@ -22,6 +23,7 @@ use glam::{IVec3, Vec2, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+pub use arch::{ArchShape, ArchSpec};
 pub use canyon::CanyonSpec;
 pub use hoodoo::{Hoodoo, HoodooSpec, Terminal};
 pub use karst::KarstSpec;
@@ -67,6 +69,8 @@ pub enum GeneratorSpec {
     Hoodoos(HoodooSpec),
     /// River canyons whose walls the stream erodes (Paris et al. 2019 §6.1).
     Canyon(CanyonSpec),
+    /// A natural arch: a fin of rock with an opening under its hard bed.
+    Arch(ArchSpec),
 }
 
 /// Errors of a generator: bad parameters for the terrain it meets.
@@ -329,6 +333,10 @@ impl LandformSpec {
             },
             GeneratorSpec::Hoodoos(h) => Generated {
                 primitives: h.generate(ground)?,
+                joining: Joining::Accrete,
+            },
+            GeneratorSpec::Arch(a) => Generated {
+                primitives: a.generate(ground)?,
                 joining: Joining::Accrete,
             },
         })

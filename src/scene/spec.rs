@@ -467,16 +467,18 @@ impl NodeSpec {
 
 impl Scene {
     /// The names of the scene's features, in the tree's order: named Feature Volumes,
-    /// anchored nodes, and named carves of a `Difference` — what `karstic run` makes a
-    /// close-up of.
+    /// anchored nodes, landforms, and named carves of a `Difference` — what `karstic run`
+    /// makes a close-up of.
     pub fn feature_names(&self) -> Vec<&str> {
         let mut names = Vec::new();
         for n in self.all_nodes() {
             if let NodeSpec::Difference(d) = n {
                 names.extend(d.carves.iter().filter_map(NodeSpec::name));
             }
-            if matches!(n, NodeSpec::FeatureVolume(_) | NodeSpec::Anchor(_))
-                && let Some(name) = n.name()
+            if matches!(
+                n,
+                NodeSpec::FeatureVolume(_) | NodeSpec::Anchor(_) | NodeSpec::Landform(_)
+            ) && let Some(name) = n.name()
             {
                 names.push(name);
             }

@@ -1,0 +1,345 @@
+//! Natural arches as remnants of a fin of bedded rock.
+//!
+//! A natural arch is what weathering left of a narrow wall of rock — a fin, a spur or a
+//! cliff line — after a soft bed under a harder one gave way right through it (the
+//! sandstone arches of the Colorado Plateau and of the Cumberland Plateau's caprock;
+//! Paris et al. 2019 §6.1 and Fig. 11 carve theirs where the geology is less durable).
+//! So the generator does not bend a tube over the ground: it stands up the fin and cuts
+//! the opening out of it.
+//!
+//! * **The fin** is a run of joint blocks rooted well below the ground, each a little
+//!   wider or narrower than its neighbours and set off to either side (the faces break
+//!   along vertical joints, the section varies along the span), narrowing toward the
+//!   ends; a dome over them brings the crest down toward both ends, as fins wear from
+//!   their ends.
+//! * **The opening** is an upright ellipsoid through the fin, its top cut off level by a
+//!   bedding plane: the ceiling is the base of the hard bed that holds the lintel up. When
+//!   `height` is not given, the ceiling is found in the scene's geology: the height, in
+//!   the upper part of the span's range, where the rock turns hardest from below to above
+//!   (the contact of a soft bed under a hard one). Without geology it lies at 45% of the
+//!   span.
+//! * Both carry a weathering noise scaled by the fin's width.
+//!
+//! The node expands to `Union([base, Erode(Transform(Difference(fin, opening)))])`: the
+//! erosion node over the fin alone reads the scene's geology, so its soft beds recess and
+//! its hard ones stand out on its faces while the ground around it is left as it was. Spans default to what nature holds (tens of metres; the longest known spans
+//! are about 90 to 120 m).
+
+use glam::{Vec2, Vec3};
+use serde::{Deserialize, Serialize};
+
+use super::{Ground, LandformError, Rng};
+use crate::field::noise::Octaves;
+use crate::field::skeleton::Size3;
+use crate::field::{NoiseSpec, PrimitiveSpec, SkeletonSpec};
+use crate::scene::spec::{BoxSpec, DifferenceSpec, ErodeSpec, Nary, Rotation, TransformSpec};
+use crate::scene::{Dir3, Finite, NodeSpec, NonNegative, P2, P3, Positive};
+
+/// Parameters of a natural arch.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArchSpec {
+    /// One foot of the opening on the ground (tree frame, x and y).
+    pub from: P2,
+    /// The other foot: the span is the distance between the two.
+    pub to: P2,
+    /// Height of the opening's ceiling above the ground at mid-span, metres (default: the
+    /// base of the hard bed the geology puts there, else 45% of the span).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<Positive>,
+    /// Thickness of the lintel at mid-span, metres (default 30% of the opening's height,
+    /// at least 3 m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lintel: Option<Positive>,
+    /// Mean width of the fin, metres (default 22% of the span, between 4 and 20 m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<Positive>,
+    /// How far the fin runs on beyond each foot, metres (default 70% of the span).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reach: Option<Positive>,
+    /// Strength of the erosion node over the fin (Paris et al. 2019 §6): how far its soft
+    /// beds recess, in field units (default 0.4; 0 leaves the fin unweathered).
+    #[serde(default = "default_weathering")]
+    pub weathering: NonNegative,
+}
+
+fn default_weathering() -> NonNegative {
+    NonNegative(0.4)
+}
+
+/// Spans the generator accepts, metres: a metre-wide window is a pothole, not an arch,
+/// and no known arch spans more than about 120 m.
+const SPANS: (f32, f32) = (4.0, 300.0);
+
+/// How far below the lowest ground the fin is rooted, as a fraction of its height.
+const ROOT: f32 = 0.3;
+
+/// The geometry the generator settled on, in the arch's frame (x along the span from its
+/// middle, z absolute).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArchShape {
+    /// Middle of the span (tree frame, x and y).
+    pub center: Vec2,
+    /// Direction of the span, from `from` to `to`.
+    pub axis: Vec2,
+    /// Span between the feet, metres.
+    pub span: f32,
+    /// Ground height at mid-span.
+    pub ground: f32,
+    /// Height of the opening's ceiling (the base of the lintel's bed).
+    pub ceiling: f32,
+    /// Height of the crest at mid-span.
+    pub crest: f32,
+    /// The fin's joint blocks in the arch's frame, west to east along the span: `(x
+    /// range, y range)` of each.
+    pub blocks: Vec<(Vec2, Vec2)>,
+    /// Bottom of the fin.
+    pub root: f32,
+}
+
+impl ArchSpec {
+    /// The arch's geometry on `ground`.
+    pub fn shape(&self, ground: &Ground) -> Result<ArchShape, LandformError> {
+        let (a, b) = (self.from.0, self.to.0);
+        let span = a.distance(b);
+        if !(SPANS.0..=SPANS.1).contains(&span) {
+            return Err(LandformError::Invalid(format!(
+                "an arch spans {span:.1} m between `from` and `to`: give between {} and {} m",
+                SPANS.0, SPANS.1
+            )));
+        }
+        let axis = (b - a) / span;
+        let center = 0.5 * (a + b);
+        let heights = [a, center, b].map(|p| ground.height(p));
+        if heights.iter().any(|h| !h.is_finite()) {
+            return Err(LandformError::Invalid(
+                "an arch's feet and middle must stand on the landform region's ground".into(),
+            ));
+        }
+        let g = heights[1];
+        let low = heights.iter().copied().fold(f32::INFINITY, f32::min);
+        let ceiling = g + self
+            .height
+            .map_or_else(|| hard_bed(ground, center, g, span), |h| h.0);
+        let rise = ceiling - g;
+        let lintel = self.lintel.map_or((0.3 * rise).max(3.0), |t| t.0);
+        let crest = ceiling + lintel;
+        let width = self.width.map_or((0.22 * span).clamp(4.0, 20.0), |w| w.0);
+        let reach = self.reach.map_or(0.7 * span, |r| r.0);
+        let mut rng = Rng::new(ground.seed ^ 0xa5c4_0ac4);
+        Ok(ArchShape {
+            center,
+            axis,
+            span,
+            ground: g,
+            ceiling,
+            crest,
+            blocks: blocks(&mut rng, 0.5 * span + reach, width),
+            root: low - ROOT * (crest - low),
+        })
+    }
+
+    /// The arch's nodes: one transform holding the fin less its opening.
+    pub fn generate(&self, ground: &Ground) -> Result<Vec<NodeSpec>, LandformError> {
+        let s = self.shape(ground)?;
+        Ok(vec![s.node(self.weathering.0)])
+    }
+}
+
+/// The ceiling's height above `g` at `xy`: where, between 30% and 70% of the span above
+/// the ground, the resistance rises most steeply going up (a soft bed under a hard one);
+/// 45% of the span when the rock is the same all the way up.
+fn hard_bed(ground: &Ground, xy: Vec2, g: f32, span: f32) -> f32 {
+    let rho = |dz: f32| (ground.resistance)(xy.extend(g + dz));
+    let step = (0.01 * span).max(0.1);
+    let (lo, hi) = (0.3 * span, 0.7 * span);
+    let mut best = (0.0, 0.45 * span);
+    let mut dz = lo;
+    while dz <= hi {
+        let rise = rho(dz + step) - rho(dz - step);
+        if rise > best.0 {
+            best = (rise, dz);
+        }
+        dz += step;
+    }
+    // A rise of less than 0.05 over two steps is noise, not a bed.
+    if best.0 < 0.05 { 0.45 * span } else { best.1 }
+}
+
+/// A fin's joint blocks over `[-half, half]`, mean width `width`: one to two widths
+/// long, each side set in or out independently by up to 45%, narrowing to 60% at both
+/// ends.
+fn blocks(rng: &mut Rng, half: f32, width: f32) -> Vec<(Vec2, Vec2)> {
+    let mut joints = vec![-half];
+    while let Some(&x) = joints.last()
+        && x < half
+    {
+        let next = x + width * (0.9 + 1.1 * rng.unit());
+        // No sliver of a block at the end.
+        joints.push(if next > half - 0.5 * width {
+            half
+        } else {
+            next
+        });
+    }
+    joints
+        .windows(2)
+        .map(|j| {
+            let mid = 0.5 * (j[0] + j[1]);
+            let taper = 1.0 - 0.4 * (mid / half).powi(2);
+            let mut side = || 0.5 * width * taper * (0.55 + 0.9 * rng.unit());
+            let (right, left) = (side(), side());
+            (Vec2::new(j[0], j[1]), Vec2::new(-right, left))
+        })
+        .collect()
+}
+
+/// Rounds to the centimetre, so expanded files read well.
+fn round2(v: f32) -> f32 {
+    (v * 100.0).round() / 100.0
+}
+
+fn p3(v: Vec3) -> P3 {
+    P3(v.to_array().map(round2).into())
+}
+
+fn noise(amplitude: f32, wavelength: f32, octaves: u32, seed_offset: u32) -> Option<NoiseSpec> {
+    Some(NoiseSpec {
+        amplitude: NonNegative(round2(amplitude)),
+        wavelength: Positive(round2(wavelength).max(0.01)),
+        octaves: Octaves::new(octaves).unwrap_or_default(),
+        seed_offset,
+    })
+}
+
+fn primitive(shape: SkeletonSpec, falloff: f32, noise: Option<NoiseSpec>) -> NodeSpec {
+    NodeSpec::Primitive(PrimitiveSpec {
+        name: None,
+        shape,
+        falloff: Positive(round2(falloff).max(0.01)),
+        energy: Finite(1.0),
+        noise,
+    })
+}
+
+impl ArchShape {
+    /// The fin's mean width.
+    fn width(&self) -> f32 {
+        let n = self.blocks.len().max(1) as f32;
+        self.blocks.iter().map(|(_, y)| y.y - y.x).sum::<f32>() / n
+    }
+
+    /// The plain node: the fin less its opening, placed on the span, weathered by an
+    /// erosion node of strength `weathering` over its box (none at 0).
+    pub fn node(&self, weathering: f32) -> NodeSpec {
+        let w = self.width();
+        let half = self.blocks.last().map_or(0.0, |(x, _)| x.y);
+        let falloff = (0.25 * w).clamp(1.0, 4.0);
+        // The blocks stand from the root to above the crest; the dome trims them.
+        let (lo, hi) = (self.root, self.crest + 0.5 * w);
+        let blocks = self
+            .blocks
+            .iter()
+            .enumerate()
+            .map(|(k, (x, y))| {
+                primitive(
+                    SkeletonSpec::Box {
+                        center: p3(Vec3::new(
+                            0.5 * (x.x + x.y),
+                            0.5 * (y.x + y.y),
+                            0.5 * (lo + hi),
+                        )),
+                        half_size: Size3(
+                            Vec3::new(0.5 * (x.y - x.x), 0.5 * (y.y - y.x), 0.5 * (hi - lo))
+                                .map(round2),
+                        ),
+                        yaw: Finite(0.0),
+                    },
+                    falloff,
+                    noise(0.12 * w, 0.8 * w, 4, 71 + k as u32),
+                )
+            })
+            .collect();
+        // The dome: its crest at `crest` mid-span, down to a fifth of the fin's height
+        // above the ground at the ends.
+        let height = self.crest - self.ground;
+        let rx = 1.05 * half;
+        let drop = (1.0 - (half / rx).powi(2)).sqrt();
+        let rz = 0.8 * height / (1.0 - drop);
+        let dome = primitive(
+            SkeletonSpec::Ellipsoid {
+                center: p3(Vec3::new(0.0, 0.0, self.crest - rz)),
+                radii: Size3(Vec3::new(rx, 4.0 * w, rz).map(round2)),
+            },
+            falloff,
+            noise(0.06 * height, 0.5 * height, 3, 61),
+        );
+        // The opening: an upright ellipsoid whose section at the ground spans the feet,
+        // cut level at the ceiling.
+        let rise = self.ceiling - self.ground;
+        let (cz, oz) = (self.ground - 0.25 * rise, 1.35 * rise);
+        let ox = 0.5 * self.span / (1.0 - ((self.ground - cz) / oz).powi(2)).sqrt();
+        let vault = primitive(
+            SkeletonSpec::Ellipsoid {
+                center: p3(Vec3::new(0.0, 0.0, cz)),
+                radii: Size3(Vec3::new(ox, 3.0 * w, oz).map(round2)),
+            },
+            falloff,
+            noise(0.05 * self.span, 0.25 * self.span, 3, 62),
+        );
+        let deep = self.ceiling - self.root + 10.0;
+        let bed = primitive(
+            SkeletonSpec::Box {
+                center: p3(Vec3::new(0.0, 0.0, self.ceiling - 0.5 * deep)),
+                half_size: Size3(Vec3::new(self.span, 3.0 * w, 0.5 * deep).map(round2)),
+                yaw: Finite(0.0),
+            },
+            0.5 * falloff,
+            noise(0.02 * self.span, 0.15 * self.span, 3, 63),
+        );
+        let fin = NodeSpec::Intersection(Nary {
+            name: None,
+            children: vec![
+                NodeSpec::Union(Nary {
+                    name: None,
+                    children: blocks,
+                }),
+                dome,
+            ],
+        });
+        let arch = NodeSpec::Difference(DifferenceSpec {
+            name: None,
+            base: Box::new(fin),
+            carves: vec![NodeSpec::Intersection(Nary {
+                name: None,
+                children: vec![vault, bed],
+            })],
+        });
+        let placed = NodeSpec::Transform(TransformSpec {
+            name: None,
+            translate: p3(self.center.extend(0.0)),
+            rotate: Some(Rotation {
+                axis: Dir3(Vec3::Z),
+                degrees: Finite(round2(self.axis.y.atan2(self.axis.x).to_degrees())),
+            }),
+            scale: Default::default(),
+            child: Box::new(arch),
+        });
+        if weathering <= 0.0 {
+            return placed;
+        }
+        // The fin's footprint turned onto the tree frame, with room for its noise.
+        let reach = Vec2::splat(half + w);
+        let (lo, hi) = (self.center - reach, self.center + reach);
+        NodeSpec::Erode(ErodeSpec {
+            name: None,
+            strength: NonNegative(weathering),
+            region: BoxSpec {
+                min: p3(lo.extend(self.root)),
+                max: p3(hi.extend(self.crest + w)),
+            },
+            blend: Some(Positive(round2(0.5 * w).max(0.5))),
+            child: Box::new(placed),
+        })
+    }
+}
