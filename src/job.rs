@@ -13,11 +13,12 @@ use rayon::prelude::*;
 use crate::analysis::{Masks, Raster, texture_frame};
 use crate::field::{Aabb, Field, Node, NodeId, Tree};
 use crate::io::progress;
+use crate::landform::generated_node;
 use crate::mesh::export::{self, ExportOptions, Origin};
 use crate::mesh::{GridSpec, Mesh, MeshOptions, MeshStats, polygonize};
 use crate::render::guide::Guide;
 use crate::render::image::write_contact_sheet;
-use crate::render::{Camera, Frame, Materials, Method, RenderSettings, Shading, cpu, views};
+use crate::render::{Camera, Frame, Materials, Method, RenderSettings, cpu, views};
 use crate::scene::{self, SceneFile};
 
 /// What to run.
@@ -449,6 +450,12 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         })
     };
 
+    // One picture setup for the preview and the views, as `render` and the editor make
+    // it (water, geology colours, shading at the scene's scale).
+    let settings = camera.as_ref().map(|c| {
+        RenderSettings::with_materials(&file.scene, &tree, materials.clone(), c, Method::Segment)
+    });
+
     // The masks and the mesh's UVs span the job's region, or the DEM for a full job.
     let frame = texture_frame(
         region_of_job.filter(|_| !opts.full).as_ref(),
@@ -473,7 +480,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
                 .as_ref()
                 .and_then(|j| j.full_cell.map(|c| c.0))
                 .unwrap_or(BACKDROP_CELLS * cell);
-            let sun = Some(Shading::for_scene(&region).sun);
+            let sun = settings.as_ref().map(|s| s.shading.sun);
             let guides = guides(
                 &tree,
                 || Ok(vec![guide_on(&mesh, &grid, opts.budget)?]),
@@ -511,21 +518,15 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         stages.push(("masks", t.elapsed()));
     }
 
-    let image_path = match camera {
+    let image_path = match camera.zip(settings) {
         None => None,
-        Some(camera) => {
+        Some((camera, settings)) => {
             let t = Instant::now();
-            // The settings `render` and the editor take (water, geology colours, shading
-            // at the scene's scale), with the guides meshed above.
+            // Each view traces at its own pixel's cone, along the guides meshed above.
             let look = |camera: &Camera| RenderSettings {
+                trace: settings.trace.with_pixel_angle(camera.pixel_angle()),
                 guides: guides.clone(),
-                ..RenderSettings::for_tree(
-                    &file.scene,
-                    &tree,
-                    ground.clone(),
-                    camera,
-                    Method::Segment,
-                )
+                ..settings.clone()
             };
             let draw = |camera: &Camera, what: &str| {
                 let tiles = camera.width.div_ceil(cpu::TILE) * camera.height.div_ceil(cpu::TILE);
@@ -547,11 +548,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
                 let fov = job.as_ref().map_or(40.0, |j| j.fov.0);
                 let mut frames = vec![frame];
                 for name in file.scene.feature_names() {
-                    // A landform's feature is what it generated, not the terrain under it.
-                    let Some(id) = ["-rocks", "-carves", ""]
-                        .iter()
-                        .find_map(|suffix| tree.find(&format!("{name}{suffix}")))
-                    else {
+                    let Some(id) = generated_node(&tree, name).or_else(|| tree.find(name)) else {
                         continue;
                     };
                     let fixed = job.as_ref().and_then(|j| j.views.get(name));

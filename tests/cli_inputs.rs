@@ -52,6 +52,17 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// Runs `karstic args`, expecting it to refuse to overwrite an input and `file` to still
+/// hold `original`.
+fn refused_leaving(args: &[&str], file: &Path, original: &[u8]) {
+    let (ok, err) = karstic(args);
+    assert!(
+        !ok && err.contains("refusing to overwrite"),
+        "{args:?}: {err}"
+    );
+    assert_eq!(std::fs::read(file).unwrap(), original, "{args:?}");
+}
+
 /// A scratch folder holding a copy of `trees/arch.ron`.
 fn with_arch() -> (tempfile::TempDir, PathBuf) {
     let dir = tempfile::tempdir().unwrap();
@@ -141,12 +152,7 @@ fn outputs_never_overwrite_inputs() {
         vec!["sample", s(&tree), "--res", "4", "4", "4", "-o", s(&tree)],
         vec!["curves", "build", s(&tree), "--ribbons", s(&tree)],
     ] {
-        let (ok, err) = karstic(&args);
-        assert!(
-            !ok && err.contains("refusing to overwrite"),
-            "{args:?}: {err}"
-        );
-        assert_eq!(std::fs::read(&tree).unwrap(), original, "{args:?}");
+        refused_leaving(&args, &tree, &original);
     }
     // A DEM the tree reads is one of its inputs too.
     let dem_tree = dir.path().join("dem.ron");
@@ -299,20 +305,14 @@ fn outputs_never_replace_inputs_special_files_or_modes() {
     // A tree named `.glb` run into its own folder.
     let glb_tree = dir.path().join("t.glb");
     std::fs::copy(&tree, &glb_tree).unwrap();
-    let (ok, err) = karstic(&["run", s(&glb_tree), "-o", s(dir.path()), "--no-render"]);
-    assert!(!ok && err.contains("refusing to overwrite"), "{err}");
-    assert_eq!(std::fs::read(&glb_tree).unwrap(), original);
+    let run = ["run", s(&glb_tree), "-o", s(dir.path()), "--no-render"];
+    refused_leaving(&run, &glb_tree, &original);
     // `tree expand` and `edit --screenshot` over their tree.
     for args in [
         vec!["tree", "expand", s(&tree), "-o", s(&tree)],
         vec!["edit", s(&tree), "--screenshot", s(&tree)],
     ] {
-        let (ok, err) = karstic(&args);
-        assert!(
-            !ok && err.contains("refusing to overwrite"),
-            "{args:?}: {err}"
-        );
-        assert_eq!(std::fs::read(&tree).unwrap(), original, "{args:?}");
+        refused_leaving(&args, &tree, &original);
     }
     // A mask stem is a file name, not a path.
     let out = dir.path().join("masks");

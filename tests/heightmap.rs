@@ -255,3 +255,46 @@ fn gdal_reads_the_heightmap_with_the_dems_size_crs_and_geotransform() {
     }
     assert_eq!(got["bands"][0]["type"], "Float32");
 }
+
+/// An arch standing on the DEM (a rotated fin less a noisy carved opening): the local
+/// Lipschitz bounds over its columns are loose (hundreds), the tracer's steps millimetres,
+/// and a column whose band ran out of steps took the top of a band far below (z = 180 m
+/// under ground at 626 m).
+#[test]
+fn column_tops_over_a_carved_arch_are_the_scanned_tops() {
+    let dem = root().join("trees/data/jacksboro_crop.asc");
+    let text = format!(
+        "(version: 1, seed: 11, root: Landform(name: \"arch\", seed: 5, cell: 5.0, \
+         region: (min: (4120, 4900, 500), max: (4440, 5100, 760)), \
+         base: Heightfield(name: \"dem\", source: {:?}, falloff: 30.0, interpolation: Bicubic), \
+         generator: Arch(from: (4250, 5012), to: (4300, 4992), weathering: 0)))",
+        dem.display()
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("arch.ron");
+    std::fs::write(&path, text).unwrap();
+    let c = compile(&path);
+    let grid = HeightmapGrid::new(
+        c.ground.as_deref(),
+        c.tree.support().footprint(),
+        Some(2.0),
+        Some(karstic::field::Rect::new(
+            Vec2::new(4236.0, 5000.0),
+            Vec2::new(4264.0, 5030.0),
+        )),
+    )
+    .unwrap();
+    let opts = TopOptions {
+        tolerance: 0.002,
+        direct: true,
+    };
+    let hm = heightmap(&c.tree, &grid, &opts, BUDGET).unwrap();
+    for j in 0..grid.size[1] {
+        for i in 0..grid.size[0] {
+            let xy = grid.at(i, j);
+            let want = brute_top(&c.tree, xy, 0.02).expect("solid in the column");
+            let got = hm.heightfield.at(i, j);
+            assert!((got - want).abs() <= 0.05, "{xy}: top {got}, scan {want}");
+        }
+    }
+}

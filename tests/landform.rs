@@ -614,3 +614,54 @@ fn an_arch_varies_along_its_span_and_stands_on_rooted_abutments() {
     // The same file gives the same arch.
     assert_eq!(arch().0, s);
 }
+
+/// On a 25° slope an arch's fin runs down past its lower foot: its root must reach below
+/// the ground there too, not only below its feet (the fin would hang in the air).
+#[test]
+fn an_arch_on_a_slope_is_rooted_along_its_whole_fin() {
+    let slope = "Transform(rotate: (axis: (0, 1, 0), degrees: 25), \
+        child: Primitive(shape: Box(center: (0, 0, -60), half_size: (150, 150, 60)), falloff: 2.0))";
+    let ground = scene_file(&format!("(version: 1, root: {slope})"))
+        .compile()
+        .unwrap()
+        .tree;
+    let tree = scene_file(&format!(
+        "(version: 1, seed: 3, root: Landform(name: \"arch\", seed: 1, cell: 2, \
+         region: (min: (-90, -60, -60), max: (90, 60, 60)), base: {slope}, \
+         generator: Arch(from: (-20, 0), to: (20, 0), weathering: 0)))"
+    ))
+    .compile()
+    .unwrap()
+    .tree;
+    let top = |t: &Tree, x: f32| {
+        (0..=1200)
+            .map(|k| 60.0 - 0.1 * k as f32)
+            .find(|&z| t.value(Vec3::new(x, 0.0, z)) > ISO)
+            .unwrap()
+    };
+    // Beside the feet (the abutments) and near both ends of the fin (it runs 28 m past
+    // each foot): ground and fin are one rock, no air between them.
+    for x in [-46.0f32, -26.0, 26.0, 46.0] {
+        let (from, to) = (Vec3::new(x, 0.0, -60.0), Vec3::new(x, 0.0, 60.0));
+        let at = |k: i32| tree.value(from.lerp(to, k as f32 / 1200.0)) > ISO;
+        let crossings = (1..=1200).filter(|&k| at(k) != at(k - 1)).count();
+        assert_eq!(
+            crossings, 1,
+            "air between the ground and the fin at x = {x}"
+        );
+    }
+    // The fin stands over both feet.
+    for x in [-20.0f32, 20.0] {
+        assert!(
+            top(&tree, x) > top(&ground, x) + 5.0,
+            "no fin over the foot at x = {x}"
+        );
+    }
+    // The downhill end stands above its ground (the fin is there, not buried).
+    let low_end = if top(&ground, 46.0) < top(&ground, -46.0) {
+        46.0
+    } else {
+        -46.0
+    };
+    assert!(top(&tree, low_end) > top(&ground, low_end) + 1.0);
+}

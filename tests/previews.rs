@@ -12,6 +12,20 @@ use crate::render_cli::karstic;
 
 const SCENE: &str = "trees/jacksboro_caves.ron";
 
+/// A quiet job writing to `out_dir`, with the feature views when `views`.
+fn quiet_job(out_dir: &Path, views: bool) -> JobOptions {
+    JobOptions {
+        out_dir: out_dir.to_path_buf(),
+        full: false,
+        no_render: false,
+        no_views: !views,
+        quiet: true,
+        budget: karstic::io::DEFAULT_MEMORY_BUDGET,
+        origin: karstic::mesh::export::Origin::Dem,
+        masks: false,
+    }
+}
+
 fn rgb(path: &Path) -> image::RgbImage {
     image::open(path).unwrap().to_rgb8()
 }
@@ -19,16 +33,7 @@ fn rgb(path: &Path) -> image::RgbImage {
 #[test]
 fn main_preview_reads_as_terrain_and_each_feature_gets_a_view() {
     let dir = tempfile::tempdir().unwrap();
-    let opts = JobOptions {
-        out_dir: dir.path().to_path_buf(),
-        full: false,
-        no_render: false,
-        no_views: false,
-        quiet: true,
-        budget: karstic::io::DEFAULT_MEMORY_BUDGET,
-        origin: karstic::mesh::export::Origin::Dem,
-        masks: false,
-    };
+    let opts = quiet_job(dir.path(), true);
     let r = job::run(Path::new(SCENE), &opts).unwrap();
     // Named after the file.
     let preview = r.image_path.clone().unwrap();
@@ -228,16 +233,7 @@ fn run_and_render_draw_the_same_picture() {
     );
     let tree = dir.path().join("sea.ron");
     std::fs::write(&tree, small).unwrap();
-    let opts = JobOptions {
-        out_dir: dir.path().join("out"),
-        full: false,
-        no_render: false,
-        no_views: true,
-        quiet: true,
-        budget: karstic::io::DEFAULT_MEMORY_BUDGET,
-        origin: karstic::mesh::export::Origin::Dem,
-        masks: false,
-    };
+    let opts = quiet_job(&dir.path().join("out"), false);
     let report = job::run(&tree, &opts).unwrap();
     let rendered = dir.path().join("render.png");
     let (ok, err) = karstic(&[

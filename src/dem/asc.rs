@@ -72,7 +72,7 @@ pub fn read_bytes(
     let col_of = |line: &str, tok: &str| tok.as_ptr() as usize - line.as_ptr() as usize + 1;
 
     let mut lines = text.lines().enumerate().peekable();
-    let mut fields: Vec<(String, f64, usize)> = Vec::new();
+    let mut fields: Vec<(&str, f64, usize)> = Vec::new();
     while let Some(&(ln, line)) = lines.peek() {
         let mut toks = line.split_ascii_whitespace();
         let Some(k) = toks.next() else {
@@ -102,14 +102,14 @@ pub fn read_bytes(
             .ok()
             .filter(|x| x.is_finite())
             .ok_or_else(|| syntax(ln + 1, col_of(line, v), format!("a number for `{k}`")))?;
-        fields.push((k.to_ascii_lowercase(), num, ln + 1));
+        fields.push((k, num, ln + 1));
         lines.next();
     }
     let get = |names: &[&str]| {
         fields
             .iter()
-            .find(|f| names.contains(&f.0.as_str()))
-            .map(|f| (f.1, f.2, f.0.as_str()))
+            .find(|f| names.contains(&f.0))
+            .map(|f| (f.1, f.2, f.0))
     };
     let need = |names: &[&str]| {
         get(names).ok_or_else(|| DemError::Malformed {

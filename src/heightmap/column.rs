@@ -89,7 +89,18 @@ impl<'t> Columns<'t> {
         if self.tree.value(ray.origin) > ISO {
             return Some(band.hi);
         }
-        let hit = self.tracer.trace(&ray, (0.0, band.width()), &self.params);
+        // Every step advances at least ε: with this many, the march reaches the band's
+        // bottom before giving up. A tracer out of steps declares a miss, and a missed
+        // band would put the top on a lower one (a loose local bound over the band, as
+        // around noisy carved primitives, makes steps of millimetres).
+        let params = TraceParams {
+            max_steps: (band.width() / self.params.epsilon)
+                .ceil()
+                .min(u32::MAX as f32) as u32
+                + self.params.max_steps,
+            ..self.params
+        };
+        let hit = self.tracer.trace(&ray, (0.0, band.width()), &params);
         hit.hit().then_some(band.hi - hit.t)
     }
 }

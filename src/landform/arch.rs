@@ -28,10 +28,10 @@
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::{Ground, LandformError, Rng};
+use super::{Ground, LandformError, Rng, round3, solid};
 use crate::field::noise::Octaves;
 use crate::field::skeleton::Size3;
-use crate::field::{NoiseSpec, PrimitiveSpec, SkeletonSpec};
+use crate::field::{NoiseSpec, SkeletonSpec};
 use crate::scene::spec::{BoxSpec, DifferenceSpec, ErodeSpec, Nary, Rotation, TransformSpec};
 use crate::scene::{Dir3, Finite, NodeSpec, NonNegative, P2, P3, Positive};
 
@@ -71,7 +71,8 @@ fn default_weathering() -> NonNegative {
 /// and no known arch spans more than about 120 m.
 const SPANS: (f32, f32) = (4.0, 300.0);
 
-/// How far below the lowest ground the fin is rooted, as a fraction of its height.
+/// How far below the lowest ground under the fin it is rooted, as a fraction of its
+/// height above that ground.
 const ROOT: f32 = 0.3;
 
 /// The geometry the generator settled on, in the arch's frame (x along the span from its
@@ -117,7 +118,6 @@ impl ArchSpec {
             ));
         }
         let g = heights[1];
-        let low = heights.iter().copied().fold(f32::INFINITY, f32::min);
         let ceiling = g + self
             .height
             .map_or_else(|| hard_bed(ground, center, g, span), |h| h.0);
@@ -126,6 +126,8 @@ impl ArchSpec {
         let crest = ceiling + lintel;
         let width = self.width.map_or((0.22 * span).clamp(4.0, 20.0), |w| w.0);
         let reach = self.reach.map_or(0.7 * span, |r| r.0);
+        let half = 0.5 * span + reach;
+        let low = lowest_ground(ground, center, axis, half, width).min(g);
         let mut rng = Rng::new(ground.seed ^ 0xa5c4_0ac4);
         Ok(ArchShape {
             center,
@@ -134,7 +136,7 @@ impl ArchSpec {
             ground: g,
             ceiling,
             crest,
-            blocks: blocks(&mut rng, 0.5 * span + reach, width),
+            blocks: blocks(&mut rng, half, width),
             root: low - ROOT * (crest - low),
         })
     }
@@ -144,6 +146,22 @@ impl ArchSpec {
         let s = self.shape(ground)?;
         Ok(vec![s.node(self.weathering.0)])
     }
+}
+
+/// The lowest ground under a fin of half-length `half` and width `width` along `axis`
+/// from `center` (on a slope its downhill end stands far below its feet), sampled every
+/// half width along its axis and both sides; samples off the region's ground are skipped.
+fn lowest_ground(ground: &Ground, center: Vec2, axis: Vec2, half: f32, width: f32) -> f32 {
+    let across = axis.perp();
+    let n = (2.0 * half / (0.5 * width)).ceil() as usize;
+    (0..=n)
+        .flat_map(|i| {
+            let along = center + axis * (-half + 2.0 * half * i as f32 / n as f32);
+            [-0.5, 0.0, 0.5].map(|k| along + across * (k * width))
+        })
+        .map(|xy| ground.height(xy))
+        .filter(|h| h.is_finite())
+        .fold(f32::INFINITY, f32::min)
 }
 
 /// The ceiling's height above `g` at `xy`: where, between 30% and 70% of the span above
@@ -194,32 +212,21 @@ fn blocks(rng: &mut Rng, half: f32, width: f32) -> Vec<(Vec2, Vec2)> {
         .collect()
 }
 
-/// Rounds to the centimetre, so expanded files read well.
-fn round2(v: f32) -> f32 {
-    (v * 100.0).round() / 100.0
-}
-
 fn p3(v: Vec3) -> P3 {
-    P3(v.to_array().map(round2).into())
+    P3(v.to_array().map(round3).into())
 }
 
 fn noise(amplitude: f32, wavelength: f32, octaves: u32, seed_offset: u32) -> Option<NoiseSpec> {
     Some(NoiseSpec {
-        amplitude: NonNegative(round2(amplitude)),
-        wavelength: Positive(round2(wavelength).max(0.01)),
+        amplitude: NonNegative(round3(amplitude)),
+        wavelength: Positive(round3(wavelength).max(0.01)),
         octaves: Octaves::new(octaves).unwrap_or_default(),
         seed_offset,
     })
 }
 
 fn primitive(shape: SkeletonSpec, falloff: f32, noise: Option<NoiseSpec>) -> NodeSpec {
-    NodeSpec::Primitive(PrimitiveSpec {
-        name: None,
-        shape,
-        falloff: Positive(round2(falloff).max(0.01)),
-        energy: Finite(1.0),
-        noise,
-    })
+    solid(shape, round3(falloff).max(0.01), noise)
 }
 
 impl ArchShape {
@@ -251,7 +258,7 @@ impl ArchShape {
                         )),
                         half_size: Size3(
                             Vec3::new(0.5 * (x.y - x.x), 0.5 * (y.y - y.x), 0.5 * (hi - lo))
-                                .map(round2),
+                                .map(round3),
                         ),
                         yaw: Finite(0.0),
                     },
@@ -260,16 +267,17 @@ impl ArchShape {
                 )
             })
             .collect();
-        // The dome: its crest at `crest` mid-span, down to a fifth of the fin's height
-        // above the ground at the ends.
+        // The dome: an ellipsoid centred at the root, its top at `crest` mid-span and a
+        // fifth of the fin's height above the middle's ground at the ends: it trims the
+        // crest, never the root (the fin's downhill end stays in the ground).
         let height = self.crest - self.ground;
-        let rx = 1.05 * half;
-        let drop = (1.0 - (half / rx).powi(2)).sqrt();
-        let rz = 0.8 * height / (1.0 - drop);
+        let rz = self.crest - self.root;
+        let end = (self.ground + 0.2 * height - self.root) / rz;
+        let rx = half / (1.0 - end * end).sqrt();
         let dome = primitive(
             SkeletonSpec::Ellipsoid {
-                center: p3(Vec3::new(0.0, 0.0, self.crest - rz)),
-                radii: Size3(Vec3::new(rx, 4.0 * w, rz).map(round2)),
+                center: p3(Vec3::new(0.0, 0.0, self.root)),
+                radii: Size3(Vec3::new(rx, 4.0 * w, rz).map(round3)),
             },
             falloff,
             noise(0.06 * height, 0.5 * height, 3, 61),
@@ -282,7 +290,7 @@ impl ArchShape {
         let vault = primitive(
             SkeletonSpec::Ellipsoid {
                 center: p3(Vec3::new(0.0, 0.0, cz)),
-                radii: Size3(Vec3::new(ox, 3.0 * w, oz).map(round2)),
+                radii: Size3(Vec3::new(ox, 3.0 * w, oz).map(round3)),
             },
             falloff,
             noise(0.05 * self.span, 0.25 * self.span, 3, 62),
@@ -291,7 +299,7 @@ impl ArchShape {
         let bed = primitive(
             SkeletonSpec::Box {
                 center: p3(Vec3::new(0.0, 0.0, self.ceiling - 0.5 * deep)),
-                half_size: Size3(Vec3::new(self.span, 3.0 * w, 0.5 * deep).map(round2)),
+                half_size: Size3(Vec3::new(self.span, 3.0 * w, 0.5 * deep).map(round3)),
                 yaw: Finite(0.0),
             },
             0.5 * falloff,
@@ -320,7 +328,7 @@ impl ArchShape {
             translate: p3(self.center.extend(0.0)),
             rotate: Some(Rotation {
                 axis: Dir3(Vec3::Z),
-                degrees: Finite(round2(self.axis.y.atan2(self.axis.x).to_degrees())),
+                degrees: Finite(round3(self.axis.y.atan2(self.axis.x).to_degrees())),
             }),
             scale: Default::default(),
             child: Box::new(arch),
@@ -338,7 +346,7 @@ impl ArchShape {
                 min: p3(lo.extend(self.root)),
                 max: p3(hi.extend(self.crest + w)),
             },
-            blend: Some(Positive(round2(0.5 * w).max(0.5))),
+            blend: Some(Positive(round3(0.5 * w).max(0.5))),
             child: Box::new(placed),
         })
     }

@@ -24,12 +24,12 @@
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::{Ground, LandformError, Poisson, Rng};
+use super::{Ground, LandformError, Poisson, Rng, solid};
 use crate::analysis::flow::{drainage_area, fill_depressions};
 use crate::analysis::relief::slope;
 use crate::field::noise::Octaves;
 use crate::field::skeleton::Size3;
-use crate::field::{NoiseSpec, PrimitiveSpec, SkeletonSpec};
+use crate::field::{NoiseSpec, SkeletonSpec};
 use crate::scene::{Finite, NodeSpec, NonNegative, P2, P3, Positive, Unit};
 
 fn default_lambda() -> Unit {
@@ -267,13 +267,7 @@ impl HoodooSpec {
                         None,
                     ),
                 };
-                NodeSpec::Primitive(PrimitiveSpec {
-                    name: None,
-                    shape,
-                    falloff: Positive(falloff),
-                    energy: Finite(1.0),
-                    noise,
-                })
+                solid(shape, falloff, noise)
             })
             .collect())
     }

@@ -30,7 +30,7 @@ pub use karst::KarstSpec;
 pub use sea::SeaSpec;
 
 use crate::dem::{Heightfield, Interpolation};
-use crate::field::{Aabb, Field, ISO, PrimitiveSpec, SkeletonSpec, Tree};
+use crate::field::{Aabb, Field, ISO, NodeId, NoiseSpec, PrimitiveSpec, SkeletonSpec, Tree};
 use crate::heightmap::{Columns, TopOptions};
 use crate::scene::spec::{BoxSpec, Nary};
 use crate::scene::{Finite, NodeSpec, P3, Positive};
@@ -199,8 +199,21 @@ pub fn carving_sphere(center: Vec3, radius: f32, e: f32) -> NodeSpec {
     point(center, radius / CAVITY_FRACTION, -2.0 * e)
 }
 
+/// Rounds to the millimetre, so expanded files read well.
 fn round3(v: f32) -> f32 {
     (v * 1000.0).round() / 1000.0
+}
+
+/// A solid primitive (energy 1) of `shape`, falloff `falloff` and optional noise: the
+/// rock the accreting generators stand on the terrain.
+pub fn solid(shape: SkeletonSpec, falloff: f32, noise: Option<NoiseSpec>) -> NodeSpec {
+    NodeSpec::Primitive(PrimitiveSpec {
+        name: None,
+        shape,
+        falloff: Positive(falloff),
+        energy: Finite(1.0),
+        noise,
+    })
 }
 
 /// A point primitive (a blob) of falloff `falloff` and energy `energy`.
@@ -307,6 +320,25 @@ pub enum Joining {
     Accrete,
 }
 
+impl Joining {
+    /// What names the blend of the generated primitives: `NAME-carves` or `NAME-rocks`.
+    fn suffix(&self) -> &'static str {
+        match self {
+            Joining::Carve => "carves",
+            Joining::Accrete => "rocks",
+        }
+    }
+}
+
+/// The node of a compiled `tree` holding what the landform `name` generated (its
+/// `NAME-carves` or `NAME-rocks` blend; `None` when it made nothing): the landform's
+/// feature, where the node `name` itself is the terrain under it too.
+pub fn generated_node(tree: &Tree, name: &str) -> Option<NodeId> {
+    [Joining::Carve, Joining::Accrete]
+        .iter()
+        .find_map(|j| tree.find(&format!("{name}-{}", j.suffix())))
+}
+
 /// What a generator made: its primitives and how they join the base.
 pub struct Generated {
     /// The primitives.
@@ -349,10 +381,7 @@ impl LandformSpec {
 
     /// The plain node this landform expands into (its base already expanded).
     pub fn expansion(self, generated: Generated) -> NodeSpec {
-        let suffix = match generated.joining {
-            Joining::Carve => "carves",
-            Joining::Accrete => "rocks",
-        };
+        let suffix = generated.joining.suffix();
         let mut children = vec![*self.base];
         // An empty blend is refused by the tree file's checks: nothing generated, nothing
         // added.

@@ -68,8 +68,21 @@ impl RenderSettings {
         camera: &Camera,
         method: Method,
     ) -> Self {
+        let materials = Materials::for_tree(scene, tree, ground);
+        Self::with_materials(scene, tree, materials, camera, method)
+    }
+
+    /// [`RenderSettings::for_tree`] with the tree's `materials` already made (the job
+    /// colours its mesh with them too).
+    pub fn with_materials(
+        scene: &Scene,
+        tree: &Tree,
+        materials: Materials,
+        camera: &Camera,
+        method: Method,
+    ) -> Self {
         let mut s = RenderSettings {
-            materials: Materials::for_tree(scene, tree, ground),
+            materials,
             ..RenderSettings::for_scene(&scene_box(scene, tree), camera, method)
         };
         s.shading.water = scene
