@@ -63,6 +63,19 @@ fn refused_leaving(args: &[&str], file: &Path, original: &[u8]) {
     assert_eq!(std::fs::read(file).unwrap(), original, "{args:?}");
 }
 
+/// A tree `dem.ron` in `dir` reading the DEM `dem.png` beside it (which holds the bytes
+/// `not overwritten`, not a PNG: nothing may read or write it before the check).
+fn tree_beside_its_dem(dir: &Path) -> (PathBuf, PathBuf) {
+    let (tree, png) = (dir.join("dem.ron"), dir.join("dem.png"));
+    std::fs::write(&png, b"not overwritten").unwrap();
+    std::fs::write(
+        &tree,
+        "(version: 1, root: Heightfield(source: \"dem.png\", falloff: 2))",
+    )
+    .unwrap();
+    (tree, png)
+}
+
 /// A scratch folder holding a copy of `trees/arch.ron`.
 fn with_arch() -> (tempfile::TempDir, PathBuf) {
     let dir = tempfile::tempdir().unwrap();
@@ -155,14 +168,7 @@ fn outputs_never_overwrite_inputs() {
         refused_leaving(&args, &tree, &original);
     }
     // A DEM the tree reads is one of its inputs too.
-    let dem_tree = dir.path().join("dem.ron");
-    let png = dir.path().join("dem.png");
-    std::fs::write(&png, b"not overwritten").unwrap();
-    std::fs::write(
-        &dem_tree,
-        "(version: 1, root: Heightfield(source: \"dem.png\", falloff: 2))",
-    )
-    .unwrap();
+    let (dem_tree, png) = tree_beside_its_dem(dir.path());
     let (ok, err) = karstic(&["render", s(&dem_tree), "-o", s(&png)]);
     assert!(!ok && err.contains("refusing to overwrite"), "{err}");
     assert_eq!(std::fs::read(&png).unwrap(), b"not overwritten");
@@ -291,14 +297,7 @@ fn outputs_never_replace_inputs_special_files_or_modes() {
         );
     }
     // `run` with a tree beside its DEM: the preview would be `dem.png`.
-    let dem_tree = dir.path().join("dem.ron");
-    let png = dir.path().join("dem.png");
-    std::fs::write(&png, b"not overwritten").unwrap();
-    std::fs::write(
-        &dem_tree,
-        "(version: 1, root: Heightfield(source: \"dem.png\", falloff: 2))",
-    )
-    .unwrap();
+    let (dem_tree, png) = tree_beside_its_dem(dir.path());
     let (ok, err) = karstic(&["run", s(&dem_tree), "-o", s(dir.path()), "--quiet"]);
     assert!(!ok && err.contains("refusing to overwrite"), "{err}");
     assert_eq!(std::fs::read(&png).unwrap(), b"not overwritten");

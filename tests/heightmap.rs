@@ -100,6 +100,25 @@ fn edge_ring(grid: &HeightmapGrid, i: usize, j: usize) -> bool {
     i == 0 || j == 0 || i + 1 == grid.size[0] || j + 1 == grid.size[1]
 }
 
+/// The column tops of `c` over the rectangle `(min, max)` at a 2 m cell, located to
+/// `tolerance` (direct where the tree is a heightfield).
+fn tops_over(c: &Compiled, (min, max): (Vec2, Vec2), tolerance: f32) -> (HeightmapGrid, Dem) {
+    let rect = karstic::field::Rect::new(min, max);
+    let grid = HeightmapGrid::new(
+        c.ground.as_deref(),
+        c.tree.support().footprint(),
+        Some(2.0),
+        Some(rect),
+    )
+    .unwrap();
+    let opts = TopOptions {
+        tolerance,
+        direct: true,
+    };
+    let hm = heightmap(&c.tree, &grid, &opts, BUDGET).unwrap();
+    (grid, hm)
+}
+
 /// The highest solid sample of the column over `xy`, scanning down in steps of `dz`.
 fn brute_top(t: &Tree, xy: Vec2, dz: f32) -> Option<f32> {
     let s = t.support();
@@ -113,21 +132,11 @@ fn brute_top(t: &Tree, xy: Vec2, dz: f32) -> Option<f32> {
 fn over_the_main_jobs_arch_the_top_is_the_arch() {
     let c = compile(&root().join("trees/jacksboro_caves.ron"));
     let ground = c.ground.clone().unwrap();
-    let grid = HeightmapGrid::new(
-        c.ground.as_deref(),
-        c.tree.support().footprint(),
-        Some(2.0),
-        Some(karstic::field::Rect::new(
-            Vec2::new(4560.0, 4946.0),
-            Vec2::new(4700.0, 4954.0),
-        )),
-    )
-    .unwrap();
-    let opts = TopOptions {
-        tolerance: 0.01,
-        direct: true,
-    };
-    let hm = heightmap(&c.tree, &grid, &opts, BUDGET).unwrap();
+    let (grid, hm) = tops_over(
+        &c,
+        (Vec2::new(4560.0, 4946.0), Vec2::new(4700.0, 4954.0)),
+        0.01,
+    );
     let mut over = 0;
     for j in 0..grid.size[1] {
         for i in (0..grid.size[0]).step_by(5) {
@@ -274,21 +283,11 @@ fn column_tops_over_a_carved_arch_are_the_scanned_tops() {
     let path = dir.path().join("arch.ron");
     std::fs::write(&path, text).unwrap();
     let c = compile(&path);
-    let grid = HeightmapGrid::new(
-        c.ground.as_deref(),
-        c.tree.support().footprint(),
-        Some(2.0),
-        Some(karstic::field::Rect::new(
-            Vec2::new(4236.0, 5000.0),
-            Vec2::new(4264.0, 5030.0),
-        )),
-    )
-    .unwrap();
-    let opts = TopOptions {
-        tolerance: 0.002,
-        direct: true,
-    };
-    let hm = heightmap(&c.tree, &grid, &opts, BUDGET).unwrap();
+    let (grid, hm) = tops_over(
+        &c,
+        (Vec2::new(4236.0, 5000.0), Vec2::new(4264.0, 5030.0)),
+        0.002,
+    );
     for j in 0..grid.size[1] {
         for i in 0..grid.size[0] {
             let xy = grid.at(i, j);
