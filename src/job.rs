@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use crate::analysis::{Masks, Raster, texture_frame};
 use crate::field::{Aabb, Field, Node, NodeId, Tree};
 use crate::io::progress;
-use crate::landform::generated_node;
+use crate::landform::feature_node;
 use crate::mesh::export::{self, ExportOptions, Origin};
 use crate::mesh::{GridSpec, Mesh, MeshOptions, MeshStats, polygonize};
 use crate::render::guide::Guide;
@@ -548,7 +548,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
                 let fov = job.as_ref().map_or(40.0, |j| j.fov.0);
                 let mut frames = vec![frame];
                 for name in file.scene.feature_names() {
-                    let Some(id) = generated_node(&tree, name).or_else(|| tree.find(name)) else {
+                    let Some(id) = feature_node(&tree, name) else {
                         continue;
                     };
                     let fixed = job.as_ref().and_then(|j| j.views.get(name));

@@ -58,7 +58,7 @@ karstic sample trees/jacksboro_caves.ron --box 3470 4880 790 3470.5 5070 980 --r
 karstic sample trees/jacksboro_caves.ron --box 3360 4860 868 3840 5080 868.5 --res 961 441 2 -o cave_plan.npy
 karstic render trees/curves/overhang.ron -o curves_overhang.png --quiet
 karstic render trees/curves/arch.ron -o curves_arch.png --quiet
-karstic render trees/jacksboro_caves.ron -o meld_arch_after.png --camera 4700 5330 700 4620 4950 625 --fov 50 --quiet
+karstic render trees/curves/jacksboro_arch.ron -o meld_arch_after.png --quiet
 karstic render trees/arch_unaware.ron -o meld_arch_before.png --camera 4700 5330 700 4620 4950 625 --fov 50 --quiet
 karstic render trees/ridge_tunnel.ron -o meld_portal.png --camera 4190 6150 878 4130 6205 858 --fov 55 --quiet
 karstic render trees/rock_spire.ron -o rock_spire.png --quiet
@@ -70,9 +70,9 @@ karstic render trees/elevation_valley.ron -o elevation_valley.png --quiet
 karstic sample trees/elevation_valley.ron --box 212 1050 100 212.5 1550 520 --res 2 501 421 -o elevation_section.npy
 karstic build trees/arch.ron -o arch_mesh.obj --res 40 --quiet
 karstic masks trees/jacksboro_caves.ron -o masks --cell 5 --box 3300 4840 480 4860 5330 1100 --quiet
-karstic render trees/jacksboro_caves.ron -o heightmap_tree.png --quiet
-karstic heightmap trees/jacksboro_caves.ron -o top.tif --cell 2.5 --region 4300 4700 4900 5200
-karstic render trees/heightmap_top.ron -o heightmap_top.png --camera 4900 4380 780 4480 4990 690 --fov 40 --quiet
+karstic render trees/jacksboro_caves.ron -o heightmap_tree.png --camera 4258 4925 662 4281 5012 642 --fov 40 --quiet
+karstic heightmap trees/jacksboro_caves.ron -o top.tif --cell 2.5 --region 4100 4800 4500 5200
+karstic render trees/heightmap_top.ron -o heightmap_top.png --camera 4258 4925 662 4281 5012 642 --fov 40 --quiet
 karstic render trees/jacksboro_bare.ron -o detail_on.png --camera 3920 5150 790 3560 5120 880 --fov 50 --quiet
 karstic render trees/jacksboro_smooth.ron -o detail_off.png --camera 3920 5150 790 3560 5120 880 --fov 50 --quiet
 karstic render trees/eroded_range.ron -o eroded_range.png --camera 600 380 300 660 700 200 --fov 50 --quiet
@@ -157,10 +157,10 @@ const UNAWARE_GROUND: f32 = 80.0;
 
 /// Writes the variants of the main job's tree that [`COMMANDS`] render into the sandbox's
 /// `trees/`: `jacksboro_bare.ron`, its terrain alone under the same `job` section (the DEM
-/// before amplification, seen as the main job sees it), and `arch_unaware.ron`, its arch
-/// volume built without the terrain (`on_terrain: false`) but with a ground curve under
-/// the apex, united with the terrain — what a Feature Volume did to a terrain before
-/// `Replace`; `jacksboro_smooth.ron`, the terrain without its detail amplification; and
+/// before amplification, seen as the main job sees it), and `arch_unaware.ron`, the arch
+/// volume of `curves/jacksboro_arch.ron` built without the terrain (`on_terrain: false`)
+/// but with a ground curve under the apex, united with the terrain — what a Feature
+/// Volume did to a terrain before `Replace`; `jacksboro_smooth.ron`, the terrain without its detail amplification; and
 /// `heightmap_top.ron`, the main job's heightmap as a scene.
 fn prepare(trees: &Path) {
     let main = karstic::scene::load(trees.join("jacksboro_caves.ron"))
@@ -172,13 +172,17 @@ fn prepare(trees: &Path) {
         .as_deref()
         .expect("the main job names its terrain");
     let dem = named[terrain].clone();
-    let mut arch = named["arch"].clone();
+    // The Feature Curves arch on the same DEM (its volume names no file).
+    let curve_arch = karstic::scene::load(trees.join("curves/jacksboro_arch.ron"))
+        .expect("the curve arch's tree")
+        .scene;
+    let mut arch = curve_arch.named()["arch"].clone();
     let NodeSpec::FeatureVolume(volume) = &mut arch else {
-        panic!("the main job's `arch` is a FeatureVolume")
+        panic!("the curve arch's `arch` is a FeatureVolume")
     };
     volume.on_terrain = false;
     let CurveSource::Inline(features) = &mut volume.curves else {
-        panic!("the main job's arch is written inline")
+        panic!("the curve arch is written inline")
     };
     for a in &mut features.arches {
         a.ground = Some(Positive::new(UNAWARE_GROUND));
@@ -189,7 +193,7 @@ fn prepare(trees: &Path) {
     };
     // The main job's heightmap around the arch (`top.tif`, written by COMMANDS at the
     // sandbox's root) as the only node of a scene.
-    let top = "(version: 1, root: Heightfield(source: \"../top.tif\", falloff: 5.0, placement: (4300, 4700)))";
+    let top = "(version: 1, root: Heightfield(source: \"../top.tif\", falloff: 5.0, placement: (4100, 4800)))";
     std::fs::write(trees.join("heightmap_top.ron"), top).expect("heightmap_top.ron");
     write(
         "jacksboro_bare.ron",

@@ -19,7 +19,7 @@ fn tree(s: &SceneFile) -> Tree {
     s.compile().unwrap().tree
 }
 
-/// The scene without its features: every `Replace` is its base, every `Difference` its
+/// The scene without its features: every `Replace`, `Difference` and `Landform` is its
 /// base, and n-ary nodes keep only the children holding a heightfield.
 fn bare(s: &SceneFile) -> Tree {
     fn terrain(n: &NodeSpec) -> bool {
@@ -29,6 +29,7 @@ fn bare(s: &SceneFile) -> Tree {
         match n {
             NodeSpec::Replace(r) => strip(&r.base),
             NodeSpec::Difference(d) => strip(&d.base),
+            NodeSpec::Landform(l) => strip(&l.base),
             NodeSpec::Union(x) | NodeSpec::Blend(x) | NodeSpec::Intersection(x) => {
                 let kept: Vec<&NodeSpec> = x.children.iter().filter(|c| terrain(c)).collect();
                 match kept.as_slice() {
@@ -137,18 +138,23 @@ fn assert_melds(t: &Tree, bare: &Tree, region: Aabb, curve: &[Vec2], radius: f32
 fn default_scene_changes_the_terrain_only_near_its_features() {
     let s = scene("jacksboro_caves");
     let (t, b) = (tree(&s), bare(&s));
-    // The arch: its span from foot to foot; 30 m is half its width at the feet (21 m)
-    // and a margin. The region reaches well past the volume's domain faces.
+    // The arch: its fin from end to end (65 m each way from the middle of its span,
+    // along it); 20 m is half the fin's widest block (at most 9 m), its noise and a
+    // margin.
+    let (middle, along) = (
+        Vec2::new(4275.0, 5002.0),
+        Vec2::new(50.0, -20.0).normalize(),
+    );
     assert_melds(
         &t,
         &b,
         Aabb::new(
-            Vec3::new(4330.0, 4810.0, 540.0),
-            Vec3::new(4920.0, 5090.0, 720.0),
+            Vec3::new(4100.0, 4860.0, 540.0),
+            Vec3::new(4460.0, 5140.0, 720.0),
         ),
-        &[Vec2::new(4470.0, 4950.0), Vec2::new(4790.0, 4950.0)],
-        30.0,
-        40.0,
+        &[middle - 65.0 * along, middle + 65.0 * along],
+        20.0,
+        15.0,
     );
     // The cave: the tunnel's path (its part in the air leaves no trace).
     assert_melds(
@@ -191,7 +197,7 @@ fn solid_runs(t: &Tree, from: Vec3, to: Vec3, step: f32) -> Vec<f32> {
 
 #[test]
 fn the_arch_is_a_slab_thinnest_at_the_crown_over_open_air() {
-    let s = scene("jacksboro_caves");
+    let s = scene("curves/jacksboro_arch");
     let (t, ground) = (tree(&s), bare(&s));
     let (thickness, voxel) = (14.0, 2.0);
     // Vertical line through the crown: the ground, then the slab.
@@ -238,6 +244,47 @@ fn the_arch_is_a_slab_thinnest_at_the_crown_over_open_air() {
             solid_runs(&t, a, b, 0.5).is_empty(),
             "rock under the arch on {a} → {b}"
         );
+    }
+}
+
+/// The main job's arch is a fin with an opening: under the middle of its span the ground,
+/// open air, then the lintel; open air along the span under it; each abutment one rock
+/// from the ground up to the lintel, beyond each foot.
+#[test]
+fn the_main_jobs_arch_is_a_fin_open_under_its_lintel() {
+    let s = scene("jacksboro_caves");
+    let (t, ground) = (tree(&s), bare(&s));
+    let (middle, along) = (
+        Vec2::new(4275.0, 5002.0),
+        Vec2::new(50.0, -20.0).normalize(),
+    );
+    let floor = height(&ground, middle);
+    let runs = solid_runs(&t, middle.extend(720.0), middle.extend(540.0), 0.25);
+    assert_eq!(runs.len(), 2, "lintel and ground under mid-span: {runs:?}");
+    assert!(
+        (3.0..=15.0).contains(&runs[0]),
+        "a lintel {} m thick",
+        runs[0]
+    );
+    // The opening: 24 m high at mid-span, open from 2 m above the ground to 20 m.
+    let open = solid_runs(
+        &t,
+        middle.extend(floor + 2.0),
+        middle.extend(floor + 20.0),
+        0.25,
+    );
+    assert!(open.is_empty(), "rock in the opening: {open:?}");
+    for (foot, out) in [(-27.0f32, -1.0f32), (27.0, 1.0)] {
+        // 6 m past the foot, away from the opening: rock from the ground to 15 m up.
+        let xy = middle + along * (foot + 6.0 * out);
+        let z0 = height(&ground, xy);
+        let column = solid_runs(&t, xy.extend(z0 + 15.0), xy.extend(z0 - 3.0), 0.25);
+        assert_eq!(
+            column.len(),
+            1,
+            "the abutment at {xy} is broken: {column:?}"
+        );
+        assert!(column[0] >= 17.0, "the abutment at {xy}: {column:?}");
     }
 }
 

@@ -59,7 +59,7 @@ fn main_preview_reads_as_terrain_and_each_feature_gets_a_view() {
 
     // A view of each feature a camera can see, the sealed chamber excepted, and a sheet.
     let names: Vec<&str> = r.views.iter().map(|(n, _)| n.as_str()).collect();
-    assert_eq!(names, ["grotto", "cave", "arch", "sheet"]);
+    assert_eq!(names, ["grotto", "arch", "cave", "sheet"]);
     assert!(
         r.notices.iter().any(|n| n.contains("\"chamber\"")),
         "{:?}",
@@ -73,15 +73,20 @@ fn main_preview_reads_as_terrain_and_each_feature_gets_a_view() {
     let tree = &r.tree;
     let file = karstic::scene::load(Path::new(SCENE)).unwrap();
     let ground = file.compile().unwrap().ground;
+    let job = file.scene.job.clone().unwrap();
     let materials = Materials::for_scene(&r.region, ground);
     let view = |name: &str| {
         let feature = tree
-            .info(tree.find(name).unwrap())
+            .info(karstic::landform::feature_node(tree, name).unwrap())
             .support
             .intersection(r.region);
-        let cam = views::feature_view(tree, &[], &feature, &materials, 40.0, (160, 90))
-            .unwrap()
-            .unwrap();
+        // The job's camera for the feature when it names one, else its automatic close-up.
+        let cam = match job.views.get(name) {
+            Some(c) => Camera::look_at(c.eye.0, c.target.0, job.fov.0, 160, 90).unwrap(),
+            None => views::feature_view(tree, &[], &feature, &materials, 40.0, (160, 90))
+                .unwrap()
+                .unwrap(),
+        };
         let params = TraceParams::for_scene(Method::Segment, 2.0 * tree.support().radius())
             .with_pixel_angle(cam.pixel_angle());
         let depth = cpu::depth(tree, &cam, &params).0;

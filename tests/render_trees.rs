@@ -570,18 +570,20 @@ fn guided_traces_find_the_surface_the_field_march_finds() {
     let tree = &compiled.tree;
     let job = karstic::scene::load(&path).unwrap().scene.job.unwrap();
     let region = job.region.unwrap();
-    let grid = GridSpec::with_cell(&Aabb::new(region.min.0, region.max.0), 5.0).unwrap();
+    // The job's own cell: its guides are meshed at it.
+    let cell = job.cell.0;
+    let grid = GridSpec::with_cell(&Aabb::new(region.min.0, region.max.0), cell).unwrap();
     let (mesh, _) = polygonize(tree, &grid, &MeshOptions::default()).unwrap();
     let guide = |lift: f32| {
         let mut m = mesh.clone();
         m.positions.iter_mut().for_each(|p| p[2] += lift);
-        let g = Guide::from_mesh(&m, &grid.bounds(), 5.0, 1 << 30).unwrap();
+        let g = Guide::from_mesh(&m, &grid.bounds(), cell, 1 << 30).unwrap();
         vec![std::sync::Arc::new(g)]
     };
     let (right, lifted) = (guide(0.0), guide(12.0));
     let materials = settings.materials.clone();
     let arch = tree
-        .info(tree.find("arch").unwrap())
+        .info(karstic::landform::feature_node(tree, "arch").unwrap())
         .support
         .intersection(grid.bounds());
     let arch_cam =

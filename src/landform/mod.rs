@@ -330,13 +330,15 @@ impl Joining {
     }
 }
 
-/// The node of a compiled `tree` holding what the landform `name` generated (its
-/// `NAME-carves` or `NAME-rocks` blend; `None` when it made nothing): the landform's
-/// feature, where the node `name` itself is the terrain under it too.
-pub fn generated_node(tree: &Tree, name: &str) -> Option<NodeId> {
+/// The node of a compiled `tree` that stands for the feature `name` (one of
+/// [`crate::scene::Scene::feature_names`]): for a landform, the blend of what it generated
+/// (`NAME-carves` or `NAME-rocks`; the node `NAME` is the terrain under it too), else the
+/// node of that name.
+pub fn feature_node(tree: &Tree, name: &str) -> Option<NodeId> {
     [Joining::Carve, Joining::Accrete]
         .iter()
         .find_map(|j| tree.find(&format!("{name}-{}", j.suffix())))
+        .or_else(|| tree.find(name))
 }
 
 /// What a generator made: its primitives and how they join the base.

@@ -109,12 +109,14 @@ fn no_encoding(tree: &Tree, id: NodeId, kind: &str, why: &str) -> TapeError {
     }
 }
 
-/// True for the leaves worth a guard of their own: S-field volumes and noisy primitives,
-/// whose evaluation is long (on lavapipe, every lane of a SIMD group pays for a leaf any
-/// lane evaluates; a guard lets rays away from the leaf jump over it).
+/// True for the nodes worth a guard of their own: S-field volumes and noisy primitives,
+/// whose evaluation is long, and placed subtrees (a generated arch: one guard skips all of
+/// it). On lavapipe, every lane of a SIMD group pays for a leaf any lane evaluates; a
+/// guard lets rays away from the node jump over it.
 fn costly(node: &Node) -> bool {
     let leaf = match node {
         Node::Primitive(p) => return p.noise().is_some(),
+        Node::Affine { .. } => return true,
         Node::Leaf(f) => f.as_any(),
         _ => return false,
     };
@@ -131,10 +133,12 @@ fn emit(tree: &Tree, b: &mut TapeBuilder, id: NodeId) -> Result<(), TapeError> {
     let support = tree.info(id).support;
     if costly(node) && !support.is_empty() && support.size().is_finite() {
         // Every node is 0 outside its support box, so a guard may stand before it.
+        // The tree's support is the one the guard checks (the builder's own estimate of
+        // a primitive's may differ from it by a rounding).
         let g = b.guard_begin(support);
         emit_node(tree, b, id, node)?;
-        b.guard_end(g)?;
-        return b.assume_support(support);
+        b.assume_support(support)?;
+        return b.guard_end(g);
     }
     emit_node(tree, b, id, node)?;
     b.assume_support(support)
