@@ -611,6 +611,27 @@ fn an_arch_varies_along_its_span_and_stands_on_rooted_abutments() {
             assert!(t.value(p) > ISO, "the abutment is broken at {p}");
         }
     }
+    // Fallen blocks lie beside the fin, a part of each below the ground and a part above
+    // it, each one solid rock in the tree.
+    assert!(s.talus.len() >= 10, "{} fallen blocks", s.talus.len());
+    for b in &s.talus {
+        let c = b.center;
+        assert!(
+            c.z - b.half.z < s.ground && c.z + b.half.z > s.ground,
+            "a block at {c} does not lie on the ground at {}",
+            s.ground
+        );
+        let face = s
+            .blocks
+            .iter()
+            .find(|k| k.x.x <= c.x && c.x <= k.x.y)
+            .unwrap();
+        assert!(
+            c.y < face.y.x || c.y > face.y.y,
+            "a block inside the fin at {c}"
+        );
+        assert!(t.value(c) > ISO, "no rock at the block's centre {c}");
+    }
     // The same file gives the same arch.
     assert_eq!(arch().0, s);
 }
@@ -664,4 +685,29 @@ fn an_arch_on_a_slope_is_rooted_along_its_whole_fin() {
         -46.0
     };
     assert!(top(&tree, low_end) > top(&ground, low_end) + 1.0);
+}
+
+/// The fin arch scene meshes into one surface: fin, lintel and fallen blocks all one with
+/// the ground (no boulder floats, no sliver of rock is left in the opening).
+#[test]
+fn the_fin_arch_scene_meshes_into_one_piece() {
+    let dir = tempfile::tempdir().unwrap();
+    let opts = karstic::job::JobOptions {
+        out_dir: dir.path().to_path_buf(),
+        full: false,
+        no_render: true,
+        no_views: true,
+        quiet: true,
+        budget: karstic::io::DEFAULT_MEMORY_BUDGET,
+        origin: karstic::mesh::export::Origin::Dem,
+        masks: false,
+    };
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/fin_arch.ron");
+    let r = karstic::job::run(&path, &opts).unwrap();
+    assert_eq!(
+        r.mesh.component_sizes().len(),
+        1,
+        "{:?}",
+        r.mesh.component_sizes()
+    );
 }

@@ -61,6 +61,13 @@ pub struct ArchSpec {
     /// beds recess, in field units (default 0.4; 0 leaves the fin unweathered).
     #[serde(default = "default_weathering")]
     pub weathering: NonNegative,
+    /// Whether blocks fallen from the fin lie on the ground beside it (default true).
+    #[serde(default = "default_talus")]
+    pub talus: bool,
+}
+
+fn default_talus() -> bool {
+    true
 }
 
 fn default_weathering() -> NonNegative {
@@ -91,11 +98,36 @@ pub struct ArchShape {
     pub ceiling: f32,
     /// Height of the crest at mid-span.
     pub crest: f32,
-    /// The fin's joint blocks in the arch's frame, west to east along the span: `(x
-    /// range, y range)` of each.
-    pub blocks: Vec<(Vec2, Vec2)>,
+    /// The fin's joint blocks in the arch's frame, from `from`'s side to `to`'s.
+    pub blocks: Vec<Block>,
+    /// Fallen blocks on the ground beside the fin, in the arch's frame.
+    pub talus: Vec<Talus>,
     /// Bottom of the fin.
     pub root: f32,
+}
+
+/// A joint block of the fin: its x and y ranges in the arch's frame and its top (the
+/// dome trims it further).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Block {
+    /// Range along the span.
+    pub x: Vec2,
+    /// Range across it.
+    pub y: Vec2,
+    /// Height of its top.
+    pub top: f32,
+}
+
+/// A block fallen from the fin: its centre (x and y in the arch's frame, z absolute),
+/// half extents and turn about the vertical, degrees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Talus {
+    /// Centre.
+    pub center: Vec3,
+    /// Half extents.
+    pub half: Vec3,
+    /// Turn about +z, degrees.
+    pub yaw: f32,
 }
 
 impl ArchSpec {
@@ -129,6 +161,17 @@ impl ArchSpec {
         let half = 0.5 * span + reach;
         let low = lowest_ground(ground, center, axis, half, width).min(g);
         let mut rng = Rng::new(ground.seed ^ 0xa5c4_0ac4);
+        // Where the lintel has weathered thinnest: a waist somewhere over the opening.
+        let waist = span * (rng.unit() - 0.5) * 0.5;
+        let blocks = blocks(&mut rng, half, width, crest, (waist, 0.2 * span));
+        let frame = |p: Vec2| center + axis * p.x + axis.perp() * p.y;
+        let talus = match self.talus {
+            true => talus(&mut rng, &blocks, width, |p| {
+                let xy = frame(p);
+                ground.surface_near(xy, ground.height(xy), 0.5 * width)
+            }),
+            false => Vec::new(),
+        };
         Ok(ArchShape {
             center,
             axis,
@@ -136,7 +179,8 @@ impl ArchSpec {
             ground: g,
             ceiling,
             crest,
-            blocks: blocks(&mut rng, half, width),
+            blocks,
+            talus,
             root: low - ROOT * (crest - low),
         })
     }
@@ -184,15 +228,19 @@ fn hard_bed(ground: &Ground, xy: Vec2, g: f32, span: f32) -> f32 {
     if best.0 < 0.05 { 0.45 * span } else { best.1 }
 }
 
-/// A fin's joint blocks over `[-half, half]`, mean width `width`: one to two widths
-/// long, each side set in or out independently by up to 45%, narrowing to 60% at both
-/// ends.
-fn blocks(rng: &mut Rng, half: f32, width: f32) -> Vec<(Vec2, Vec2)> {
+/// A fin's joint blocks over `[-half, half]`, mean width `width`, under `crest`: joints
+/// half a width to two and a half widths apart; each side set in or out by up to 45%,
+/// or (two times in five) flush with its neighbour, so not every joint shows on both
+/// faces; narrowing to 60% at both ends and by up to 40% at the `waist` (its position
+/// and reach along the span), where the lintel weathered thinnest; tops from a sixth of a
+/// width below the crest to half a width above it (the dome trims them), so the crest
+/// steps at some joints.
+fn blocks(rng: &mut Rng, half: f32, width: f32, crest: f32, waist: (f32, f32)) -> Vec<Block> {
     let mut joints = vec![-half];
     while let Some(&x) = joints.last()
         && x < half
     {
-        let next = x + width * (0.9 + 1.1 * rng.unit());
+        let next = x + width * (0.5 + 2.0 * rng.unit());
         // No sliver of a block at the end.
         joints.push(if next > half - 0.5 * width {
             half
@@ -200,16 +248,74 @@ fn blocks(rng: &mut Rng, half: f32, width: f32) -> Vec<(Vec2, Vec2)> {
             next
         });
     }
+    let mut sides = (0.0f32, 0.0f32);
     joints
         .windows(2)
-        .map(|j| {
+        .enumerate()
+        .map(|(k, j)| {
             let mid = 0.5 * (j[0] + j[1]);
-            let taper = 1.0 - 0.4 * (mid / half).powi(2);
-            let mut side = || 0.5 * width * taper * (0.55 + 0.9 * rng.unit());
-            let (right, left) = (side(), side());
-            (Vec2::new(j[0], j[1]), Vec2::new(-right, left))
+            let thinning = 0.4 * (-((mid - waist.0) / waist.1).powi(2)).exp();
+            let taper = (1.0 - 0.4 * (mid / half).powi(2)) * (1.0 - thinning);
+            let mut side = |previous: f32| match k > 0 && rng.unit() < 0.4 {
+                true => previous,
+                false => 0.5 * width * taper * (0.55 + 0.9 * rng.unit()),
+            };
+            sides = (side(sides.0), side(sides.1));
+            Block {
+                x: Vec2::new(j[0], j[1]),
+                y: Vec2::new(-sides.0, sides.1),
+                top: crest + width * (-1.0 / 6.0 + (2.0 / 3.0) * rng.unit()),
+            }
         })
         .collect()
+}
+
+/// Blocks fallen from the fin onto the ground beside it (`ground`: the surface's height
+/// at a point of the arch's frame, `None` where it cannot be found): about one every half width along each face, a twelfth to a third of
+/// the width across, lying up to three of their sizes off the face, half sunk into the
+/// ground, turned at random (the ellipsoid that stands for a block is axis-aligned: the
+/// turn sets its radii along x and y).
+fn talus(
+    rng: &mut Rng,
+    blocks: &[Block],
+    width: f32,
+    ground: impl Fn(Vec2) -> Option<f32>,
+) -> Vec<Talus> {
+    let (lo, hi) = match (blocks.first(), blocks.last()) {
+        (Some(a), Some(b)) => (a.x.x, b.x.y),
+        _ => return Vec::new(),
+    };
+    let n = ((hi - lo) / (0.5 * width)).ceil() as usize;
+    let mut out = Vec::with_capacity(2 * n);
+    for side in [-1.0f32, 1.0] {
+        for _ in 0..n {
+            let x = lo + (hi - lo) * rng.unit();
+            let Some(b) = blocks.iter().find(|b| b.x.x <= x && x <= b.x.y) else {
+                continue;
+            };
+            let face = if side < 0.0 { -b.y.x } else { b.y.y };
+            let size = width * (0.15 + 0.25 * rng.unit());
+            let xy = Vec2::new(x, side * (face + size * (0.8 + 2.2 * rng.unit())));
+            let Some(h) = ground(xy) else {
+                continue;
+            };
+            let half = 0.5
+                * size
+                * Vec3::new(
+                    0.7 + 0.6 * rng.unit(),
+                    0.7 + 0.6 * rng.unit(),
+                    0.5 + 0.4 * rng.unit(),
+                );
+            out.push(Talus {
+                // Half sunk: a block resting on a slope settles into it, and a block
+                // only touching the ground would leave slivers of air under its edge.
+                center: xy.extend(h),
+                half,
+                yaw: 360.0 * rng.unit(),
+            });
+        }
+    }
+    out
 }
 
 fn p3(v: Vec3) -> P3 {
@@ -233,32 +339,36 @@ impl ArchShape {
     /// The fin's mean width.
     fn width(&self) -> f32 {
         let n = self.blocks.len().max(1) as f32;
-        self.blocks.iter().map(|(_, y)| y.y - y.x).sum::<f32>() / n
+        self.blocks.iter().map(|b| b.y.y - b.y.x).sum::<f32>() / n
     }
 
     /// The plain node: the fin less its opening, placed on the span, weathered by an
     /// erosion node of strength `weathering` over its box (none at 0).
     pub fn node(&self, weathering: f32) -> NodeSpec {
         let w = self.width();
-        let half = self.blocks.last().map_or(0.0, |(x, _)| x.y);
+        let half = self.blocks.last().map_or(0.0, |b| b.x.y);
         let falloff = (0.25 * w).clamp(1.0, 4.0);
-        // The blocks stand from the root to above the crest; the dome trims them.
-        let (lo, hi) = (self.root, self.crest + 0.5 * w);
+        // The blocks stand from the root to their tops; the dome trims them.
         let blocks = self
             .blocks
             .iter()
             .enumerate()
-            .map(|(k, (x, y))| {
+            .map(|(k, b)| {
+                let (lo, hi) = (self.root, b.top);
                 primitive(
                     SkeletonSpec::Box {
                         center: p3(Vec3::new(
-                            0.5 * (x.x + x.y),
-                            0.5 * (y.x + y.y),
+                            0.5 * (b.x.x + b.x.y),
+                            0.5 * (b.y.x + b.y.y),
                             0.5 * (lo + hi),
                         )),
                         half_size: Size3(
-                            Vec3::new(0.5 * (x.y - x.x), 0.5 * (y.y - y.x), 0.5 * (hi - lo))
-                                .map(round3),
+                            Vec3::new(
+                                0.5 * (b.x.y - b.x.x),
+                                0.5 * (b.y.y - b.y.x),
+                                0.5 * (hi - lo),
+                            )
+                            .map(round3),
                         ),
                         yaw: Finite(0.0),
                     },
@@ -293,7 +403,7 @@ impl ArchShape {
                 radii: Size3(Vec3::new(ox, 3.0 * w, oz).map(round3)),
             },
             falloff,
-            noise(0.05 * self.span, 0.25 * self.span, 3, 62),
+            noise(0.03 * self.span, 0.25 * self.span, 3, 62),
         );
         let deep = self.ceiling - self.root + 10.0;
         let bed = primitive(
@@ -323,6 +433,24 @@ impl ArchShape {
                 children: vec![vault, bed],
             })],
         });
+        // Boulders: the blocks' corners broken off, as weathering rounds fallen rock.
+        let fallen = self.talus.iter().enumerate().map(|(k, t)| {
+            let size = 2.0 * t.half.max_element();
+            let turn = Vec2::from_angle(t.yaw.to_radians());
+            let radii = (turn * t.half.x).abs() + (turn.perp() * t.half.y).abs();
+            primitive(
+                SkeletonSpec::Ellipsoid {
+                    center: p3(t.center),
+                    radii: Size3(radii.extend(t.half.z).map(round3)),
+                },
+                (0.3 * size).max(0.2),
+                noise(0.12 * size, 0.8 * size, 2, 101 + k as u32),
+            )
+        });
+        let arch = NodeSpec::Union(Nary {
+            name: None,
+            children: std::iter::once(arch).chain(fallen).collect(),
+        });
         let placed = NodeSpec::Transform(TransformSpec {
             name: None,
             translate: p3(self.center.extend(0.0)),
@@ -336,8 +464,8 @@ impl ArchShape {
         if weathering <= 0.0 {
             return placed;
         }
-        // The fin's footprint turned onto the tree frame, with room for its noise.
-        let reach = Vec2::splat(half + w);
+        // The fin's footprint turned onto the tree frame, with room for its talus.
+        let reach = Vec2::splat(half + 2.5 * w);
         let (lo, hi) = (self.center - reach, self.center + reach);
         NodeSpec::Erode(ErodeSpec {
             name: None,

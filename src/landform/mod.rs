@@ -155,6 +155,25 @@ impl<'a> Ground<'a> {
         self.top.sample(xy, Interpolation::Bilinear)
     }
 
+    /// The height of the base's surface over `xy` within `reach` of `guess` (bisection
+    /// along the vertical to a millimetre), where the column is solid at `guess − reach`
+    /// and empty at `guess + reach`: the exact surface where [`Ground::height`]
+    /// interpolates the analysis grid.
+    pub fn surface_near(&self, xy: Vec2, guess: f32, reach: f32) -> Option<f32> {
+        let (mut lo, mut hi) = (guess - reach, guess + reach);
+        if !self.solid(xy.extend(lo)) || self.solid(xy.extend(hi)) {
+            return None;
+        }
+        while hi - lo > 1e-3 {
+            let mid = 0.5 * (lo + hi);
+            match self.solid(xy.extend(mid)) {
+                true => lo = mid,
+                false => hi = mid,
+            }
+        }
+        Some(0.5 * (lo + hi))
+    }
+
     /// Whether `p` is in the base's solid.
     pub fn solid(&self, p: Vec3) -> bool {
         self.tree.value(p) > ISO
