@@ -18,7 +18,7 @@ use karstic::field::{Field, Interval, Rect, ZBands};
 
 fn leaf() -> HeightfieldField {
     let mut spec = HeightfieldSpec::new("../shared/data/dem/jacksboro_utm16n_90m.tif", 60.0);
-    spec.cell_size = Some(karstic::scene::Positive::new(30.0));
+    spec.cell_size = Some(karstic::value::Positive::new(30.0));
     spec.load(Path::new(env!("CARGO_MANIFEST_DIR")))
         .expect("the shared DEM loads")
 }

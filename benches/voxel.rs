@@ -15,7 +15,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use karstic::curves::FeatureVolumeSpec;
 use karstic::curves::spec::BuildOptions;
 use karstic::field::Field;
-use karstic::scene::{P3, Positive};
+use karstic::value::{P3, Positive};
 use karstic::voxel::{Interpolation, run};
 
 fn ridge(c: &mut Criterion) {

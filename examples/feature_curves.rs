@@ -20,7 +20,7 @@ use karstic::curves::spec::{
 use karstic::mesh::MeshOptions;
 use karstic::mesh::export::{self, ExportOptions};
 use karstic::render::Materials;
-use karstic::scene::{Finite, NonNegative, Unit};
+use karstic::value::{Finite, NonNegative, Unit};
 
 /// A control vertex at absolute coordinates (metres).
 fn abs(x: f32, y: f32, z: f32) -> Point {

@@ -389,7 +389,7 @@ fn dem_cache_shares_decoded_files() {
     let mut cache = karstic::dem::DemCache::new(1 << 30);
     let a = HeightfieldSpec::new("../shared/data/dem/jacksboro_int16.tif", 100.0);
     let mut b = a.clone();
-    b.vertical_scale = karstic::scene::Finite(-1.0);
+    b.vertical_scale = karstic::value::Finite(-1.0);
     let fa = a.load_with(base, &mut cache, 0).unwrap();
     let fb = b.load_with(base, &mut cache, 0).unwrap();
     assert_eq!(

@@ -508,9 +508,9 @@ fn editor_drags_a_feature_curve_point_along_the_surface_as_one_edit() {
     assert_eq!(
         set.tunnels[0].path[1],
         karstic::curves::spec::Point::Ground(
-            karstic::scene::Finite(3800.0),
-            karstic::scene::Finite(5150.0),
-            karstic::scene::Finite(-5.0)
+            karstic::value::Finite(3800.0),
+            karstic::value::Finite(5150.0),
+            karstic::value::Finite(-5.0)
         ),
         "the other point stays"
     );
@@ -537,9 +537,9 @@ fn editor_drops_absolute_points_in_the_plane_parallel_to_the_image() {
         volume: "v".into(),
         slot: Slot::Curve(0, 1),
         point: karstic::curves::spec::Point::Abs(
-            karstic::scene::Finite(10.0),
-            karstic::scene::Finite(5.0),
-            karstic::scene::Finite(3.0),
+            karstic::value::Finite(10.0),
+            karstic::value::Finite(5.0),
+            karstic::value::Finite(3.0),
         ),
         world,
     };

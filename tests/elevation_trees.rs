@@ -45,7 +45,7 @@ const TREE: &str = r#"(
 )"#;
 
 fn spec() -> ElevationSpec {
-    karstic::scene::ron_options().from_str(TREE).unwrap()
+    karstic::value::ron_options().from_str(TREE).unwrap()
 }
 
 fn tree() -> ElevationTree {
@@ -363,7 +363,7 @@ fn spec_errors_name_the_node_and_field() {
         "points: [(100, 900, 260), (500, 850, 300)]",
         "points: [(100, 900, 260)]",
     );
-    let spec: ElevationSpec = karstic::scene::ron_options().from_str(&bad_points).unwrap();
+    let spec: ElevationSpec = karstic::value::ron_options().from_str(&bad_points).unwrap();
     let cx = BuildContext {
         base_dir: &Path::new(env!("CARGO_MANIFEST_DIR")).join("trees"),
         seed: 7,
@@ -378,13 +378,13 @@ fn spec_errors_name_the_node_and_field() {
         "profile: [(-50, -8), (0, 0), (20, 1)]",
         "profile: [(0, -8), (-50, 0)]",
     );
-    let e = karstic::scene::ron_options()
+    let e = karstic::value::ron_options()
         .from_str::<ElevationSpec>(&unsorted)
         .unwrap_err()
         .to_string();
     assert!(e.contains("increasing distance"), "{e}");
     let unknown = TREE.replace("width: 90,", "width: 90, depth: 3,");
-    let e = karstic::scene::ron_options()
+    let e = karstic::value::ron_options()
         .from_str::<ElevationSpec>(&unknown)
         .unwrap_err()
         .to_string();
@@ -413,7 +413,7 @@ fn the_gpu_tape_names_the_elevation_leaf_and_the_scene_renders_on_the_cpu() {
 #[test]
 fn a_curve_alone_reaches_its_bound() {
     // z rises 1 in 10 along the curve, the profile 1 in 1 across it: λ = 0.1 + 1.
-    let spec: ElevationSpec = karstic::scene::ron_options()
+    let spec: ElevationSpec = karstic::value::ron_options()
         .from_str(
             "(extent: ((0, 0), (100, 100)), falloff: 5, \
               tree: Curve(points: [(0, 50, 0), (100, 50, 10)], width: 40, profile: [(0, 0), (30, 30)]))",

@@ -9,7 +9,7 @@ use karstic::analysis::flow::FlowGraph;
 use karstic::dem::Heightfield;
 use karstic::erosion::{Eroder, ErosionStage, StreamPowerSpec, ThermalSpec};
 use karstic::procedural::GenerateSpec;
-use karstic::scene::{NonNegative, Positive};
+use karstic::value::{NonNegative, Positive};
 
 use crate::common::Rng;
 

@@ -9,7 +9,7 @@ use glam::{Vec2, Vec3};
 use karstic::field::{Aabb, Field};
 use karstic::geology::section::{AIR, HARD, OUTLINE, SOFT, Section};
 use karstic::geology::{Geology, GeologySpec, Resistance};
-use karstic::scene::ron_options;
+use karstic::value::ron_options;
 
 use crate::common::{Rng, check_segment_lipschitz, check_z_bands};
 

@@ -9,7 +9,7 @@ use karstic::field::skeleton::{Points, Polygon, Size3, ZRange};
 use karstic::field::{
     Aabb, Field, ISO, Interval, Primitive, PrimitiveSpec, Rect, SkeletonSpec, ZBands,
 };
-use karstic::scene::{Dir3, Finite, NonNegative, P2, P3, Positive};
+use karstic::value::{Dir3, Finite, NonNegative, P2, P3, Positive};
 use proptest::collection::vec;
 use proptest::prelude::*;
 

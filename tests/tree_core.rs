@@ -16,7 +16,7 @@ use karstic::field::{
     Skeleton, Transition, Tree, TreeBuilder, Warp, ZBands, eval_grid, eval_grid_naive,
 };
 use karstic::geology::{Erosion, Geology, GeologySpec};
-use karstic::scene::ron_options;
+use karstic::value::ron_options;
 use proptest::prelude::*;
 
 /// `energy · g(|p − c| / r)`.

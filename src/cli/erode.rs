@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use clap::Args;
 use karstic::dem::{self, Dem, ReadOptions};
 use karstic::erosion::{Eroder, ErosionStage, StreamPowerSpec, ThermalSpec};
-use karstic::scene::{NonNegative, Positive};
+use karstic::value::{NonNegative, Positive};
 
 use super::Budget;
 

@@ -11,7 +11,7 @@ use karstic::procedural::diamond_square::DiamondSquareSpec;
 use karstic::procedural::faults::FaultSpec;
 use karstic::procedural::fractal::FractalSpec;
 use karstic::procedural::{GenerateSpec, Generator};
-use karstic::scene::{NonNegative, Positive, Unit};
+use karstic::value::{NonNegative, Positive, Unit};
 
 use super::Budget;
 

@@ -31,7 +31,7 @@ use super::{BSpline, CurveError, Features};
 use crate::field::Aabb;
 use crate::field::Fbm;
 use crate::field::noise::{Octaves, mix32};
-use crate::scene::{Dir3, Finite, NonNegative, P3, Positive, Unit};
+use crate::value::{Dir3, Finite, NonNegative, P3, Positive, Unit};
 use crate::voxel::{Expansion, FieldParams, Interpolation, Params, SField, expand, run_cached};
 
 /// A point: absolute, or anchored to the ground.
@@ -368,7 +368,7 @@ pub struct FeatureVolumeSpec {
 /// errors with the path, line and column.
 pub fn parse_ron<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Result<T, CurveError> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    crate::scene::ron_options()
+    crate::value::ron_options()
         .from_str(text)
         .map_err(|e| CurveError::Parse {
             path: path.to_path_buf(),

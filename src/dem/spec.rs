@@ -32,7 +32,7 @@ use super::{Dem, DemError, Interpolation, ReadOptions};
 use crate::field::{Fbm, NoiseSpec};
 use crate::io::DEFAULT_MEMORY_BUDGET;
 use crate::procedural::GenerateSpec;
-use crate::scene::{Finite, NonNegative, P2, Positive, Unit};
+use crate::value::{Finite, NonNegative, P2, Positive, Unit};
 
 fn one() -> Finite {
     Finite(1.0)

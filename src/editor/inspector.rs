@@ -8,8 +8,9 @@ use std::collections::HashMap;
 use egui::{ComboBox, DragValue, RichText, TextEdit, Ui};
 
 use crate::scene::NodeSpec;
-use crate::scene::load::{ron_options, to_ron_text};
+use crate::scene::load::to_ron_text;
 use crate::scene::splice::{named_fields, set_field};
+use crate::value::ron_options;
 
 /// Fields that hold child nodes: the outline edits those.
 const CHILD_FIELDS: [&str; 5] = ["child", "children", "base", "carves", "by"];

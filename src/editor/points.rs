@@ -14,7 +14,8 @@ use crate::dem::HeightfieldField;
 use crate::render::{Camera, Frame};
 use crate::scene::load::to_ron_text;
 use crate::scene::splice::without_attributes;
-use crate::scene::{Finite, NodeSpec, Scene};
+use crate::scene::{NodeSpec, Scene};
+use crate::value::Finite;
 
 /// Which point of a [`FeatureSet`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

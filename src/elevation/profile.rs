@@ -6,7 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::field::Interval;
-use crate::scene::Finite;
+use crate::value::Finite;
 
 /// A profile `c(d)`: keys `(d, dz)` in increasing `d`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

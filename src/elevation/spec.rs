@@ -31,7 +31,7 @@ use super::{ElevationError, ElevationParams, ElevationTree, Lod};
 use crate::dem::{Heightfield, Interpolation, ReadOptions};
 use crate::field::noise::Octaves;
 use crate::field::{Fbm, NoiseSpec, Rect, Warp};
-use crate::scene::{Finite, NonNegative, P2, P3, Positive};
+use crate::value::{Finite, NonNegative, P2, P3, Positive};
 
 fn one() -> Finite {
     Finite(1.0)

@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::analysis::flow::FlowGraph;
 use crate::dem::{DemError, Heightfield};
-use crate::scene::{NonNegative, Positive};
+use crate::value::{NonNegative, Positive};
 
 pub use stream_power::StreamPower;
 pub use thermal::ThermalReport;

@@ -62,7 +62,7 @@ mod tests {
     /// the index); points inside and far outside the support.
     #[test]
     fn batch_values_equal_point_values() {
-        let mut rng = crate::landform::Rng::new(1);
+        let mut rng = crate::rng::Rng::new(1);
         let mut rnd = || rng.unit();
         for others in [false, true] {
             let mut b = TreeBuilder::new();

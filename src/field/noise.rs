@@ -23,7 +23,7 @@ use super::bounds::{Aabb, Interval};
 use super::lanes::Lanes;
 #[cfg(target_arch = "x86_64")]
 use super::lanes::{F8, M8};
-use crate::scene::{NonNegative, Positive};
+use crate::value::{NonNegative, Positive};
 
 /// Skew factor to the simplex lattice in 3D: `(√4 − 1) / 3`.
 pub(crate) const F3: f32 = 1.0 / 3.0;

@@ -378,7 +378,7 @@ mod tests {
         for (lane, p) in prims.iter().enumerate() {
             g.set(lane, Round::of(p).expect("a round kernel").params());
         }
-        let mut rng = crate::landform::Rng::new(7);
+        let mut rng = crate::rng::Rng::new(7);
         let mut rnd = || rng.unit();
         let mut points = vec![Vec3::new(1.5, -2.0, 7.0), Vec3::new(0.25, 0.5, -1.0)];
         points.push(Vec3::new(1.5, -2.0, 7.0 + 4.5));

@@ -34,7 +34,7 @@ use super::falloff::{ISO, WYVILL_MAX_SLOPE, wyvill, wyvill_d, wyvill_interval, w
 use super::noise::{Fbm, NoiseSpec};
 use super::profile::LineProfile;
 use super::skeleton::{Project, Skeleton, SkeletonSpec};
-use crate::scene::{Finite, Positive};
+use crate::value::{Finite, Positive};
 
 /// Largest noise amplitude, as a fraction of the falloff radius `R`.
 pub const MAX_AMPLITUDE_RATIO: f32 = 0.9;

@@ -21,8 +21,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::field::{NoiseSpec, PrimitiveSpec};
-use crate::scene::spec::{BoxSpec, Region};
-use crate::scene::{Dir3, Finite, P3, Positive, Unit};
+use crate::value::{BoxSpec, Region};
+use crate::value::{Dir3, Finite, P3, Positive, Unit};
 
 /// The geology of a scene: the root of its resistance tree (Paris et al. 2019 §4).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -28,12 +28,15 @@
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::{Ground, LandformError, Rng, round3, solid};
+use super::{Ground, LandformError, round3, solid};
 use crate::field::noise::Octaves;
 use crate::field::skeleton::Size3;
 use crate::field::{NoiseSpec, SkeletonSpec};
-use crate::scene::spec::{BoxSpec, DifferenceSpec, ErodeSpec, Nary, Rotation, TransformSpec};
-use crate::scene::{Dir3, Finite, NodeSpec, NonNegative, P2, P3, Positive};
+use crate::rng::Rng;
+use crate::scene::NodeSpec;
+use crate::scene::spec::{DifferenceSpec, ErodeSpec, Nary, Rotation, TransformSpec};
+use crate::value::BoxSpec;
+use crate::value::{Dir3, Finite, NonNegative, P2, P3, Positive};
 
 /// Parameters of a natural arch.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -18,7 +18,8 @@ use serde::{Deserialize, Serialize};
 use super::{Ground, LandformError, effect, point};
 use crate::analysis::relief::stream_power;
 use crate::field::ISO;
-use crate::scene::{NodeSpec, Positive, Unit};
+use crate::scene::NodeSpec;
+use crate::value::{Positive, Unit};
 
 fn default_beta() -> Unit {
     Unit(0.3)

@@ -24,13 +24,15 @@
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::{Ground, LandformError, Poisson, Rng, solid};
+use super::{Ground, LandformError, Poisson, solid};
 use crate::analysis::flow::{drainage_area, fill_depressions};
 use crate::analysis::relief::slope;
 use crate::field::noise::Octaves;
 use crate::field::skeleton::Size3;
 use crate::field::{NoiseSpec, SkeletonSpec};
-use crate::scene::{Finite, NodeSpec, NonNegative, P2, P3, Positive, Unit};
+use crate::rng::Rng;
+use crate::scene::NodeSpec;
+use crate::value::{Finite, NonNegative, P2, P3, Positive, Unit};
 
 fn default_lambda() -> Unit {
     Unit(0.8)

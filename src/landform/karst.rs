@@ -12,9 +12,11 @@ use std::collections::BinaryHeap;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use super::{Ground, LandformError, Poisson, Rng, carving_sphere, effect};
+use super::{Ground, LandformError, Poisson, carving_sphere, effect};
 use crate::analysis::relief::sinks;
-use crate::scene::{NodeSpec, P2, Positive, Unit};
+use crate::rng::Rng;
+use crate::scene::NodeSpec;
+use crate::value::{P2, Positive, Unit};
 
 fn default_epsilon() -> Unit {
     Unit(0.1)

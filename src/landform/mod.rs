@@ -32,8 +32,11 @@ pub use sea::SeaSpec;
 use crate::dem::{Heightfield, Interpolation};
 use crate::field::{Aabb, Field, ISO, NodeId, NoiseSpec, PrimitiveSpec, SkeletonSpec, Tree};
 use crate::heightmap::{Columns, TopOptions};
-use crate::scene::spec::{BoxSpec, Nary};
-use crate::scene::{Finite, NodeSpec, P3, Positive};
+use crate::rng::Rng;
+use crate::scene::NodeSpec;
+use crate::scene::spec::Nary;
+use crate::value::BoxSpec;
+use crate::value::{Finite, P3, Positive};
 
 /// A landform node of a tree file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -202,8 +205,8 @@ pub fn effect(rho: f32, sigma: f32, beta: f32) -> f32 {
 }
 
 /// The effect below which the erosion generators drop a sample (`min_effect`'s default).
-fn default_min_effect() -> crate::scene::Unit {
-    crate::scene::Unit(0.1)
+fn default_min_effect() -> crate::value::Unit {
+    crate::value::Unit(0.1)
 }
 
 /// The falloff radius of a carving sphere whose cavity, at full effect `e = 1`, has
@@ -246,41 +249,6 @@ pub fn point(center: Vec3, falloff: f32, energy: f32) -> NodeSpec {
         energy: Finite(round3(energy)),
         noise: None,
     })
-}
-
-/// A deterministic random stream (SplitMix64).
-pub struct Rng(u64);
-
-impl Rng {
-    /// A stream from `seed`.
-    pub fn new(seed: u64) -> Rng {
-        Rng(seed ^ 0x6a09_e667_f3bc_c909)
-    }
-
-    /// The next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-
-    /// A uniform number in `[0, 1)`.
-    pub fn unit(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-    }
-
-    /// A direction of the lower hemisphere (`z ≤ 0`), its `z = −u²` (`u` uniform): more
-    /// often near the horizontal than a uniform draw, as water that reached a bed spreads
-    /// along it.
-    pub fn lower_hemisphere(&mut self) -> Vec3 {
-        let u = self.unit();
-        let z = -u * u;
-        let phi = std::f32::consts::TAU * self.unit();
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        Vec3::new(r * phi.cos(), r * phi.sin(), z)
-    }
 }
 
 /// Poisson-disk acceptance in 3D: a point is taken only if no taken point lies closer

@@ -9,10 +9,12 @@
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::{Ground, LandformError, Poisson, Rng, carving_sphere, effect, throw_dart};
+use super::{Ground, LandformError, Poisson, carving_sphere, effect, throw_dart};
 use crate::analysis::relief::coastal_accessibility;
 use crate::dem::Heightfield;
-use crate::scene::{Finite, NodeSpec, Positive, Unit};
+use crate::rng::Rng;
+use crate::scene::NodeSpec;
+use crate::value::{Finite, Positive, Unit};
 
 fn default_beta() -> Unit {
     Unit(0.5)

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::unit_hash;
 use crate::dem::DemError;
-use crate::scene::Unit;
+use crate::value::Unit;
 
 fn default_roughness() -> Unit {
     Unit(0.8)

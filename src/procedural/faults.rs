@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::unit_hash;
-use crate::scene::NonNegative;
+use crate::value::NonNegative;
 
 fn default_faults() -> u32 {
     200

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::field::noise::{Fbm, Octaves, simplex};
-use crate::scene::Positive;
+use crate::value::Positive;
 
 fn default_octaves() -> Octaves {
     Octaves::new(8).expect("8 octaves is within range")

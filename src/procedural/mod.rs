@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 use crate::dem::{DemError, Heightfield};
 use crate::erosion::{Eroder, ErosionStage};
 use crate::field::noise::mix32;
-use crate::scene::Positive;
+use crate::value::Positive;
 
 /// The kinds of generator and their parameters.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

@@ -7,11 +7,12 @@
 use std::path::{Path, PathBuf};
 
 use super::compile::compile_scene;
-use super::load::{SceneError, load, ron_options, to_ron_text};
+use super::load::{SceneError, load, to_ron_text};
 use super::spec::{NodeSpec, Scene};
 use super::splice::{SpliceError, set_field};
 use super::validate::validate;
 use crate::io::{read_regular, write_bytes_atomic, write_bytes_atomic_like};
+use crate::value::ron_options;
 
 fn edit_error(path: &Path, message: impl Into<String>) -> SceneError {
     SceneError::Edit {

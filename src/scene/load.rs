@@ -9,6 +9,7 @@ use super::spec::{FORMAT_VERSION, NodeSpec, Scene};
 use super::validate::{Locate, Problem, validate};
 use crate::curves::spec::CurveSource;
 use crate::io::read_regular;
+use crate::value::ron_options;
 
 /// Errors from loading, validating, compiling or editing a tree file.
 #[derive(Debug, thiserror::Error)]
@@ -68,13 +69,6 @@ pub enum SceneError {
         /// What went wrong.
         message: String,
     },
-}
-
-/// The RON options of tree files: `Some` may be left out, and a node's fields may be
-/// written straight inside its kind, `Blend(children: [...])`.
-pub fn ron_options() -> ron::Options {
-    ron::Options::default()
-        .with_default_extension(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_VARIANT_NEWTYPES)
 }
 
 /// A scene type as tree-file text (canonical layout, the extensions of [`ron_options`]).

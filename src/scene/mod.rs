@@ -6,11 +6,9 @@ pub mod load;
 pub mod spec;
 pub mod splice;
 pub mod validate;
-pub mod value;
 pub mod volume;
 
 pub use compile::{Compiled, compile_scene};
-pub use load::{SceneError, SceneFile, load, parse_scene, ron_options};
+pub use load::{SceneError, SceneFile, load, parse_scene};
 pub use spec::{FORMAT_VERSION, NodeSpec, Scene};
-pub use value::{Dir3, Finite, NonNegative, P2, P3, Positive, Scale3, Unit};
 pub use volume::VolumeFile;

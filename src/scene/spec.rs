@@ -2,12 +2,12 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::value::{Dir3, Finite, NonNegative, P3, Positive, Scale3};
 use crate::curves::FeatureVolumeSpec;
 use crate::dem::HeightfieldSpec;
 use crate::elevation::ElevationSpec;
 use crate::field::{NoiseSpec, PrimitiveSpec};
 use crate::landform::LandformSpec;
+use crate::value::{BoxSpec, Dir3, Finite, NonNegative, P2, P3, Positive, Region, Scale3};
 
 /// The tree-file format version this build reads and writes.
 pub const FORMAT_VERSION: u32 = 1;
@@ -179,16 +179,6 @@ pub struct TransformSpec {
     pub child: Box<NodeSpec>,
 }
 
-/// An axis-aligned box `(min: (x, y, z), max: (x, y, z))`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct BoxSpec {
-    /// Lower corner.
-    pub min: P3,
-    /// Upper corner.
-    pub max: P3,
-}
-
 /// A look-at camera.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -245,43 +235,6 @@ fn default_fov() -> Positive {
     Positive(40.0)
 }
 
-/// A box region with a falloff around it.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, try_from = "RawRegion")]
-pub struct Region {
-    /// Lower corner.
-    pub min: P3,
-    /// Upper corner.
-    pub max: P3,
-    /// Width of the falloff around the box, in metres.
-    pub falloff: Positive,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawRegion {
-    min: P3,
-    max: P3,
-    falloff: Positive,
-}
-
-impl TryFrom<RawRegion> for Region {
-    type Error = String;
-    fn try_from(r: RawRegion) -> Result<Self, String> {
-        if r.min.0.cmpgt(r.max.0).any() {
-            return Err(format!(
-                "region min {:?} must be <= max {:?} on every axis",
-                r.min.0, r.max.0
-            ));
-        }
-        Ok(Region {
-            min: r.min,
-            max: r.max,
-            falloff: r.falloff,
-        })
-    }
-}
-
 /// A turbulence warp node: `child` evaluated at `p + δ(p)·f_D(p)`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -306,7 +259,7 @@ pub struct AnchorSpec {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// Where on the terrain, in the terrain's frame (metres).
-    pub at: super::value::P2,
+    pub at: P2,
     /// Height above (positive) or depth below (negative) the terrain surface there.
     #[serde(default)]
     pub offset: Finite,

@@ -5,7 +5,7 @@ use serde::de::Error as _;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::polygon::validate_polygon;
-use crate::scene::{Dir3, Finite, P2, P3, Positive};
+use crate::value::{Dir3, Finite, P2, P3, Positive};
 
 /// A skeleton as written in a tree file (RON), e.g. `Sphere(center: (0, 0, 10), radius: 4)`.
 ///

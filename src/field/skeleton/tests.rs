@@ -4,7 +4,7 @@ use glam::{Mat3, Vec2, Vec3};
 
 use super::*;
 use crate::field::noise::mix32;
-use crate::scene::{Dir3, Finite, P2, P3, Positive};
+use crate::value::{Dir3, Finite, P2, P3, Positive};
 
 struct Rng(u32);
 

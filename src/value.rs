@@ -1,4 +1,5 @@
-//! Validated numbers for tree files.
+//! The value types of the file format: validated numbers, points, boxes and regions, and
+//! the RON options every file of the format is read with.
 //!
 //! These check themselves while the file is parsed, so RON reports a bad value with the
 //! line and column where it stands ("expected a finite number", "radius must be > 0").
@@ -7,6 +8,7 @@
 use std::fmt;
 
 use glam::{Vec2, Vec3};
+use ron::extensions::Extensions;
 use serde::de::Error as _;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
@@ -175,6 +177,60 @@ impl Dir3 {
     pub fn unit(self) -> Vec3 {
         self.0.normalize()
     }
+}
+
+/// A box region with a falloff around it.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, try_from = "RawRegion")]
+pub struct Region {
+    /// Lower corner.
+    pub min: P3,
+    /// Upper corner.
+    pub max: P3,
+    /// Width of the falloff around the box, in metres.
+    pub falloff: Positive,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRegion {
+    min: P3,
+    max: P3,
+    falloff: Positive,
+}
+
+impl TryFrom<RawRegion> for Region {
+    type Error = String;
+    fn try_from(r: RawRegion) -> Result<Self, String> {
+        if r.min.0.cmpgt(r.max.0).any() {
+            return Err(format!(
+                "region min {:?} must be <= max {:?} on every axis",
+                r.min.0, r.max.0
+            ));
+        }
+        Ok(Region {
+            min: r.min,
+            max: r.max,
+            falloff: r.falloff,
+        })
+    }
+}
+
+/// An axis-aligned box `(min: (x, y, z), max: (x, y, z))`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoxSpec {
+    /// Lower corner.
+    pub min: P3,
+    /// Upper corner.
+    pub max: P3,
+}
+
+/// The RON options of tree files: `Some` may be left out, and a node's fields may be
+/// written straight inside its kind, `Blend(children: [...])`.
+pub fn ron_options() -> ron::Options {
+    ron::Options::default()
+        .with_default_extension(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_VARIANT_NEWTYPES)
 }
 
 #[cfg(test)]
