@@ -12,9 +12,10 @@ use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::{Vec2, Vec3};
-use karstic::dem::{HeightfieldField, HeightfieldSpec};
+use karstic::dem::HeightfieldField;
 use karstic::field::contract::z_bands_by_interval;
 use karstic::field::{Field, Interval, Rect, ZBands};
+use karstic::scene::HeightfieldSpec;
 
 fn leaf() -> HeightfieldField {
     let mut spec = HeightfieldSpec::new("../shared/data/dem/jacksboro_utm16n_90m.tif", 60.0);

@@ -12,10 +12,10 @@ use rng::Rng;
 use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use karstic::curves::FeatureVolumeSpec;
-use karstic::curves::spec::BuildOptions;
 use karstic::field::Field;
 use karstic::value::{P3, Positive};
+use karstic::voxel::FeatureVolumeSpec;
+use karstic::voxel::spec::BuildOptions;
 use karstic::voxel::{Interpolation, run};
 
 fn ridge(c: &mut Criterion) {

@@ -13,14 +13,14 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
-use karstic::curves::spec::{
-    Bitangent, ConstraintSpec, CurveSource, CurveSpec, FeatureSet, FeatureVolumeSpec, Point,
-    parse_ron,
-};
 use karstic::mesh::MeshOptions;
 use karstic::mesh::export::{self, ExportOptions};
 use karstic::render::Materials;
 use karstic::value::{Finite, NonNegative, Unit};
+use karstic::voxel::spec::{
+    Bitangent, ConstraintSpec, CurveSource, CurveSpec, FeatureSet, FeatureVolumeSpec, Point,
+    parse_ron,
+};
 
 /// A control vertex at absolute coordinates (metres).
 fn abs(x: f32, y: f32, z: f32) -> Point {

@@ -8,8 +8,9 @@ use crate::curves_util;
 use std::path::Path;
 
 use glam::Vec3;
-use karstic::curves::{FeatureVolumeSpec, Features, Orientation};
+use karstic::curves::{Features, Orientation};
 use karstic::field::{Aabb, Field, ISO, Interval, Rect, ZBands};
+use karstic::voxel::FeatureVolumeSpec;
 use karstic::voxel::{Interpolation, SField, run};
 
 fn load(name: &str) -> (FeatureVolumeSpec, Features) {
@@ -411,7 +412,7 @@ fn tunnel_in_a_1024_cube_stays_under_a_gigabyte() {
         voxel: 1.0,
     )"#;
     let spec: FeatureVolumeSpec =
-        karstic::curves::spec::parse_ron(text, Path::new("<test>")).unwrap();
+        karstic::voxel::spec::parse_ron(text, Path::new("<test>")).unwrap();
     let f = spec.build(Path::new("."), 0).unwrap();
     let st = f.stats();
     let fine = st.levels.last().unwrap();

@@ -4,8 +4,9 @@
 use crate::curves_util;
 
 use glam::Vec3;
-use karstic::curves::{CurveSample, FeatureVolumeSpec, Features};
+use karstic::curves::{CurveSample, Features};
 use karstic::field::{Field, ISO};
+use karstic::voxel::FeatureVolumeSpec;
 use karstic::voxel::SField;
 
 /// A scene of `trees/curves/`: values come from the compiled tree, parameters and

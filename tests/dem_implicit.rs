@@ -7,11 +7,10 @@ use crate::common::{Rng, check_z_bands, column_crossings_in_bands};
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
-use karstic::dem::{
-    DetailParams, Heightfield, HeightfieldField, HeightfieldSpec, ImplicitParams, Interpolation,
-};
+use karstic::dem::{DetailParams, Heightfield, HeightfieldField, ImplicitParams, Interpolation};
 use karstic::field::falloff::sigma;
 use karstic::field::{Aabb, Fbm, Field, ISO, Interval, Rect, ZBands};
+use karstic::scene::HeightfieldSpec;
 
 fn utm_leaf(r: f32, interp: Interpolation) -> HeightfieldField {
     utm_leaf_with(r, interp, "")
@@ -386,7 +385,7 @@ fn tree_frame_maps_back_to_utm() {
 #[test]
 fn dem_cache_shares_decoded_files() {
     let base = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut cache = karstic::dem::DemCache::new(1 << 30);
+    let mut cache = karstic::scene::DemCache::new(1 << 30);
     let a = HeightfieldSpec::new("../shared/data/dem/jacksboro_int16.tif", 100.0);
     let mut b = a.clone();
     b.vertical_scale = karstic::value::Finite(-1.0);

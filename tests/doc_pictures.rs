@@ -21,10 +21,10 @@ use std::collections::BTreeSet;
 use std::path::Path;
 
 use image::imageops::FilterType;
-use karstic::curves::spec::CurveSource;
 use karstic::scene::spec::Nary;
 use karstic::scene::{NodeSpec, Scene};
 use karstic::value::Positive;
+use karstic::voxel::spec::CurveSource;
 
 use crate::doc_util::{
     Sandbox, mesh_picture, pages, picture_links, root, section_picture, shown, write_indexed,

@@ -354,7 +354,7 @@ fn editor_memo_volumes_are_the_direct_builds() {
         };
         let g = f.compile().unwrap().ground.unwrap();
         let ground = |xy: glam::Vec2| Some(g.height(xy));
-        let opts = karstic::curves::spec::BuildOptions {
+        let opts = karstic::voxel::spec::BuildOptions {
             seed: scene.seed,
             ground: Some(&ground),
             max_memory: 1 << 30,
@@ -488,10 +488,10 @@ fn editor_drags_a_feature_curve_point_along_the_surface_as_one_edit() {
     let Some(NodeSpec::FeatureVolume(v)) = named.get("cave") else {
         panic!("no cave: {}", h.state().status());
     };
-    let karstic::curves::spec::CurveSource::Inline(set) = &v.curves else {
+    let karstic::voxel::spec::CurveSource::Inline(set) = &v.curves else {
         panic!("the curves stay inline");
     };
-    let karstic::curves::spec::Point::Ground(x, y, off) = set.tunnels[0].path[0] else {
+    let karstic::voxel::spec::Point::Ground(x, y, off) = set.tunnels[0].path[0] else {
         panic!(
             "the point stays on the ground: {:?}",
             set.tunnels[0].path[0]
@@ -507,7 +507,7 @@ fn editor_drags_a_feature_curve_point_along_the_surface_as_one_edit() {
     assert_eq!(off.0, -5.0, "the offset is kept");
     assert_eq!(
         set.tunnels[0].path[1],
-        karstic::curves::spec::Point::Ground(
+        karstic::voxel::spec::Point::Ground(
             karstic::value::Finite(3800.0),
             karstic::value::Finite(5150.0),
             karstic::value::Finite(-5.0)
@@ -536,7 +536,7 @@ fn editor_drops_absolute_points_in_the_plane_parallel_to_the_image() {
     let handle = Handle {
         volume: "v".into(),
         slot: Slot::Curve(0, 1),
-        point: karstic::curves::spec::Point::Abs(
+        point: karstic::voxel::spec::Point::Abs(
             karstic::value::Finite(10.0),
             karstic::value::Finite(5.0),
             karstic::value::Finite(3.0),

@@ -6,9 +6,10 @@ use std::path::Path;
 use std::process::Command;
 
 use glam::{Vec2, Vec3};
+use karstic::field::Resistance;
 use karstic::field::{Aabb, Field};
 use karstic::geology::section::{AIR, HARD, OUTLINE, SOFT, Section};
-use karstic::geology::{Geology, GeologySpec, Resistance};
+use karstic::geology::{Geology, GeologySpec};
 use karstic::value::ron_options;
 
 use crate::common::{Rng, check_segment_lipschitz, check_z_bands};

@@ -11,8 +11,8 @@ use glam::{Vec2, Vec3};
 use karstic::analysis::flow::{drainage_area, fill_depressions};
 use karstic::analysis::relief::{coastal_accessibility, sinks, slope, stream_power};
 use karstic::dem::Heightfield;
+use karstic::field::Resistance;
 use karstic::field::{Aabb, Field, ISO, Tree};
-use karstic::geology::Resistance;
 use karstic::landform::{
     GeneratorSpec, Ground, HoodooSpec, KarstSpec, LandformSpec, SeaSpec, Terminal, carving_sphere,
 };

@@ -9,13 +9,14 @@ use crate::common::Rng;
 use std::sync::Arc;
 
 use glam::{Affine3A, Quat, Vec3};
+use karstic::field::Erosion;
 use karstic::field::falloff::{WYVILL_MAX_SLOPE, wyvill, wyvill_d, wyvill_interval, wyvill_slope};
 use karstic::field::skeleton::Point;
 use karstic::field::{
     Aabb, Fbm, Field, Grid, ISO, Interval, Line, Node, NodeId, Primitive, PrimitiveSpec, Rect,
     Skeleton, Transition, Tree, TreeBuilder, Warp, ZBands, eval_grid, eval_grid_naive,
 };
-use karstic::geology::{Erosion, Geology, GeologySpec};
+use karstic::geology::{Geology, GeologySpec};
 use karstic::value::ron_options;
 use proptest::prelude::*;
 

@@ -8,12 +8,12 @@ pub mod constraint;
 pub mod ribbon;
 pub mod room;
 pub mod shapes;
-pub mod spec;
 pub mod terrain;
 
 use std::path::PathBuf;
 
 use glam::Vec3;
+use serde::{Deserialize, Serialize};
 
 pub use bspline::BSpline;
 pub use compound::{Arch, Profile, Tube, Tunnel, tube_proxy, tunnel_proxies};
@@ -21,7 +21,6 @@ pub use constraint::{ConstraintPoint, CurveSample, FeatureCurve, slope_bitangent
 pub use ribbon::{ProxyMesh, ProxyTriangle, ProxyVertex, Side, curve_ribbon};
 pub use room::Room;
 pub use shapes::{Disc, Quad};
-pub use spec::{FeatureSet, FeatureVolumeSpec, Orientation, Propagation};
 pub use terrain::TerrainSurface;
 
 /// Errors of curve files, feature-volume specs and the voxel pipeline.
@@ -305,4 +304,25 @@ impl Features {
         }
         Room::new(out)
     }
+}
+
+/// Which side of the surface the primitive's field is solid on.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Orientation {
+    /// Solid behind the surface (opposite the normals): `f = σ(−S)`. Rock, ground.
+    #[default]
+    Solid,
+    /// Solid on the normals' side: `f = σ(S)`. The air of a cave, to carve with.
+    Air,
+}
+
+/// Surface propagation method (Becher 2016 §4.6).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Propagation {
+    /// Signed distance propagation (§4.6.2).
+    #[default]
+    Distance,
+    /// Streamlines along the bitangent field add surface cells first (§4.6.1), then the
+    /// distance propagation signs the field.
+    Streamline,
 }

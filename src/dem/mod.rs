@@ -12,7 +12,7 @@
 //! * [`MinMaxPyramid`] ([`pyramid`]): conservative min/max over any footprint in O(1).
 //! * [`Detail`] ([`detail`]): detail amplification of the elevation (Frasson et al. §5).
 //! * [`HeightfieldField`] ([`implicit`]): the implicit terrain primitive of
-//!   Paris et al. 2019 §5.1, and [`HeightfieldSpec`] ([`spec`]) its node in tree files.
+//!   Paris et al. 2019 §5.1 (its node in tree files is `scene::HeightfieldSpec`).
 //!
 //! Library code never prints: notices (such as "cell size converted from degrees") are
 //! returned in [`Dem::notices`] for the caller to show.
@@ -31,7 +31,6 @@ pub(crate) mod interp;
 pub mod png16;
 pub mod prism;
 pub mod pyramid;
-pub mod spec;
 
 use std::path::Path;
 
@@ -42,7 +41,6 @@ pub use grid::{Heightfield, Interpolation};
 pub use implicit::{HeightfieldField, ImplicitParams};
 pub use png16::ZMapping;
 pub use pyramid::MinMaxPyramid;
-pub use spec::{DemCache, HeightfieldSpec};
 
 use crate::io::DEFAULT_MEMORY_BUDGET;
 

@@ -8,14 +8,14 @@
 use glam::Vec3;
 
 use super::history::Edit;
-use crate::curves::FeatureSet;
-use crate::curves::spec::{CurveSource, Point};
 use crate::dem::HeightfieldField;
 use crate::render::{Camera, Frame};
 use crate::scene::load::to_ron_text;
 use crate::scene::splice::without_attributes;
 use crate::scene::{NodeSpec, Scene};
 use crate::value::Finite;
+use crate::voxel::FeatureSet;
+use crate::voxel::spec::{CurveSource, Point};
 
 /// Which point of a [`FeatureSet`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

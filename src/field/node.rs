@@ -4,12 +4,12 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Mat3A};
 
+use super::Erosion;
 use super::bvh::ChildBvh;
 use super::contract::Field;
 use super::primitive::Primitive;
 use super::replace::Transition;
 use super::warp::Warp;
-use crate::geology::Erosion;
 
 /// Index of a node in a [`super::Tree`] arena. Children always have smaller ids than their
 /// parents (post-order), and a node may have several parents (instancing).

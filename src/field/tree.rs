@@ -4,6 +4,7 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Vec2, Vec3};
 
+use super::Erosion;
 use super::bounds::{Aabb, Interval, Rect, ZBands};
 use super::bvh::{BVH_MIN_CHILDREN, ChildBvh};
 use super::contract::{Elevation, Field};
@@ -13,7 +14,6 @@ use super::primitive::{Primitive, Round};
 use super::replace::{Transition, gap};
 use super::slope_grid::blend_lipschitz;
 use super::warp::Warp;
-use crate::geology::Erosion;
 
 /// What the compiler caches for every node.
 #[derive(Clone, Debug)]

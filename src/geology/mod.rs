@@ -10,7 +10,6 @@
 //! (`scene::compile::Compiler::resistance`), and the erosion node (`field::Erode`) and
 //! the landform generators read it. `docs/geology.md` shows each node in section.
 
-pub mod erode;
 mod rock;
 pub mod section;
 pub mod spec;
@@ -22,17 +21,8 @@ pub use spec::{
     TurbulenceSpec,
 };
 
-pub use erode::Erosion;
-
-use crate::field::{Aabb, Interval};
+use crate::field::{Aabb, Interval, Resistance};
 use rock::Rock;
-
-/// Rock resistance `ρ(p) ∈ [0, 1]` (Paris et al. 2019 §4): 0 the softest rock, 1 the
-/// hardest.
-pub trait Resistance: Send + Sync {
-    /// `ρ(p)`, in `[0, 1]`.
-    fn resistance(&self, p: Vec3) -> f32;
-}
 
 /// The resistance a scene without a geology has everywhere.
 pub const DEFAULT_RESISTANCE: f32 = 0.5;
@@ -110,5 +100,17 @@ impl Resistance for Geology {
     #[inline]
     fn resistance(&self, p: Vec3) -> f32 {
         self.value(p)
+    }
+
+    fn resistance_grad(&self, p: Vec3) -> (f32, Vec3) {
+        self.value_grad(p)
+    }
+
+    fn resistance_interval(&self, b: &Aabb) -> Interval {
+        self.interval(b)
+    }
+
+    fn resistance_lipschitz(&self, b: &Aabb) -> f32 {
+        self.lipschitz_box(b)
     }
 }

@@ -10,16 +10,18 @@ use super::load::{SceneError, SceneFile};
 use super::spec::{Nary, NodeSpec, Scene};
 use std::sync::Arc;
 
-use crate::curves::FeatureVolumeSpec;
-use crate::curves::spec::BuildOptions;
-use crate::curves::spec::CurveSource;
-use crate::dem::{DemCache, HeightfieldField, HeightfieldSpec};
+use crate::dem::HeightfieldField;
 use crate::elevation::{BuildContext, ElevationField, ElevationSpec};
 use crate::field::{Aabb, Field, NodeId, Primitive, Transition, Tree, TreeBuilder, Warp};
-use crate::geology::{Erosion, Geology, Resistance};
+use crate::field::{Erosion, Resistance};
+use crate::geology::Geology;
 use crate::io::DEFAULT_MEMORY_BUDGET;
 use crate::landform::Ground;
+use crate::scene::{DemCache, HeightfieldSpec};
+use crate::voxel::FeatureVolumeSpec;
 use crate::voxel::SField;
+use crate::voxel::spec::BuildOptions;
+use crate::voxel::spec::CurveSource;
 
 /// A compiled scene: the tree, and for each node of the scene's root (pre-order, the order
 /// of [`NodeSpec::walk`]) the compiled node it became.

@@ -7,9 +7,9 @@ use ron::extensions::Extensions;
 
 use super::spec::{FORMAT_VERSION, NodeSpec, Scene};
 use super::validate::{Locate, Problem, validate};
-use crate::curves::spec::CurveSource;
 use crate::io::read_regular;
 use crate::value::ron_options;
+use crate::voxel::spec::CurveSource;
 
 /// Errors from loading, validating, compiling or editing a tree file.
 #[derive(Debug, thiserror::Error)]

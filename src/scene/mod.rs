@@ -2,6 +2,7 @@
 
 pub mod compile;
 pub mod edit;
+pub mod heightfield;
 pub mod load;
 pub mod spec;
 pub mod splice;
@@ -9,6 +10,7 @@ pub mod validate;
 pub mod volume;
 
 pub use compile::{Compiled, compile_scene};
+pub use heightfield::{DemCache, HeightfieldSpec};
 pub use load::{SceneError, SceneFile, load, parse_scene};
 pub use spec::{FORMAT_VERSION, NodeSpec, Scene};
 pub use volume::VolumeFile;

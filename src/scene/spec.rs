@@ -2,12 +2,12 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::curves::FeatureVolumeSpec;
-use crate::dem::HeightfieldSpec;
 use crate::elevation::ElevationSpec;
 use crate::field::{NoiseSpec, PrimitiveSpec};
 use crate::landform::LandformSpec;
+use crate::scene::HeightfieldSpec;
 use crate::value::{BoxSpec, Dir3, Finite, NonNegative, P2, P3, Positive, Region, Scale3};
+use crate::voxel::FeatureVolumeSpec;
 
 /// The tree-file format version this build reads and writes.
 pub const FORMAT_VERSION: u32 = 1;

@@ -4,9 +4,9 @@
 use std::path::{Path, PathBuf};
 
 use super::load::{SceneError, SceneFile, parse_scene, read_text};
-use crate::curves::FeatureVolumeSpec;
-use crate::curves::spec::{BuildOptions, CurveSource, parse_ron};
+use crate::voxel::FeatureVolumeSpec;
 use crate::voxel::SField;
+use crate::voxel::spec::{BuildOptions, CurveSource, parse_ron};
 
 /// A loaded Feature Volume file.
 #[derive(Clone, Debug)]

@@ -252,7 +252,7 @@ fn decode(file: &[u8], key: u64) -> Option<Volume> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::curves::spec::{BuildOptions, FeatureVolumeSpec, parse_ron};
+    use crate::voxel::spec::{BuildOptions, FeatureVolumeSpec, parse_ron};
 
     fn volume() -> Volume {
         let spec: FeatureVolumeSpec = parse_ron(

@@ -10,10 +10,12 @@ pub mod propagate;
 pub mod sfield;
 pub mod smooth;
 pub mod sparse;
+pub mod spec;
 pub mod tricubic;
 pub mod voxelize;
 
 pub use expand::{Expanded, Expansion, expand};
 pub use pipeline::{Params, Stats, Volume, run, run_cached};
 pub use sfield::{FieldParams, SField};
+pub use spec::{FeatureSet, FeatureVolumeSpec};
 pub use tricubic::Interpolation;

@@ -5,8 +5,10 @@
 
 use std::path::{Path, PathBuf};
 
-use karstic::curves::{FeatureVolumeSpec, Features};
+use karstic::curves::Features;
+
 use karstic::field::Tree;
+use karstic::voxel::FeatureVolumeSpec;
 use karstic::voxel::SField;
 
 /// `trees/curves/`.

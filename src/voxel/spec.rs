@@ -23,16 +23,16 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::compound::{Arch, Profile, Tube};
-use super::constraint::{ConstraintPoint, FeatureCurve, reproject, slope_bitangent};
-use super::shapes::{Disc, Quad};
-use super::terrain::TerrainSurface;
-use super::{BSpline, CurveError, Features};
+use super::{Expansion, FieldParams, Interpolation, Params, SField, expand, run_cached};
+use crate::curves::compound::{Arch, Profile, Tube};
+use crate::curves::constraint::{ConstraintPoint, FeatureCurve, reproject, slope_bitangent};
+use crate::curves::shapes::{Disc, Quad};
+use crate::curves::terrain::TerrainSurface;
+use crate::curves::{BSpline, CurveError, Features, Orientation, Propagation};
 use crate::field::Aabb;
 use crate::field::Fbm;
 use crate::field::noise::{Octaves, mix32};
 use crate::value::{Dir3, Finite, NonNegative, P3, Positive, Unit};
-use crate::voxel::{Expansion, FieldParams, Interpolation, Params, SField, expand, run_cached};
 
 /// A point: absolute, or anchored to the ground.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -220,27 +220,6 @@ pub enum CurveSource {
     Inline(FeatureSet),
     /// A `FeatureSet` RON file, relative to the tree file's folder.
     Path(PathBuf),
-}
-
-/// Which side of the surface the primitive's field is solid on.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub enum Orientation {
-    /// Solid behind the surface (opposite the normals): `f = σ(−S)`. Rock, ground.
-    #[default]
-    Solid,
-    /// Solid on the normals' side: `f = σ(S)`. The air of a cave, to carve with.
-    Air,
-}
-
-/// Surface propagation method (Becher 2016 §4.6).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub enum Propagation {
-    /// Signed distance propagation (§4.6.2).
-    #[default]
-    Distance,
-    /// Streamlines along the bitangent field add surface cells first (§4.6.1), then the
-    /// distance propagation signs the field.
-    Streamline,
 }
 
 /// Solver settings of the pipeline (all have defaults).

@@ -26,9 +26,9 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
-use super::detail::DetailParams;
-use super::implicit::{HeightfieldField, ImplicitParams};
-use super::{Dem, DemError, Interpolation, ReadOptions};
+use crate::dem::detail::DetailParams;
+use crate::dem::implicit::{HeightfieldField, ImplicitParams};
+use crate::dem::{Dem, DemError, Interpolation, ReadOptions};
 use crate::field::{Fbm, NoiseSpec};
 use crate::io::DEFAULT_MEMORY_BUDGET;
 use crate::procedural::GenerateSpec;
@@ -126,7 +126,7 @@ fn default_altitude() -> Unit {
 }
 
 /// The `detail:` of a heightfield leaf: `d(p) = A·m(x, y)·t(p)` added to the elevation
-/// ([`super::detail`]).
+/// ([`crate::dem::detail`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DetailSpec {
@@ -290,7 +290,7 @@ impl DemCache {
         let c = f64::from(hf.cell().x);
         let mut dem = Dem {
             heightfield: hf,
-            georef: super::Georef::local(c, c),
+            georef: crate::dem::Georef::local(c, c),
             notices: Vec::new(),
         };
         if let Some(c) = spec.cell_size {
@@ -323,7 +323,7 @@ impl DemCache {
                 .map(|(lo, hi)| [lo.get().into(), hi.get().into()]),
             ..ReadOptions::default()
         };
-        let mut dem = super::read(path, &opts)?;
+        let mut dem = crate::dem::read(path, &opts)?;
         if let Some(c) = spec.cell_size {
             dem = dem.resample(c.get().into(), spec.interpolation, self.budget)?;
         }

@@ -15,17 +15,34 @@
 //! and `f_e`'s bound is `L_f + |∇e|`'s. A fault inside `D` makes `ρ` jump: boxes across
 //! it get `L = +∞`, which is sound (the tracers then step at their tolerance there).
 
+use std::fmt::Debug;
 use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::Geology;
-use crate::field::{Aabb, Interval, Transition};
+use super::{Aabb, Interval, Transition};
+
+/// Rock resistance `ρ(p) ∈ [0, 1]` (Paris et al. 2019 §4): 0 the softest rock, 1 the
+/// hardest, with the bounds the erosion node needs. The field defines it; a geology
+/// answers it.
+pub trait Resistance: Send + Sync + Debug {
+    /// `ρ(p)`, in `[0, 1]`.
+    fn resistance(&self, p: Vec3) -> f32;
+
+    /// `(ρ(p), ∇ρ(p))`.
+    fn resistance_grad(&self, p: Vec3) -> (f32, Vec3);
+
+    /// A range in `[0, 1]` holding `ρ(p)` for every `p` in `b`.
+    fn resistance_interval(&self, b: &Aabb) -> Interval;
+
+    /// A Lipschitz bound of `ρ` for pairs of points in `b` (`+∞` across a jump).
+    fn resistance_lipschitz(&self, b: &Aabb) -> f32;
+}
 
 /// The erosion a node subtracts from its child: `e(p) = a·w(p)·(1 − ρ(p))`.
 #[derive(Clone, Debug)]
 pub struct Erosion {
-    geology: Arc<Geology>,
+    rock: Arc<dyn Resistance>,
     mix: Transition,
     strength: f32,
 }
@@ -33,17 +50,12 @@ pub struct Erosion {
 impl Erosion {
     /// Erosion of strength `strength ≥ 0` (field units: how much the field drops in the
     /// softest rock) over `region`, fading over `blend` metres inside its faces.
-    pub fn new(geology: Arc<Geology>, region: Aabb, blend: f32, strength: f32) -> Self {
+    pub fn new(rock: Arc<dyn Resistance>, region: Aabb, blend: f32, strength: f32) -> Self {
         Erosion {
-            geology,
+            rock,
             mix: Transition::new(region, blend),
             strength: strength.max(0.0),
         }
-    }
-
-    /// The geology read.
-    pub fn geology(&self) -> &Arc<Geology> {
-        &self.geology
     }
 
     /// The region `D`: `e = 0` outside.
@@ -63,7 +75,7 @@ impl Erosion {
         if w <= 0.0 {
             return 0.0;
         }
-        self.strength * w * (1.0 - self.geology.value(p))
+        self.strength * w * (1.0 - self.rock.resistance(p))
     }
 
     /// `(e(p), ∇e(p))`.
@@ -72,7 +84,7 @@ impl Erosion {
         if w <= 0.0 {
             return (0.0, Vec3::ZERO);
         }
-        let (rho, grho) = self.geology.value_grad(p);
+        let (rho, grho) = self.rock.resistance_grad(p);
         let a = self.strength;
         (a * w * (1.0 - rho), a * ((1.0 - rho) * gw - w * grho))
     }
@@ -83,7 +95,9 @@ impl Erosion {
         if w.hi <= 0.0 {
             return Interval::ZERO;
         }
-        let rho = self.geology.interval(&b.intersection(*self.region()));
+        let rho = self
+            .rock
+            .resistance_interval(&b.intersection(*self.region()));
         let a = self.strength;
         Interval::new(
             a * w.lo.max(0.0) * (1.0 - rho.hi),
@@ -98,13 +112,13 @@ impl Erosion {
             return 0.0;
         }
         let inside = b.intersection(*self.region());
-        let rho = self.geology.interval(&inside);
+        let rho = self.rock.resistance_interval(&inside);
         let lw = if w.lo >= 1.0 {
             0.0
         } else {
             self.mix.lipschitz()
         };
-        self.strength * ((1.0 - rho.lo) * lw + w.hi * self.geology.lipschitz_box(&inside))
+        self.strength * ((1.0 - rho.lo) * lw + w.hi * self.rock.resistance_lipschitz(&inside))
     }
 
     /// [`Erosion::lipschitz_box`] over the whole region: the global bound.
