@@ -144,7 +144,10 @@ fn main() -> anyhow::Result<()> {
     // The preview's materials: rock on steep faces and on the features (away from the
     // DEM's surface), soil and grass on gentler slopes.
     let opts = ExportOptions {
-        materials: Some(Materials::for_scene(&tree.support(), Some(ground))),
+        albedo: Some(std::sync::Arc::new(Materials::for_scene(
+            &tree.support(),
+            Some(ground),
+        ))),
         ..ExportOptions::default()
     };
     export::write(&mesh, &path, &opts)?;

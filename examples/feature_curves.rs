@@ -104,7 +104,10 @@ fn main() -> anyhow::Result<()> {
     std::fs::create_dir_all(&out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
     let path = out_dir.join("overhang.glb");
     let opts = ExportOptions {
-        materials: Some(Materials::for_scene(&mesh.bounds(), None)),
+        albedo: Some(std::sync::Arc::new(Materials::for_scene(
+            &mesh.bounds(),
+            None,
+        ))),
         ..ExportOptions::default()
     };
     export::write(&mesh, &path, &opts)?;

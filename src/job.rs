@@ -502,7 +502,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
     let mesh_path = opts.out_dir.join(format!("{stem}.glb"));
     let t = Instant::now();
     let export_opts = ExportOptions {
-        materials: Some(materials.clone()),
+        albedo: Some(Arc::new(materials.clone())),
         origin: opts.origin,
         uv_frame: Some(frame),
     };

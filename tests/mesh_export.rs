@@ -78,7 +78,10 @@ fn attribute<const N: usize>(
 /// larger than the mesh (like a DEM around a region), and `origin`.
 fn engine_options(mesh: &Mesh, origin: Origin) -> ExportOptions {
     ExportOptions {
-        materials: Some(Materials::for_scene(&mesh.bounds(), None)),
+        albedo: Some(std::sync::Arc::new(Materials::for_scene(
+            &mesh.bounds(),
+            None,
+        ))),
         origin,
         uv_frame: Some(mesh.bounds().footprint().dilate(25.0)),
     }
@@ -180,7 +183,7 @@ fn glb_material_colours_and_uvs_are_the_previews() {
     assert_eq!(pbr.base_color_factor.0, [1.0; 4]);
     // COLOR_0 is the material model's albedo, the colour the preview shades.
     use gltf_json::mesh::Semantic;
-    let materials = opts.materials.as_ref().unwrap();
+    let materials = opts.albedo.as_deref().unwrap();
     let colors: Vec<[f32; 3]> = attribute(&root, bin, Semantic::Colors(0));
     for (i, c) in colors.iter().enumerate() {
         let want = materials.albedo(mesh.positions[i].into(), mesh.normals[i].into());

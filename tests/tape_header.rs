@@ -7,8 +7,8 @@ use std::collections::BTreeSet;
 use std::path::Path;
 
 use karstic::render::gpu::SHADER_MODULES;
-use karstic::tape::header::HEADER_PATH;
-use karstic::tape::wgsl_header;
+use karstic::render::gpu::header::HEADER_PATH;
+use karstic::render::gpu::wgsl_header;
 
 fn read(rel: &str) -> String {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(rel);

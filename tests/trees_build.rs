@@ -73,7 +73,10 @@ fn every_scene_in_trees_builds_a_closed_valid_mesh() {
         // The preview's materials over the tree's terrain, recentred: the export's
         // materials, UVs and node translation pass the validator on every tree.
         let opts = ExportOptions {
-            materials: Some(Materials::for_scene(&support, compiled.ground)),
+            albedo: Some(std::sync::Arc::new(Materials::for_scene(
+                &support,
+                compiled.ground,
+            ))),
             origin: Origin::Center,
             uv_frame: None,
         };

@@ -9,7 +9,9 @@ use clap::Args;
 use karstic::analysis::texture_frame;
 use karstic::field::{Aabb, Field};
 use karstic::io::{check_outputs, progress, read_regular};
-use karstic::mesh::export::{self, ExportOptions, Format, Origin};
+use std::sync::Arc;
+
+use karstic::mesh::export::{self, Albedo, ExportOptions, Format, Origin};
 use karstic::mesh::polygonize::progress_steps;
 use karstic::mesh::sample::Sidecar;
 use karstic::mesh::{DenseGrid, GridSpec, Mesh, MeshOptions, MeshStats, mc_dense, npy, polygonize};
@@ -69,11 +71,11 @@ pub(super) fn run(args: BuildArgs) -> anyhow::Result<()> {
             &outputs,
         )?;
         let (mesh, stats) = build_from_grid(&args)?;
-        let materials = args
+        let albedo = args
             .tint
-            .then(|| Materials::for_scene(&mesh.bounds(), None));
+            .then(|| Arc::new(Materials::for_scene(&mesh.bounds(), None)) as Arc<dyn Albedo>);
         let opts = ExportOptions {
-            materials,
+            albedo,
             origin: args.origin,
             uv_frame: None,
         };
@@ -84,9 +86,13 @@ pub(super) fn run(args: BuildArgs) -> anyhow::Result<()> {
         let support = compiled.tree.support();
         let bbox = args.bbox.as_deref().map(super::corners);
         let opts = ExportOptions {
-            materials: args
-                .tint
-                .then(|| Materials::for_tree(&file.scene, &compiled.tree, compiled.ground.clone())),
+            albedo: args.tint.then(|| {
+                Arc::new(Materials::for_tree(
+                    &file.scene,
+                    &compiled.tree,
+                    compiled.ground.clone(),
+                )) as Arc<dyn Albedo>
+            }),
             origin: args.origin,
             uv_frame: Some(texture_frame(
                 bbox.as_ref(),

@@ -1,6 +1,6 @@
 //! Feature Curves and the other modelling primitives of Becher 2016 (ch. 3): cubic
 //! B-splines with Constraint Points, simple shapes, compound tunnels and arches, and the
-//! proxy ribbon meshes they all turn into for the voxel pipeline ([`crate::voxel`]).
+//! proxy ribbon meshes they all turn into for the voxel pipeline.
 
 pub mod bspline;
 pub mod compound;

@@ -1,7 +1,7 @@
 //! The prism that closes an implicitized elevation into a solid (Paris et al. 2019 §5.1):
 //! `P = (Ω ⊖ B(R)) × Δz` and `f_P(p) = 2T · g(d(p, P) / R)`, shared by the leaves that
 //! implicitize an elevation — the raster [`super::HeightfieldField`] and the elevation
-//! tree's [`crate::elevation::ElevationField`]. The distance to `P` is written
+//! tree's `ElevationField`. The distance to `P` is written
 //! `√(d_xy² + d_z²)`, with `d_xy = max(0, R − e(xy))` from the clearance `e` of Ω (see
 //! `implicit.rs` for why this is exact on convex domains and a lower bound elsewhere).
 

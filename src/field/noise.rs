@@ -663,7 +663,7 @@ impl Fbm {
     /// Octaves `k0 .. k0 + 4` alone, unweighted: lane `l` is octave `k0 + l`,
     /// `n_k(2^l q + k·c)` (bit for bit the scalar noise; lanes past the last octave hold
     /// noise too), `q` the point in octave `k0`'s lattice units. The elevation trees'
-    /// multifractals weight the octaves their own way (`crate::elevation`).
+    /// multifractals weight the octaves their own way (the elevation trees).
     #[inline]
     pub(crate) fn octaves4(&self, k0: u32, q: Vec3) -> Vec4 {
         self.octaves4_impl::<false>(k0, q).0
@@ -673,7 +673,7 @@ impl Fbm {
     /// [`Fbm::octaves4`]`(k − k mod 4, q_l)` bit for bit, where `q_l = (q[0], q[1], q[2])[l]`
     /// is a point in the lattice units of octave `k − k mod 4` — the same operations, with
     /// one seed on every lane. The elevation trees' multifractals evaluate the octaves of
-    /// many points this way (`crate::elevation`).
+    /// many points this way (the elevation trees).
     #[inline(always)]
     pub(crate) fn octave_lanes<L: NoiseLanes>(&self, k: u32, q: [L; 3]) -> L {
         let seeds = [self.seed.wrapping_add(k.wrapping_mul(0x9e37_79b9)); 8];

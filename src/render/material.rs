@@ -26,6 +26,7 @@ use crate::dem::HeightfieldField;
 use crate::field::noise::simplex;
 use crate::field::{Aabb, Field, Tree};
 use crate::geology::Geology;
+use crate::mesh::export::Albedo;
 use crate::scene::Scene;
 
 /// Seed of the noise that moves material boundaries.
@@ -245,4 +246,10 @@ fn job_region(scene: &Scene) -> Option<Aabb> {
 pub fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
     let u = ((x - a) / (b - a)).clamp(0.0, 1.0);
     u * u * (3.0 - 2.0 * u)
+}
+
+impl Albedo for Materials {
+    fn albedo(&self, p: Vec3, n: Vec3) -> Vec3 {
+        Materials::albedo(self, p, n)
+    }
 }

@@ -30,7 +30,7 @@ pub struct Tape {
     pub sf_data: Vec<f32>,
     /// The `SFIELD` leaves themselves, by index: the CPU evaluates them.
     pub sfields: Vec<Arc<SField>>,
-    /// The scene's terrain for the materials ([`crate::render::Materials::ground`]), when
+    /// The scene's terrain for the materials (the materials' ground), when
     /// given ([`Tape::with_ground`]): the `HEIGHT` flags and parameter offset of its
     /// encoding, which no instruction evaluates.
     pub ground: Option<(u32, u32)>,

@@ -33,13 +33,12 @@
 //! * The leaves' encodings and CPU twins: [`mod@shape`] (`PRIM`), [`mod@height`]
 //!   (`HEIGHT`), [`noise`] (fBm, `NPRIM`, `TWARP`), [`mod@sfield`] (`SFIELD`).
 //!
-//! The tape knows nothing of the GPU: `crate::render::gpu` uploads it and runs the WGSL.
+//! The tape knows nothing of the GPU: the renderer's GPU path uploads it and runs the WGSL.
 
 pub mod builder;
 pub mod features;
 pub mod format;
 pub mod from_tree;
-pub mod header;
 pub mod height;
 pub mod interpreter;
 pub mod noise;
@@ -50,7 +49,6 @@ pub use builder::{Combine, Guard, TapeBuilder};
 pub use features::FEATURES;
 pub use format::Instr;
 pub use from_tree::tape_from_tree;
-pub use header::wgsl_header;
 pub use height::HeightGrid;
 pub use interpreter::Tape;
 pub use shape::{Profile, Shape};

@@ -11,6 +11,8 @@ use super::plan::{Plan, Tile};
 use crate::analysis::texture_frame;
 use crate::field::{Aabb, Field};
 use crate::io::write_bytes_atomic;
+use std::sync::Arc;
+
 use crate::mesh::export::{self, ExportOptions, Origin};
 use crate::mesh::{Mesh, MeshOptions, polygonize};
 use crate::render::Materials;
@@ -177,11 +179,11 @@ pub fn run_tile(
         let opts = ExportOptions {
             // The plan's region stands for the tree's support: the same scale in every
             // tile, whatever part of the tree each compiled.
-            materials: Some(Materials::for_scene_in(
+            albedo: Some(Arc::new(Materials::for_scene_in(
                 &loaded.file.scene,
                 plan.region(),
                 ground.clone(),
-            )),
+            ))),
             origin: Origin::Dem,
             uv_frame: Some(texture_frame(None, ground.as_deref(), &plan.region())),
         };

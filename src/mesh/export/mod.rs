@@ -7,13 +7,13 @@ pub mod obj;
 pub mod ply;
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
 use super::Mesh;
 use crate::field::{Aabb, Rect};
 use crate::io::IoError;
-use crate::render::Materials;
 
 /// Errors while exporting.
 #[derive(Debug, thiserror::Error)]
@@ -114,12 +114,20 @@ impl std::str::FromStr for Origin {
     }
 }
 
+/// What colours a surface for the exporters: its linear-RGB albedo at a point with its
+/// outward unit normal. The pictures' materials answer it, so a coloured mesh shows the
+/// colours of the preview.
+pub trait Albedo: Send + Sync + std::fmt::Debug {
+    /// The albedo at `p` with outward unit normal `n`.
+    fn albedo(&self, p: Vec3, n: Vec3) -> Vec3;
+}
+
 /// What to write besides positions, normals and triangles.
 #[derive(Clone, Debug, Default)]
 pub struct ExportOptions {
-    /// The material model that colours the vertices (glTF COLOR_0, OBJ and PLY vertex
-    /// colours), the same albedo as the preview's; `None`: no colours.
-    pub materials: Option<Materials>,
+    /// What colours the vertices (glTF COLOR_0, OBJ and PLY vertex colours), the same
+    /// albedo as the preview's; `None`: no colours.
+    pub albedo: Option<Arc<dyn Albedo>>,
     /// Where the written positions' origin lies.
     pub origin: Origin,
     /// The rectangle (tree frame, metres) the texture coordinates span: `u` west → east,
@@ -155,7 +163,7 @@ impl Prepared {
                 .iter()
                 .map(|&p| (Vec3::from(p) - offset).to_array())
                 .collect(),
-            colors: opts.materials.as_ref().map(|m| vertex_colors(mesh, m)),
+            colors: opts.albedo.as_deref().map(|m| vertex_colors(mesh, m)),
             uvs: mesh
                 .positions
                 .iter()
@@ -219,9 +227,9 @@ pub fn to_y_up(p: [f32; 3]) -> [f32; 3] {
     [p[0], p[2], -p[1]]
 }
 
-/// Linear-RGB vertex colours: the albedo of `materials` at each vertex, the colour the
+/// Linear-RGB vertex colours: the albedo `materials` gives each vertex, the colour the
 /// preview shades the same surface with.
-pub fn vertex_colors(mesh: &Mesh, materials: &Materials) -> Vec<[f32; 3]> {
+pub fn vertex_colors(mesh: &Mesh, materials: &dyn Albedo) -> Vec<[f32; 3]> {
     mesh.positions
         .iter()
         .zip(&mesh.normals)

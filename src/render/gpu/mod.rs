@@ -6,12 +6,14 @@
 //!
 //! The WGSL lives in `shaders/` and is assembled by [`shader_source`], starting with the
 //! constant header generated from the tape's Rust definitions
-//! ([`crate::tape::header`]); the tests validate every module with naga so shader errors
+//! ([`header`]); the tests validate every module with naga so shader errors
 //! fail without a GPU.
 
 pub mod context;
+pub mod header;
 
 pub use context::{GpuContext, render};
+pub use header::wgsl_header;
 
 use crate::tape::TapeError;
 

@@ -1,5 +1,5 @@
 //! The WGSL constant header, `shaders/tape_consts.wgsl`, generated from the Rust
-//! definitions: the [`format`] modules (ops, shape kinds, flags, limits, the named offset
+//! definitions: the tape's [`format`](crate::tape::format) modules (ops, shape kinds, flags, limits, the named offset
 //! of every parameter), the field's iso-value `ISO` and Wyvill constants, the simplex noise's
 //! constants, the S-field bricks' sizes, and the pipeline-overridable [`FEATURES`].
 //!
@@ -13,11 +13,11 @@ use std::fmt::Write;
 
 use glam::Vec3;
 
-use super::FEATURES;
-use super::format::GROUPS;
 use crate::field::falloff::{ISO, WYVILL_MAX_SLOPE, WYVILL_PEAK_X};
 use crate::field::noise::{F3, G3, GAIN, LACUNARITY, OCTAVE_SHIFT, R2, SIMPLEX_SCALE};
 use crate::render::shade::{CAVE_DIRS, CAVE_FLOOR, CAVE_RAMP, CAVE_STEPS, CAVE_TILT};
+use crate::tape::FEATURES;
+use crate::tape::format::GROUPS;
 use crate::voxel::sparse::{BRICK, BRICK_NODES, NONE};
 
 /// The header's path in the repository.
