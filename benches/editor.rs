@@ -25,7 +25,6 @@ use std::path::Path;
 use criterion::measurement::{Measurement, ValueFormatter};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use karstic::editor::preview::{DRAG_BUDGET, Quality, draw, fast_size, refine};
-use karstic::render::cpu::scene_camera;
 use karstic::scene::{compile_scene, edit, load};
 
 /// Nanoseconds on a CPU of every thread of this process so far (Linux).
@@ -81,7 +80,8 @@ fn editor(c: &mut Criterion<CpuTime>) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/jacksboro_caves.ron");
     let file = load(&path).unwrap();
     let compiled = file.compile().unwrap();
-    let camera = |(w, h)| scene_camera(&file.scene, &compiled.tree, None, None, w, h).unwrap();
+    let camera =
+        |(w, h)| karstic::picture::camera(&file.scene, &compiled.tree, None, None, w, h).unwrap();
     let view = (960, 540);
     let first = fast_size(view, None, DRAG_BUDGET);
     let mut g = c.benchmark_group("editor jacksboro_caves");
@@ -90,7 +90,8 @@ fn editor(c: &mut Criterion<CpuTime>) {
         b.iter(|| {
             let f = load(&path).unwrap();
             let comp = f.compile().unwrap();
-            let cam = scene_camera(&f.scene, &comp.tree, None, None, first.0, first.1).unwrap();
+            let cam = karstic::picture::camera(&f.scene, &comp.tree, None, None, first.0, first.1)
+                .unwrap();
             draw(&f.scene, &comp, &cam, Quality::Fast)
         })
     });

@@ -21,6 +21,7 @@ pub mod io;
 pub mod job;
 pub mod landform;
 pub mod mesh;
+pub mod picture;
 pub mod procedural;
 pub mod render;
 pub mod rng;

@@ -528,7 +528,7 @@ fn arch() -> (
     karstic::geology::Geology,
 ) {
     let file = scene_file(ARCH_SCENE);
-    let geology = karstic::geology::Geology::of_scene(&file.scene).unwrap();
+    let geology = file.scene.geology().unwrap();
     let NodeSpec::Landform(l) = &file.scene.root else {
         panic!("a landform")
     };

@@ -417,9 +417,8 @@ fn gpu_materials_match_the_cpu_on_the_main_job() {
     let file = karstic::scene::load(std::path::Path::new("trees/jacksboro_caves.ron")).unwrap();
     let compiled = file.compile().unwrap();
     let tape = Tape::from_tree(&compiled.tree).unwrap();
-    let materials =
-        karstic::render::Materials::for_tree(&file.scene, &compiled.tree, compiled.ground);
-    let region = karstic::render::material::scene_box(&file.scene, &compiled.tree);
+    let materials = karstic::picture::materials(&file.scene, &compiled.tree, compiled.ground);
+    let region = karstic::picture::scene_box(&file.scene, &compiled.tree);
     // Close to the arch: feature rock, ground and sky in one frame.
     let cam = Camera::look_at(
         Vec3::new(4900.0, 4380.0, 780.0),

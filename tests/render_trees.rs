@@ -323,9 +323,8 @@ fn job_view(path: &Path, width: u32, height: u32) -> (Compiled, Camera, RenderSe
     let loaded = karstic::scene::load(path).unwrap();
     let compiled = loaded.compile().unwrap();
     let tree = &compiled.tree;
-    let cam =
-        karstic::render::cpu::scene_camera(&loaded.scene, tree, None, None, width, height).unwrap();
-    let settings = RenderSettings::for_tree(
+    let cam = karstic::picture::camera(&loaded.scene, tree, None, None, width, height).unwrap();
+    let settings = karstic::picture::settings(
         &loaded.scene,
         tree,
         compiled.ground.clone(),
@@ -752,7 +751,7 @@ fn view_guides_cover_what_the_camera_sees_of_the_region() {
     let region = Aabb::new(r.min.0, r.max.0);
     // The region's guides: the backdrop's cells are the job's `full_cell`, 6 of its cells.
     let guides = |cam: &Camera| {
-        karstic::job::view_guides(tree, job, cam, None, 1 << 32, true)
+        karstic::picture::view_guides(tree, job, cam, None, 1 << 32, true)
             .unwrap()
             .into_iter()
             .filter(|g| g.cell() < 5.0 * cell)
@@ -827,14 +826,14 @@ fn view_guides_cover_what_the_camera_sees_of_the_region() {
     );
 
     let all =
-        |cam: &Camera| karstic::job::view_guides(tree, job, cam, None, 1 << 32, true).unwrap();
+        |cam: &Camera| karstic::picture::view_guides(tree, job, cam, None, 1 << 32, true).unwrap();
     let (eye, target) = TUNNEL_VIEW;
     assert!(all(&Camera::look_at(eye, target, 40.0, 96, 54).unwrap()).is_empty());
     let outside = Vec3::new(4900.0, 4380.0, 780.0);
     let away = Camera::look_at(outside, outside + Vec3::new(1.0, -1.0, 0.2), 40.0, 96, 54).unwrap();
     assert!(all(&away).is_empty());
     assert!(
-        karstic::job::view_guides(tree, None, &main_cam, None, 1 << 32, true)
+        karstic::picture::view_guides(tree, None, &main_cam, None, 1 << 32, true)
             .unwrap()
             .is_empty()
     );
@@ -854,7 +853,7 @@ fn backdrop_guides_cover_the_view_and_its_shadow_rays() {
     let job = loaded.scene.job.as_ref();
     let sun = settings.shading.sun;
     let support = tree.support();
-    let guides = |sun| karstic::job::view_guides(tree, job, &cam, sun, 1 << 32, true).unwrap();
+    let guides = |sun| karstic::picture::view_guides(tree, job, &cam, sun, 1 << 32, true).unwrap();
     let lit = guides(Some(sun));
     // The backdrop's cells start at the job's `full_cell`, 6 of the region's.
     let cell = job.unwrap().cell.0;

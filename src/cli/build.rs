@@ -87,7 +87,7 @@ pub(super) fn run(args: BuildArgs) -> anyhow::Result<()> {
         let bbox = args.bbox.as_deref().map(super::corners);
         let opts = ExportOptions {
             albedo: args.tint.then(|| {
-                Arc::new(Materials::for_tree(
+                Arc::new(karstic::picture::materials(
                     &file.scene,
                     &compiled.tree,
                     compiled.ground.clone(),

@@ -9,7 +9,6 @@ use clap::Args;
 use super::Budget;
 use karstic::analysis::{Masks, Raster, texture_frame};
 use karstic::field::Field;
-use karstic::render::Materials;
 
 /// Write texture masks of a tree as 8-bit grey PNGs (first row north) and a JSON sidecar.
 #[derive(Args, Debug)]
@@ -64,7 +63,7 @@ pub(super) fn run(args: MasksArgs) -> anyhow::Result<()> {
     });
     let raster = Raster::new(frame, cell, args.budget.max_memory)?;
     let started = Instant::now();
-    let materials = Materials::for_tree(&file.scene, tree, compiled.ground.clone());
+    let materials = karstic::picture::materials(&file.scene, tree, compiled.ground.clone());
     let masks = Masks::compute(tree, &materials, &raster);
     std::fs::create_dir_all(&args.output).map_err(|e| {
         anyhow::anyhow!(

@@ -8,7 +8,7 @@ use glam::Vec3;
 
 use super::Budget;
 use karstic::io::progress;
-use karstic::render::{Device, Frame, Method, RenderSettings, Renderable, cpu};
+use karstic::render::{Device, Frame, Method, Renderable, cpu};
 
 /// Arguments of `karstic render`.
 #[derive(clap::Args, Debug)]
@@ -76,16 +76,16 @@ pub(super) fn run(args: RenderArgs) -> anyhow::Result<()> {
         .as_deref()
         .map(|c| (Vec3::new(c[0], c[1], c[2]), Vec3::new(c[3], c[4], c[5])));
     let tree = &compiled.tree;
-    let camera = cpu::scene_camera(&file.scene, tree, look, args.fov, w, h)
+    let camera = karstic::picture::camera(&file.scene, tree, look, args.fov, w, h)
         .with_context(|| format!("{}: placing the camera", args.tree.display()))?;
     let mut settings =
-        RenderSettings::for_tree(&file.scene, tree, compiled.ground, &camera, args.method);
+        karstic::picture::settings(&file.scene, tree, compiled.ground, &camera, args.method);
     settings.shading.shadows = !args.no_shadows;
     let start = Instant::now();
     // On the CPU the tracer follows a mesh of the job's region, as `karstic run`'s
     // pictures do: meshing it costs a fraction of the march it saves.
     if !(args.gpu || args.no_guide) {
-        settings.guides = karstic::job::view_guides(
+        settings.guides = karstic::picture::view_guides(
             tree,
             file.scene.job.as_ref(),
             &camera,

@@ -27,7 +27,7 @@ use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 use super::points::{Handle, handles};
-use crate::render::cpu::{Bands, render_bands, scene_camera};
+use crate::render::cpu::{Bands, render_bands};
 use crate::render::gpu::GpuContext;
 use crate::render::trace::normal;
 use crate::render::{Camera, Frame, Method, RenderSettings, cpu};
@@ -455,7 +455,7 @@ impl Server {
         let stale = move || latest.load(Ordering::SeqCst) != id;
         let camera = |(w, h): (u32, u32)| match req.view {
             Some(o) => o.camera(w, h),
-            None => scene_camera(&req.scene, &r.compiled.tree, None, None, w, h).ok(),
+            None => crate::picture::camera(&req.scene, &r.compiled.tree, None, None, w, h).ok(),
         };
         let (Some(small), Some(full)) = (
             camera(fast_size(req.size, self.per_pixel.get(), DRAG_BUDGET)),
@@ -643,7 +643,7 @@ pub fn settings(
     camera: &Camera,
     quality: Quality,
 ) -> RenderSettings {
-    let mut s = RenderSettings::for_tree(
+    let mut s = crate::picture::settings(
         scene,
         &compiled.tree,
         compiled.ground.clone(),

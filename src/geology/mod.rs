@@ -42,14 +42,6 @@ impl Geology {
         }
     }
 
-    /// A tree file's geology, compiled with the scene's seed; `None` when it has none.
-    pub fn of_scene(scene: &crate::scene::Scene) -> Option<Self> {
-        scene
-            .geology
-            .as_ref()
-            .map(|g| Geology::from_spec(g, scene.seed))
-    }
-
     /// The same resistance `rho` everywhere (clamped to `[0, 1]`).
     pub fn uniform(rho: f32) -> Self {
         Geology {

@@ -151,7 +151,7 @@ impl Section {
         terrain: Option<&dyn Field>,
     ) -> Result<(), SectionError> {
         let rgba = self.draw(geology, terrain);
-        crate::render::image::write_rgba_png(path, self.width, self.height, &rgba).map_err(|e| {
+        crate::io::write_rgba_png(path, self.width, self.height, &rgba).map_err(|e| {
             SectionError::Write {
                 path: path.to_path_buf(),
                 message: e.to_string(),

@@ -3,10 +3,12 @@
 
 mod atomic;
 mod paths;
+mod png;
 mod size;
 
 pub use atomic::{write_atomic, write_bytes_atomic, write_bytes_atomic_like};
 pub use paths::{check_file_name, check_outputs};
+pub use png::write_rgba_png;
 pub use size::parse_byte_size;
 
 /// An error and its sources, one line: `outer: cause: root cause`.
@@ -84,6 +86,15 @@ pub enum IoError {
         output: PathBuf,
         /// The input it names.
         input: PathBuf,
+    },
+    /// An image could not be encoded.
+    #[error("cannot encode the image {path}")]
+    Encode {
+        /// The destination.
+        path: PathBuf,
+        /// What went wrong.
+        #[source]
+        source: image::ImageError,
     },
     /// Two outputs of one run would be the same file.
     #[error("the outputs {first} and {second} are the same file; give each its own name")]

@@ -8,6 +8,10 @@ use crate::field::Aabb;
 /// Largest accepted image side, in pixels.
 pub const MAX_SIDE: u32 = 32_768;
 
+/// The vertical field of view (degrees) of a picture whose tree file and command give
+/// none.
+pub const DEFAULT_FOV: f32 = 40.0;
+
 /// A ray `o + t·d` with a unit direction.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {

@@ -11,20 +11,14 @@ use super::guide::Guide;
 use super::image::Frame;
 use super::material::Materials;
 use super::shade::{
-    AO_SAMPLES, CAVE_DIRS, CAVE_STEPS, Shading, Water, ambient_occlusion, cave_closed, cave_sky,
-    to_srgb8,
+    AO_SAMPLES, CAVE_DIRS, CAVE_STEPS, Shading, ambient_occlusion, cave_closed, cave_sky, to_srgb8,
 };
 use super::trace::{Method, Trace, TraceParams, Tracer, outward};
 use glam::Vec3;
 
 use std::sync::Arc;
 
-use super::RenderError;
-use super::material::scene_box;
-use super::views::frame_surface;
-use crate::dem::HeightfieldField;
 use crate::field::{Aabb, Field, ISO, Tree};
-use crate::scene::Scene;
 
 /// Side of the square tiles handed to rayon, pixels.
 pub const TILE: u32 = 16;
@@ -54,63 +48,6 @@ impl RenderSettings {
             materials: Materials::for_scene(support, None),
             guides: Vec::new(),
         }
-    }
-}
-
-impl RenderSettings {
-    /// The settings `karstic render` and the editor use for a tree file's scene: shading at
-    /// the scale of its job's region (else the support) with its job's water level, its
-    /// materials ([`Materials::for_tree`]) over its terrain `ground`.
-    pub fn for_tree(
-        scene: &Scene,
-        tree: &Tree,
-        ground: Option<Arc<HeightfieldField>>,
-        camera: &Camera,
-        method: Method,
-    ) -> Self {
-        let materials = Materials::for_tree(scene, tree, ground);
-        Self::with_materials(scene, tree, materials, camera, method)
-    }
-
-    /// [`RenderSettings::for_tree`] with the tree's `materials` already made (the job
-    /// colours its mesh with them too).
-    pub fn with_materials(
-        scene: &Scene,
-        tree: &Tree,
-        materials: Materials,
-        camera: &Camera,
-        method: Method,
-    ) -> Self {
-        let mut s = RenderSettings {
-            materials,
-            ..RenderSettings::for_scene(&scene_box(scene, tree), camera, method)
-        };
-        s.shading.water = scene
-            .job
-            .as_ref()
-            .and_then(|j| j.water_level)
-            .map(|z| Water::at(z.0));
-        s
-    }
-}
-
-/// The camera of a tree file's preview: looking from `look`'s eye at its target when
-/// given, else the scene job's camera, else [`frame_surface`] of `field`; `fov` degrees,
-/// else the job's, else 40.
-pub fn scene_camera(
-    scene: &Scene,
-    field: &dyn Field,
-    look: Option<(Vec3, Vec3)>,
-    fov: Option<f32>,
-    width: u32,
-    height: u32,
-) -> Result<Camera, RenderError> {
-    let job = scene.job.as_ref();
-    let look = look.or_else(|| job.and_then(|j| j.camera).map(|c| (c.eye.0, c.target.0)));
-    let fov = fov.or(job.map(|j| j.fov.0)).unwrap_or(40.0);
-    match look {
-        Some((eye, target)) => Camera::look_at(eye, target, fov, width, height),
-        None => frame_surface(field, fov, width, height),
     }
 }
 

@@ -2,11 +2,8 @@
 
 use std::path::Path;
 
-use image::ImageEncoder;
-use image::codecs::png::PngEncoder;
-
 use super::RenderError;
-use crate::io::{check_budget, write_bytes_atomic};
+use crate::io::{check_budget, write_rgba_png};
 
 /// Bytes per pixel of a [`Frame`] (RGBA8, f32 depth, u32 steps) plus the PNG buffer.
 pub const BYTES_PER_PIXEL: u64 = 4 + 4 + 4 + 4;
@@ -59,7 +56,7 @@ impl Frame {
 
     /// Writes the colour image as a PNG, atomically.
     pub fn write_png(&self, path: &Path) -> Result<(), RenderError> {
-        write_rgba_png(path, self.width, self.height, &self.rgba)
+        Ok(write_rgba_png(path, self.width, self.height, &self.rgba)?)
     }
 
     /// The cost image: steps per pixel on a black–blue–red–yellow–white ramp scaled to
@@ -74,7 +71,12 @@ impl Frame {
 
     /// Writes the cost image (see [`Frame::cost_rgba`]) as a PNG, atomically.
     pub fn write_cost_png(&self, path: &Path) -> Result<(), RenderError> {
-        write_rgba_png(path, self.width, self.height, &self.cost_rgba())
+        Ok(write_rgba_png(
+            path,
+            self.width,
+            self.height,
+            &self.cost_rgba(),
+        )?)
     }
 }
 
@@ -129,25 +131,12 @@ pub fn write_contact_sheet(path: &Path, frames: &[&Frame]) -> Result<(), RenderE
         }
         y += rh + SHEET_GAP;
     }
-    write_rgba_png(path, sheet.width(), sheet.height(), sheet.as_raw())
-}
-
-/// Writes RGBA8 pixels (row-major from the top-left) as a PNG, atomically.
-pub fn write_rgba_png(
-    path: &Path,
-    width: u32,
-    height: u32,
-    rgba: &[u8],
-) -> Result<(), RenderError> {
-    let mut bytes = Vec::new();
-    PngEncoder::new(&mut bytes)
-        .write_image(rgba, width, height, image::ExtendedColorType::Rgba8)
-        .map_err(|source| RenderError::Encode {
-            path: path.to_path_buf(),
-            source,
-        })?;
-    write_bytes_atomic(path, &bytes)?;
-    Ok(())
+    Ok(write_rgba_png(
+        path,
+        sheet.width(),
+        sheet.height(),
+        sheet.as_raw(),
+    )?)
 }
 
 #[cfg(test)]

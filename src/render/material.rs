@@ -23,11 +23,10 @@ use std::sync::Arc;
 use glam::{Vec2, Vec3};
 
 use crate::dem::HeightfieldField;
+use crate::field::Aabb;
 use crate::field::noise::simplex;
-use crate::field::{Aabb, Field, Tree};
 use crate::geology::Geology;
 use crate::mesh::export::Albedo;
-use crate::scene::Scene;
 
 /// Seed of the noise that moves material boundaries.
 pub const VARIATION_SEED: u32 = 0x05ee_dc01;
@@ -134,33 +133,6 @@ impl Materials {
         }
     }
 
-    /// The materials of a tree file's scene: at the scale of [`scene_box`], over the
-    /// compiled scene's terrain, with the job's snow line, rock coloured by the scene's
-    /// geology when it has one. The preview, the feature
-    /// views, the mesh colours and the texture masks all take theirs from here.
-    pub fn for_tree(scene: &Scene, tree: &Tree, ground: Option<Arc<HeightfieldField>>) -> Self {
-        Self::for_scene_in(scene, tree.support(), ground)
-    }
-
-    /// [`Self::for_tree`] with `support` standing for the tree's support: the scale of a
-    /// scene without a job region, for consumers that compile only part of the tree (tiles
-    /// take the plan's region, the same for all of them).
-    pub fn for_scene_in(
-        scene: &Scene,
-        support: Aabb,
-        ground: Option<Arc<HeightfieldField>>,
-    ) -> Self {
-        let b = job_region(scene).unwrap_or(support);
-        let mut m = Materials::for_scene(&b, ground);
-        m.snow_line = scene
-            .job
-            .as_ref()
-            .and_then(|j| j.snow_line)
-            .map(|z| SnowLine::at(z.0, &b));
-        m.geology = Geology::of_scene(scene).map(Arc::new);
-        m
-    }
-
     /// Vertical offset of `p` from the ground — the DEM's elevation, without its detail
     /// (the GPU reads the same) — 0 without a terrain or off its cells.
     pub fn off_ground(&self, p: Vec3) -> f32 {
@@ -227,18 +199,6 @@ impl Materials {
         };
         self.albedo_of(&c, rock)
     }
-}
-
-/// The box that sets the scale of a scene's shading and materials: its job's region, or
-/// the tree's support.
-pub fn scene_box(scene: &Scene, tree: &Tree) -> Aabb {
-    job_region(scene).unwrap_or_else(|| tree.support())
-}
-
-/// The region of the scene's job, when it gives one.
-fn job_region(scene: &Scene) -> Option<Aabb> {
-    let r = scene.job.as_ref()?.region?;
-    Some(Aabb::new(r.min.0, r.max.0))
 }
 
 /// Hermite step from 0 at `a` to 1 at `b` (`a > b` steps down).

@@ -57,15 +57,6 @@ pub enum RenderError {
     /// Encoding or writing an image failed.
     #[error(transparent)]
     Io(#[from] crate::io::IoError),
-    /// PNG encoding failed.
-    #[error("cannot encode PNG {path}")]
-    Encode {
-        /// The destination.
-        path: std::path::PathBuf,
-        /// What went wrong.
-        #[source]
-        source: ::image::ImageError,
-    },
     /// The GPU path failed.
     #[error(transparent)]
     Gpu(#[from] gpu::GpuError),

@@ -566,7 +566,7 @@ impl<'s> Compiler<'s> {
             index: scene.named(),
             budget,
             roi: None,
-            geology: Arc::new(Geology::of_scene(scene).unwrap_or_default()),
+            geology: Arc::new(scene.geology().unwrap_or_default()),
         }
     }
 

@@ -232,7 +232,7 @@ fn default_image() -> (u32, u32) {
 }
 
 fn default_fov() -> Positive {
-    Positive(40.0)
+    Positive(crate::render::camera::DEFAULT_FOV)
 }
 
 /// A turbulence warp node: `child` evaluated at `p + δ(p)·f_D(p)`.
@@ -419,6 +419,13 @@ impl NodeSpec {
 }
 
 impl Scene {
+    /// The file's geology, compiled with the scene's seed; `None` when it has none.
+    pub fn geology(&self) -> Option<crate::geology::Geology> {
+        self.geology
+            .as_ref()
+            .map(|g| crate::geology::Geology::from_spec(g, self.seed))
+    }
+
     /// The names of the scene's features, in the tree's order: named Feature Volumes,
     /// anchored nodes, landforms, and named carves of a `Difference` — what `karstic run`
     /// makes a close-up of.

@@ -15,7 +15,6 @@ use std::sync::Arc;
 
 use crate::mesh::export::{self, ExportOptions, Origin};
 use crate::mesh::{Mesh, MeshOptions, polygonize};
-use crate::render::Materials;
 use crate::scene::{Compiled, SceneFile};
 
 /// Skirt depth in cells of the tile's level.
@@ -179,7 +178,7 @@ pub fn run_tile(
         let opts = ExportOptions {
             // The plan's region stands for the tree's support: the same scale in every
             // tile, whatever part of the tree each compiled.
-            albedo: Some(Arc::new(Materials::for_scene_in(
+            albedo: Some(Arc::new(crate::picture::materials_in(
                 &loaded.file.scene,
                 plan.region(),
                 ground.clone(),
