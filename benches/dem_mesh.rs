@@ -11,9 +11,10 @@ use std::path::Path;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use karstic::compile::compile_scene;
 use karstic::field::{Field, Tree};
 use karstic::mesh::{GridSpec, MeshOptions, polygonize};
-use karstic::scene::{compile_scene, parse_scene};
+use karstic::scene::parse_scene;
 
 /// Horizontal and vertical cell size, metres.
 const CELL: f32 = 30.0;

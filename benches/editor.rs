@@ -24,8 +24,9 @@ use std::path::Path;
 
 use criterion::measurement::{Measurement, ValueFormatter};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use karstic::compile::{compile_scene, edit};
 use karstic::editor::preview::{DRAG_BUDGET, Quality, draw, fast_size, refine};
-use karstic::scene::{compile_scene, edit, load};
+use karstic::scene::load;
 
 /// Nanoseconds on a CPU of every thread of this process so far (Linux).
 fn cpu_ns() -> u64 {

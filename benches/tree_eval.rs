@@ -43,7 +43,7 @@ pub fn spheres_scene() -> Tree {
     }
     text += "]))";
     let scene = karstic::scene::parse_scene(&text, "spheres".as_ref()).unwrap();
-    karstic::scene::compile_scene(&scene, "spheres".as_ref(), ".".as_ref())
+    karstic::compile::compile_scene(&scene, "spheres".as_ref(), ".".as_ref())
         .unwrap()
         .tree
 }
@@ -69,7 +69,7 @@ fn karst_scene() -> Tree {
     }
     text += "])]))";
     let scene = karstic::scene::parse_scene(&text, "karst".as_ref()).unwrap();
-    karstic::scene::compile_scene(&scene, "karst".as_ref(), dir.as_ref())
+    karstic::compile::compile_scene(&scene, "karst".as_ref(), dir.as_ref())
         .unwrap()
         .tree
 }

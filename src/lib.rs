@@ -9,6 +9,7 @@
 
 pub mod analysis;
 mod cache;
+pub mod compile;
 pub mod curves;
 pub mod dem;
 pub mod editor;

@@ -6,11 +6,12 @@
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
+use karstic::compile::compile_scene;
 use karstic::dem::HeightfieldField;
 use karstic::field::{Aabb, Field, Rect, Tree};
 use karstic::mesh::{GridSpec, Mesh, MeshOptions, MeshStats, polygonize};
 use karstic::scene::HeightfieldSpec;
-use karstic::scene::{compile_scene, parse_scene};
+use karstic::scene::parse_scene;
 
 /// The bundled 128 × 128 crop (90 m cells, no nodata), relative to the crate root.
 const CROP: &str = "trees/data/jacksboro_crop.asc";

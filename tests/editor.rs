@@ -9,11 +9,12 @@ use std::time::Duration;
 use egui::accesskit::Role;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
+use karstic::compile::edit;
 use karstic::editor::preview::{
     COARSEST_DIVISOR, DRAG_BUDGET, FAST_DIVISOR, FIRST_DIVISOR, Quality, draw, fast_size,
 };
 use karstic::editor::{Backend, Editor, Headless, Tool, settle};
-use karstic::scene::{NodeSpec, edit};
+use karstic::scene::NodeSpec;
 
 use crate::common::{REQUIRE_GPU, assert_frames_match, unavailable};
 

@@ -5,10 +5,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use glam::{Vec2, Vec3};
+use karstic::compile::Compiled;
 use karstic::dem::{self, Dem, ReadOptions};
 use karstic::field::{Field, ISO, Tree};
 use karstic::heightmap::{HeightmapGrid, TopOptions, heightmap};
-use karstic::scene::Compiled;
 
 use crate::common::{REQUIRE_GDAL, unavailable};
 

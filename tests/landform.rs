@@ -13,10 +13,10 @@ use karstic::analysis::relief::{coastal_accessibility, sinks, slope, stream_powe
 use karstic::dem::Heightfield;
 use karstic::field::Resistance;
 use karstic::field::{Aabb, Field, ISO, Tree};
-use karstic::landform::{
-    GeneratorSpec, Ground, HoodooSpec, KarstSpec, LandformSpec, SeaSpec, Terminal, carving_sphere,
-};
+use karstic::landform::{Ground, Terminal, carving_sphere};
+use karstic::scene::landform::{HoodooSpec, KarstSpec, SeaSpec};
 use karstic::scene::spec::Nary;
+use karstic::scene::spec::{GeneratorSpec, LandformSpec};
 use karstic::scene::{NodeSpec, SceneFile, parse_scene};
 
 fn grid(nx: usize, ny: usize, cell: f32, f: impl Fn(f32, f32) -> f32) -> Heightfield {

@@ -6,9 +6,10 @@
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
+use karstic::compile::compile_scene;
 use karstic::field::{Aabb, Field, Grid, ISO, Tree, eval_grid};
 use karstic::mesh::{GridSpec, MeshOptions, polygonize};
-use karstic::scene::{NodeSpec, SceneFile, compile_scene};
+use karstic::scene::{NodeSpec, SceneFile};
 
 fn scene(name: &str) -> SceneFile {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("trees/{name}.ron"));

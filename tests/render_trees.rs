@@ -11,6 +11,7 @@ use crate::tape_conformance::conform;
 use common::{TUNNEL_VIEW, assert_frames_match_within, depth_agreement, gpu};
 use glam::Vec3;
 use indicatif::ProgressBar;
+use karstic::compile::Compiled;
 use karstic::dem::{Heightfield, HeightfieldField, ImplicitParams, Interpolation};
 use karstic::field::{Aabb, Field, ISO, Tree, TreeBuilder};
 use karstic::mesh::{GridSpec, MeshOptions, polygonize};
@@ -18,7 +19,6 @@ use karstic::render::guide::Guide;
 use karstic::render::raycast::MeshRaycaster;
 use karstic::render::trace::TraceParams;
 use karstic::render::{Camera, Method, RenderSettings, cpu, render};
-use karstic::scene::Compiled;
 use karstic::tape::{Tape, TapeError, tape_from_tree};
 
 /// The scenes `trees/*.ron` and `trees/curves/*.ron`, sorted.

@@ -38,7 +38,7 @@ fn scene(root: &str) -> Tree {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
     let path = dir.join("conformance.ron");
     let sc = karstic::scene::parse_scene(&text, &path).unwrap_or_else(|e| panic!("{e}"));
-    karstic::scene::compile_scene(&sc, &path, &dir)
+    karstic::compile::compile_scene(&sc, &path, &dir)
         .unwrap_or_else(|e| panic!("{e}"))
         .tree
 }

@@ -3,7 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
-use karstic::scene::{self, edit, parse_scene};
+use karstic::scene::{self, parse_scene};
+
+use karstic::compile::edit;
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

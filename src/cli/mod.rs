@@ -103,7 +103,7 @@ fn load_compiled(
     path: &Path,
     budget: u64,
     outputs: &[impl AsRef<Path>],
-) -> anyhow::Result<(karstic::scene::SceneFile, karstic::scene::Compiled)> {
+) -> anyhow::Result<(karstic::scene::SceneFile, karstic::compile::Compiled)> {
     let file = karstic::scene::load(path)?;
     karstic::io::check_outputs(&file.inputs(), outputs)?;
     let compiled = file.compile_with(budget)?;

@@ -6,8 +6,9 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::{Args, Subcommand};
 
+use karstic::compile::edit;
 use karstic::field::{Aabb, Field};
-use karstic::scene::{self, edit};
+use karstic::scene::{self};
 
 /// Tree-file commands.
 #[derive(Args, Debug)]

@@ -12,8 +12,9 @@ use super::inspector::{Change, Inspector};
 use super::placement;
 use super::points::{self, Handle};
 use super::preview::{Backend, Look, Orbit, Preview, Quality, Rendered, Report, Request};
+use crate::compile::edit;
 use crate::scene::load::read_text;
-use crate::scene::{Scene, edit, parse_scene};
+use crate::scene::{Scene, parse_scene};
 
 /// How far from a control point (points) a drag picks it.
 pub const HANDLE_REACH: f32 = 8.0;
@@ -712,7 +713,7 @@ impl Editor {
         Some(Box::new(move |out: &Path| {
             let (w, h) = scene.job.as_ref().map_or((960, 540), |j| j.image);
             let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-            let compiled = crate::scene::compile_scene(&scene, &path, &base)?;
+            let compiled = crate::compile::compile_scene(&scene, &path, &base)?;
             let camera = orbit
                 .camera(w, h)
                 .ok_or_else(|| anyhow::anyhow!("no camera for this view"))?;

@@ -4,8 +4,8 @@
 
 use std::path::Path;
 
+use crate::compile::edit;
 use crate::scene::SceneError;
-use crate::scene::edit;
 use crate::scene::load::read_text;
 
 /// One edit of a tree file, as `karstic tree set/add/rm` would make it.
@@ -33,7 +33,7 @@ pub enum Edit {
 }
 
 impl Edit {
-    /// Applies the edit to the file at `path` through [`crate::scene::edit`]: validated,
+    /// Applies the edit to the file at `path` through [`crate::compile::edit`]: validated,
     /// the previous file kept as `.bak`, written atomically.
     pub fn apply(&self, path: &Path) -> Result<(), SceneError> {
         match self {

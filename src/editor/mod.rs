@@ -2,7 +2,7 @@
 //!
 //! A thin interface over the library: the file is loaded and validated by
 //! [`crate::scene`], every edit is one of `karstic tree set/add/rm`'s operations
-//! ([`crate::scene::edit`]) written to the file at once (validated, atomically, the
+//! ([`crate::compile::edit`]) written to the file at once (validated, atomically, the
 //! previous version kept as `.bak`), and the viewport is the CPU tracer
 //! ([`crate::render::cpu`]) on a background thread, its refined images the wgpu tracer's
 //! ([`crate::render::gpu`]) on a hardware adapter or when asked ([`preview::Backend`]).

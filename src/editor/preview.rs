@@ -27,11 +27,12 @@ use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 use super::points::{Handle, handles};
+use crate::compile::{Compiled, compile_scene};
 use crate::render::cpu::{Bands, render_bands};
 use crate::render::gpu::GpuContext;
 use crate::render::trace::normal;
 use crate::render::{Camera, Frame, Method, RenderSettings, cpu};
-use crate::scene::{Compiled, Scene, compile_scene};
+use crate::scene::Scene;
 use crate::tape::Tape;
 
 /// The fast pass is at most this fraction of the image's side.

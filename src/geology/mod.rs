@@ -7,7 +7,7 @@
 //! translation strictly inside a domain, a discontinuity on its boundary, §4.4). A tree
 //! file carries it as a top-level `geology:` beside the terrain tree
 //! ([`GeologySpec`]); compiling the scene builds it once
-//! (`scene::compile::Compiler::resistance`), and the erosion node (`field::Erode`) and
+//! (`compile::Compiler::resistance`), and the erosion node (`field::Erosion`) and
 //! the landform generators read it. `docs/geology.md` shows each node in section.
 
 mod rock;

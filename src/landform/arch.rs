@@ -26,7 +26,6 @@
 //! are about 90 to 120 m).
 
 use glam::{Vec2, Vec3};
-use serde::{Deserialize, Serialize};
 
 use super::{Ground, LandformError, round3, solid};
 use crate::field::noise::Octaves;
@@ -34,48 +33,10 @@ use crate::field::skeleton::Size3;
 use crate::field::{NoiseSpec, SkeletonSpec};
 use crate::rng::Rng;
 use crate::scene::NodeSpec;
+use crate::scene::landform::ArchSpec;
 use crate::scene::spec::{DifferenceSpec, ErodeSpec, Nary, Rotation, TransformSpec};
 use crate::value::BoxSpec;
-use crate::value::{Dir3, Finite, NonNegative, P2, P3, Positive};
-
-/// Parameters of a natural arch.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ArchSpec {
-    /// One foot of the opening on the ground (tree frame, x and y).
-    pub from: P2,
-    /// The other foot: the span is the distance between the two.
-    pub to: P2,
-    /// Height of the opening's ceiling above the ground at mid-span, metres (default: the
-    /// base of the hard bed the geology puts there, else 45% of the span).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub height: Option<Positive>,
-    /// Thickness of the lintel at mid-span, metres (default 30% of the opening's height,
-    /// at least 3 m).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub lintel: Option<Positive>,
-    /// Mean width of the fin, metres (default 22% of the span, between 4 and 20 m).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub width: Option<Positive>,
-    /// How far the fin runs on beyond each foot, metres (default 70% of the span).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub reach: Option<Positive>,
-    /// Strength of the erosion node over the fin (Paris et al. 2019 §6): how far its soft
-    /// beds recess, in field units (default 0.4; 0 leaves the fin unweathered).
-    #[serde(default = "default_weathering")]
-    pub weathering: NonNegative,
-    /// Whether blocks fallen from the fin lie on the ground beside it (default true).
-    #[serde(default = "default_talus")]
-    pub talus: bool,
-}
-
-fn default_talus() -> bool {
-    true
-}
-
-fn default_weathering() -> NonNegative {
-    NonNegative(0.4)
-}
+use crate::value::{Dir3, Finite, NonNegative, P3, Positive};
 
 /// Spans the generator accepts, metres: a metre-wide window is a pothole, not an arch,
 /// and no known arch spans more than about 120 m.

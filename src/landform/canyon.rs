@@ -13,54 +13,16 @@
 //! bed eaten back beneath it.
 
 use glam::{Vec2, Vec3};
-use serde::{Deserialize, Serialize};
 
 use super::{Ground, LandformError, effect, point};
 use crate::analysis::relief::stream_power;
 use crate::field::ISO;
 use crate::scene::NodeSpec;
-use crate::value::{Positive, Unit};
-
-fn default_beta() -> Unit {
-    Unit(0.3)
-}
-
-fn default_retreat() -> Unit {
-    Unit(0.5)
-}
+use crate::scene::landform::CanyonSpec;
 
 /// `∫ g(|x|) dx` over the unit ball for Wyvill's `g(x) = (1 − x²)³`: `4π · 16/315`. A
 /// lattice of pitch `s` of such spheres of radius `R` sums to about this times `(R/s)³`.
 const WYVILL_VOLUME: f32 = 4.0 * std::f32::consts::PI * 16.0 / 315.0;
-
-/// Parameters of canyon erosion.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CanyonSpec {
-    /// Stream power (m, `√m²` times slope) above which a sample is riverbed.
-    pub threshold: Positive,
-    /// The riverbed's stress reaches this far onto the banks, metres: the gorge is at most
-    /// twice this wide at its rim.
-    pub banks: Positive,
-    /// Incision below the bed where the stream power is twice the threshold or more,
-    /// metres (proportionally less on weaker streams).
-    pub depth: Positive,
-    /// Falloff radius of the spheres, metres: how far the carving field is smoothed
-    /// (smaller keeps the steps of thin beds sharper).
-    pub radius: Positive,
-    /// Pitch of the sphere lattice, metres; at most half the radius, so the spheres
-    /// overlap into one field.
-    pub spacing: Positive,
-    /// β of the erosion effect (the effect on the hardest rock).
-    #[serde(default = "default_beta")]
-    pub beta: Unit,
-    /// How far the walls recede per metre of height above the floor (0: vertical walls).
-    #[serde(default = "default_retreat")]
-    pub retreat: Unit,
-    /// Samples with a smaller effect make no sphere.
-    #[serde(default = "super::default_min_effect")]
-    pub min_effect: Unit,
-}
 
 /// What the river does at one sample of the top grid.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -22,7 +22,6 @@
 //! the first symbol's height, so the columns read as weathered rock, not turned solids.
 
 use glam::{Vec2, Vec3};
-use serde::{Deserialize, Serialize};
 
 use super::{Ground, LandformError, Poisson, solid};
 use crate::analysis::flow::{drainage_area, fill_depressions};
@@ -32,38 +31,8 @@ use crate::field::skeleton::Size3;
 use crate::field::{NoiseSpec, SkeletonSpec};
 use crate::rng::Rng;
 use crate::scene::NodeSpec;
-use crate::value::{Finite, NonNegative, P2, P3, Positive, Unit};
-
-fn default_lambda() -> Unit {
-    Unit(0.8)
-}
-
-fn default_depth() -> u32 {
-    6
-}
-
-/// Parameters of a field of hoodoos.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct HoodooSpec {
-    /// Poisson spacing of the hoodoos, metres.
-    pub spacing: Positive,
-    /// Height of the first symbol, metres.
-    pub size: Positive,
-    /// λ: each symbol is this fraction of the one below.
-    #[serde(default = "default_lambda")]
-    pub lambda: Unit,
-    /// Most symbols in one hoodoo.
-    #[serde(default = "default_depth")]
-    pub max_depth: u32,
-    /// Slopes (rise over run) where hoodoos grow best, `(lo, hi)`.
-    pub slope: (Finite, Finite),
-    /// Drainage area (m²) at and above which nothing grows (rivers wash them away).
-    pub max_area: Positive,
-    /// Only inside this polygon (tree frame), when given.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub mask: Option<Vec<P2>>,
-}
+use crate::scene::landform::HoodooSpec;
+use crate::value::{NonNegative, P2, P3, Positive};
 
 /// A caprock's thickness, as a fraction of its symbol's height: caps are flat slabs.
 pub const CAP: f32 = 0.4;

@@ -10,55 +10,12 @@ use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
 use glam::Vec3;
-use serde::{Deserialize, Serialize};
 
 use super::{Ground, LandformError, Poisson, carving_sphere, effect};
 use crate::analysis::relief::sinks;
 use crate::rng::Rng;
 use crate::scene::NodeSpec;
-use crate::value::{P2, Positive, Unit};
-
-fn default_epsilon() -> Unit {
-    Unit(0.1)
-}
-
-fn default_beta() -> Unit {
-    Unit(0.5)
-}
-
-fn default_directions() -> u32 {
-    6
-}
-
-/// Parameters of a karst network.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct KarstSpec {
-    /// Sinks given by hand, `(x, y)`: water enters the ground there.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub sinks: Vec<P2>,
-    /// Also seed at the terrain's own sinks: pits of its depressions at least this many
-    /// metres deep (Barnes et al. 2014's pits, see `analysis::relief::sinks`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub auto_sinks: Option<Positive>,
-    /// Cavity radius of one carving sphere in the softest rock, metres.
-    pub radius: Positive,
-    /// Poisson spacing of the candidates (and the step of the percolation), metres.
-    pub spacing: Positive,
-    /// ρ₀: no carving where the resistance is at least this.
-    pub threshold: Unit,
-    /// ε: the range of the random perturbation of the queue's order.
-    #[serde(default = "default_epsilon")]
-    pub epsilon: Unit,
-    /// β of the erosion effect (the effect on the hardest rock).
-    #[serde(default = "default_beta")]
-    pub beta: Unit,
-    /// Candidate directions drawn around each carved point.
-    #[serde(default = "default_directions")]
-    pub directions: u32,
-    /// At most this many spheres.
-    pub max_spheres: u32,
-}
+use crate::scene::landform::KarstSpec;
 
 /// A candidate: perturbed resistance (as ordered bits), arrival number, position.
 type Candidate = Reverse<(u32, u64, [u32; 3])>;

@@ -21,60 +21,17 @@ use std::collections::HashMap;
 
 use glam::{IVec3, Vec2, Vec3};
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 
-pub use arch::{ArchShape, ArchSpec};
-pub use canyon::CanyonSpec;
-pub use hoodoo::{Hoodoo, HoodooSpec, Terminal};
-pub use karst::KarstSpec;
-pub use sea::SeaSpec;
+pub use arch::ArchShape;
+pub use hoodoo::{Hoodoo, Terminal};
 
 use crate::dem::{Heightfield, Interpolation};
 use crate::field::{Aabb, Field, ISO, NodeId, NoiseSpec, PrimitiveSpec, SkeletonSpec, Tree};
 use crate::heightmap::{Columns, TopOptions};
 use crate::rng::Rng;
 use crate::scene::NodeSpec;
-use crate::scene::spec::Nary;
-use crate::value::BoxSpec;
+use crate::scene::spec::{GeneratorSpec, LandformSpec, Nary};
 use crate::value::{Finite, P3, Positive};
-
-/// A landform node of a tree file.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct LandformSpec {
-    /// Unique node name; the expansion keeps it, its primitives' blend is `NAME-carves`
-    /// (or `NAME-rocks`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub name: Option<String>,
-    /// Seed of the generator's random choices (mixed with the scene's seed).
-    #[serde(default)]
-    pub seed: u32,
-    /// The terrain the landforms are generated on (any subtree; often a `Heightfield`,
-    /// or an earlier `Landform` for repeated steps).
-    pub base: Box<NodeSpec>,
-    /// Where the generator works (default: the base's support box).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub region: Option<BoxSpec>,
-    /// Cell of the analysis grid (top surface, drainage, accessibility), metres.
-    pub cell: Positive,
-    /// What to generate.
-    pub generator: GeneratorSpec,
-}
-
-/// The generators.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub enum GeneratorSpec {
-    /// Caves by invasion percolation from the sinks (Paris et al. 2019 §6.2).
-    Karst(KarstSpec),
-    /// Undercuts, arches and sea caves around sea level (Paris et al. 2019 §6.1).
-    SeaErosion(SeaSpec),
-    /// Hoodoos and goblins grown by an open grammar (Paris et al. 2019 §6.3).
-    Hoodoos(HoodooSpec),
-    /// River canyons whose walls the stream erodes (Paris et al. 2019 §6.1).
-    Canyon(CanyonSpec),
-    /// A natural arch: a fin of rock with an opening under its hard bed.
-    Arch(ArchSpec),
-}
 
 /// Errors of a generator: bad parameters for the terrain it meets.
 #[derive(Debug, thiserror::Error)]
@@ -202,11 +159,6 @@ impl<'a> Ground<'a> {
 /// effect without stress, `β` at full stress on the hardest rock, `σ` on the softest.
 pub fn effect(rho: f32, sigma: f32, beta: f32) -> f32 {
     sigma * (1.0 - rho) * (1.0 - beta) + sigma * beta
-}
-
-/// The effect below which the erosion generators drop a sample (`min_effect`'s default).
-fn default_min_effect() -> crate::value::Unit {
-    crate::value::Unit(0.1)
 }
 
 /// The falloff radius of a carving sphere whose cavity, at full effect `e = 1`, has

@@ -7,40 +7,13 @@
 //! Repeated steps are nested `Landform` nodes, each on the one before.
 
 use glam::{Vec2, Vec3};
-use serde::{Deserialize, Serialize};
 
 use super::{Ground, LandformError, Poisson, carving_sphere, effect, throw_dart};
 use crate::analysis::relief::coastal_accessibility;
 use crate::dem::Heightfield;
 use crate::rng::Rng;
 use crate::scene::NodeSpec;
-use crate::value::{Finite, Positive, Unit};
-
-fn default_beta() -> Unit {
-    Unit(0.5)
-}
-
-/// Parameters of one step of sea erosion.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SeaSpec {
-    /// Mean sea level, metres.
-    pub sea_level: Finite,
-    /// The waves act within this many metres above and below sea level.
-    pub band: Positive,
-    /// Cavity radius of one sphere at full effect, metres.
-    pub radius: Positive,
-    /// Poisson spacing of the surface samples, metres.
-    pub spacing: Positive,
-    /// How far the accessibility looks for open sea, metres.
-    pub reach: Positive,
-    /// β of the erosion effect (the effect on the hardest rock).
-    #[serde(default = "default_beta")]
-    pub beta: Unit,
-    /// Samples with a smaller effect make no sphere.
-    #[serde(default = "super::default_min_effect")]
-    pub min_effect: Unit,
-}
+use crate::scene::landform::SeaSpec;
 
 impl SeaSpec {
     /// The wave stress's falloff `w(z)`: 1 at sea level, 0 at and beyond the band.

@@ -2,9 +2,9 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::landform::{ArchSpec, CanyonSpec, HoodooSpec, KarstSpec, SeaSpec};
 use crate::elevation::ElevationSpec;
 use crate::field::{NoiseSpec, PrimitiveSpec};
-use crate::landform::LandformSpec;
 use crate::scene::HeightfieldSpec;
 use crate::value::{BoxSpec, Dir3, Finite, NonNegative, P2, P3, Positive, Region, Scale3};
 use crate::voxel::FeatureVolumeSpec;
@@ -416,6 +416,44 @@ impl NodeSpec {
         }
         rec(self, 0, visit)
     }
+}
+
+/// A landform node of a tree file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LandformSpec {
+    /// Unique node name; the expansion keeps it, its primitives' blend is `NAME-carves`
+    /// (or `NAME-rocks`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Seed of the generator's random choices (mixed with the scene's seed).
+    #[serde(default)]
+    pub seed: u32,
+    /// The terrain the landforms are generated on (any subtree; often a `Heightfield`,
+    /// or an earlier `Landform` for repeated steps).
+    pub base: Box<NodeSpec>,
+    /// Where the generator works (default: the base's support box).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub region: Option<BoxSpec>,
+    /// Cell of the analysis grid (top surface, drainage, accessibility), metres.
+    pub cell: Positive,
+    /// What to generate.
+    pub generator: GeneratorSpec,
+}
+
+/// The generators.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum GeneratorSpec {
+    /// Caves by invasion percolation from the sinks (Paris et al. 2019 §6.2).
+    Karst(KarstSpec),
+    /// Undercuts, arches and sea caves around sea level (Paris et al. 2019 §6.1).
+    SeaErosion(SeaSpec),
+    /// Hoodoos and goblins grown by an open grammar (Paris et al. 2019 §6.3).
+    Hoodoos(HoodooSpec),
+    /// River canyons whose walls the stream erodes (Paris et al. 2019 §6.1).
+    Canyon(CanyonSpec),
+    /// A natural arch: a fin of rock with an opening under its hard bed.
+    Arch(ArchSpec),
 }
 
 impl Scene {

@@ -13,9 +13,10 @@ use crate::field::{Aabb, Field};
 use crate::io::write_bytes_atomic;
 use std::sync::Arc;
 
+use crate::compile::Compiled;
 use crate::mesh::export::{self, ExportOptions, Origin};
 use crate::mesh::{Mesh, MeshOptions, polygonize};
-use crate::scene::{Compiled, SceneFile};
+use crate::scene::SceneFile;
 
 /// Skirt depth in cells of the tile's level.
 pub const SKIRT_CELLS: f32 = 2.0;

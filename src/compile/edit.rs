@@ -6,12 +6,12 @@
 
 use std::path::{Path, PathBuf};
 
-use super::compile::compile_scene;
-use super::load::{SceneError, load, to_ron_text};
-use super::spec::{NodeSpec, Scene};
-use super::splice::{SpliceError, set_field};
-use super::validate::validate;
+use super::compile_scene;
 use crate::io::{read_regular, write_bytes_atomic, write_bytes_atomic_like};
+use crate::scene::load::{SceneError, load, to_ron_text};
+use crate::scene::spec::{NodeSpec, Scene};
+use crate::scene::splice::{SpliceError, set_field};
+use crate::scene::validate::validate;
 use crate::value::ron_options;
 
 fn edit_error(path: &Path, message: impl Into<String>) -> SceneError {
@@ -38,7 +38,8 @@ fn edit_file(
 
 /// Copies the file at `path` to `FILE.bak`, then replaces it with `bytes` atomically.
 fn write_keeping_backup(path: &Path, bytes: &[u8]) -> Result<(), SceneError> {
-    let original = read_regular(path, super::load::MAX_TREE_FILE).map_err(SceneError::Read)?;
+    let original =
+        read_regular(path, crate::scene::load::MAX_TREE_FILE).map_err(SceneError::Read)?;
     let mut bak = path.as_os_str().to_owned();
     bak.push(".bak");
     write_bytes_atomic_like(&PathBuf::from(bak), &original, path).map_err(SceneError::Write)?;
@@ -49,7 +50,7 @@ fn write_keeping_backup(path: &Path, bytes: &[u8]) -> Result<(), SceneError> {
 /// redo), byte for byte: it is parsed and validated first, the current file is kept as
 /// `FILE.bak`, and the file is replaced atomically.
 pub fn restore(path: &Path, text: &str) -> Result<(), SceneError> {
-    super::load::parse_scene(text, path)?;
+    crate::scene::load::parse_scene(text, path)?;
     write_keeping_backup(path, text.as_bytes())
 }
 

@@ -1,4 +1,7 @@
-//! Compiling a scene into the flat [`Tree`] the evaluators run.
+//! Compiling a scene into the flat [`Tree`] the evaluators run, and the edits of tree
+//! files that a compile checks ([`edit`]).
+
+pub mod edit;
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
@@ -6,8 +9,8 @@ use std::sync::Mutex;
 
 use glam::{Affine3A, Quat, Vec3};
 
-use super::load::{SceneError, SceneFile};
-use super::spec::{Nary, NodeSpec, Scene};
+use crate::scene::spec::{Nary, NodeSpec, Scene};
+use crate::scene::{SceneError, SceneFile};
 use std::sync::Arc;
 
 use crate::dem::HeightfieldField;

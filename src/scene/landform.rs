@@ -1,0 +1,187 @@
+//! The parameters of the landform generators as tree files write them (Paris et al. 2019
+//! §6, and the natural arch of `docs/landforms.md`): plain data, checked while the file is
+//! parsed. The generators that read them are in `crate::landform`.
+
+use serde::{Deserialize, Serialize};
+
+use crate::value::{Finite, NonNegative, P2, Positive, Unit};
+
+/// The effect below which the erosion generators drop a sample (`min_effect`'s default).
+fn default_min_effect() -> Unit {
+    Unit(0.1)
+}
+
+fn arch_default_weathering() -> NonNegative {
+    NonNegative(0.4)
+}
+
+fn arch_default_talus() -> bool {
+    true
+}
+
+/// Parameters of a natural arch.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArchSpec {
+    /// One foot of the opening on the ground (tree frame, x and y).
+    pub from: P2,
+    /// The other foot: the span is the distance between the two.
+    pub to: P2,
+    /// Height of the opening's ceiling above the ground at mid-span, metres (default: the
+    /// base of the hard bed the geology puts there, else 45% of the span).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<Positive>,
+    /// Thickness of the lintel at mid-span, metres (default 30% of the opening's height,
+    /// at least 3 m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lintel: Option<Positive>,
+    /// Mean width of the fin, metres (default 22% of the span, between 4 and 20 m).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<Positive>,
+    /// How far the fin runs on beyond each foot, metres (default 70% of the span).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reach: Option<Positive>,
+    /// Strength of the erosion node over the fin (Paris et al. 2019 §6): how far its soft
+    /// beds recess, in field units (default 0.4; 0 leaves the fin unweathered).
+    #[serde(default = "arch_default_weathering")]
+    pub weathering: NonNegative,
+    /// Whether blocks fallen from the fin lie on the ground beside it (default true).
+    #[serde(default = "arch_default_talus")]
+    pub talus: bool,
+}
+
+fn canyon_default_retreat() -> Unit {
+    Unit(0.5)
+}
+
+fn canyon_default_beta() -> Unit {
+    Unit(0.3)
+}
+
+/// Parameters of canyon erosion.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CanyonSpec {
+    /// Stream power (m, `√m²` times slope) above which a sample is riverbed.
+    pub threshold: Positive,
+    /// The riverbed's stress reaches this far onto the banks, metres: the gorge is at most
+    /// twice this wide at its rim.
+    pub banks: Positive,
+    /// Incision below the bed where the stream power is twice the threshold or more,
+    /// metres (proportionally less on weaker streams).
+    pub depth: Positive,
+    /// Falloff radius of the spheres, metres: how far the carving field is smoothed
+    /// (smaller keeps the steps of thin beds sharper).
+    pub radius: Positive,
+    /// Pitch of the sphere lattice, metres; at most half the radius, so the spheres
+    /// overlap into one field.
+    pub spacing: Positive,
+    /// β of the erosion effect (the effect on the hardest rock).
+    #[serde(default = "canyon_default_beta")]
+    pub beta: Unit,
+    /// How far the walls recede per metre of height above the floor (0: vertical walls).
+    #[serde(default = "canyon_default_retreat")]
+    pub retreat: Unit,
+    /// Samples with a smaller effect make no sphere.
+    #[serde(default = "default_min_effect")]
+    pub min_effect: Unit,
+}
+
+fn hoodoo_default_lambda() -> Unit {
+    Unit(0.8)
+}
+
+fn hoodoo_default_depth() -> u32 {
+    6
+}
+
+/// Parameters of a field of hoodoos.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HoodooSpec {
+    /// Poisson spacing of the hoodoos, metres.
+    pub spacing: Positive,
+    /// Height of the first symbol, metres.
+    pub size: Positive,
+    /// λ: each symbol is this fraction of the one below.
+    #[serde(default = "hoodoo_default_lambda")]
+    pub lambda: Unit,
+    /// Most symbols in one hoodoo.
+    #[serde(default = "hoodoo_default_depth")]
+    pub max_depth: u32,
+    /// Slopes (rise over run) where hoodoos grow best, `(lo, hi)`.
+    pub slope: (Finite, Finite),
+    /// Drainage area (m²) at and above which nothing grows (rivers wash them away).
+    pub max_area: Positive,
+    /// Only inside this polygon (tree frame), when given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mask: Option<Vec<P2>>,
+}
+
+fn karst_default_directions() -> u32 {
+    6
+}
+
+fn karst_default_beta() -> Unit {
+    Unit(0.5)
+}
+
+fn karst_default_epsilon() -> Unit {
+    Unit(0.1)
+}
+
+/// Parameters of a karst network.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KarstSpec {
+    /// Sinks given by hand, `(x, y)`: water enters the ground there.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sinks: Vec<P2>,
+    /// Also seed at the terrain's own sinks: pits of its depressions at least this many
+    /// metres deep (Barnes et al. 2014's pits, see `analysis::relief::sinks`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub auto_sinks: Option<Positive>,
+    /// Cavity radius of one carving sphere in the softest rock, metres.
+    pub radius: Positive,
+    /// Poisson spacing of the candidates (and the step of the percolation), metres.
+    pub spacing: Positive,
+    /// ρ₀: no carving where the resistance is at least this.
+    pub threshold: Unit,
+    /// ε: the range of the random perturbation of the queue's order.
+    #[serde(default = "karst_default_epsilon")]
+    pub epsilon: Unit,
+    /// β of the erosion effect (the effect on the hardest rock).
+    #[serde(default = "karst_default_beta")]
+    pub beta: Unit,
+    /// Candidate directions drawn around each carved point.
+    #[serde(default = "karst_default_directions")]
+    pub directions: u32,
+    /// At most this many spheres.
+    pub max_spheres: u32,
+}
+
+fn sea_default_beta() -> Unit {
+    Unit(0.5)
+}
+
+/// Parameters of one step of sea erosion.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SeaSpec {
+    /// Mean sea level, metres.
+    pub sea_level: Finite,
+    /// The waves act within this many metres above and below sea level.
+    pub band: Positive,
+    /// Cavity radius of one sphere at full effect, metres.
+    pub radius: Positive,
+    /// Poisson spacing of the surface samples, metres.
+    pub spacing: Positive,
+    /// How far the accessibility looks for open sea, metres.
+    pub reach: Positive,
+    /// β of the erosion effect (the effect on the hardest rock).
+    #[serde(default = "sea_default_beta")]
+    pub beta: Unit,
+    /// Samples with a smaller effect make no sphere.
+    #[serde(default = "default_min_effect")]
+    pub min_effect: Unit,
+}
