@@ -16,7 +16,7 @@ const LACUNARITY: f32 = 2.0;
 const GAIN: f32 = 0.5;
 const OCTAVE_SHIFT: vec3<f32> = vec3<f32>(0.5477, 0.3127, 0.7531);
 
-// Sky occlusion at cave scale (src/render/shade.rs): tilt, ramp, floor; directions, steps.
+// Sky occlusion at cave scale (the renderer's shade.rs): tilt, ramp, floor; directions, steps.
 const CAVE_TILT: f32 = 0.7853982;
 const CAVE_RAMP: f32 = 0.12;
 const CAVE_FLOOR: f32 = 0.12;

@@ -1,5 +1,5 @@
 // Segment / sphere tracing and terrain shading, one primary ray per invocation: the GPU
-// twin of src/render/trace.rs, src/render/shade.rs and src/render/cpu.rs. Concatenated
+// twin of the CPU renderer's trace.rs, shade.rs and cpu.rs. Concatenated
 // after field.wgsl (which provides eval_tape).
 
 struct Uniforms {

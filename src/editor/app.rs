@@ -74,7 +74,7 @@ pub struct Editor {
     opened: Instant,
     first_image: Option<Duration>,
     /// Exports running in the background.
-    pub(super) exports: super::palette::Exports,
+    pub(super) exports: super::exports::Exports,
 }
 
 /// What the last preview request asked for: the file's version, the view, the image size,
@@ -342,7 +342,7 @@ impl Editor {
             ui.selectable_value(&mut self.look, Look::Normals, "normals");
             ui.toggle_value(&mut self.graph, "graph");
             ui.separator();
-            super::palette::show(self, ui);
+            self.palette(ui);
         });
         if let Some(e) = &self.load_error {
             ui.colored_label(ui.visuals().error_fg_color, e);

@@ -16,9 +16,11 @@
 //!   then the full image band by band; cost and normal views).
 //! * [`placement`]: the surface point under a pixel, and the nodes placed there.
 //! * [`points`]: Feature Curve control points shown and dragged in the viewport.
-//! * [`palette`]: add, remove, duplicate, instance; mesh and picture exports.
+//! * [`palette`]: add, remove, duplicate, instance; mesh and picture exports, run in the
+//!   background ([`exports`]).
 
 pub mod app;
+pub mod exports;
 pub mod graph;
 pub mod history;
 pub mod inspector;

@@ -1,6 +1,6 @@
 //! The parameters of the landform generators as tree files write them (Paris et al. 2019
 //! §6, and the natural arch of `docs/landforms.md`): plain data, checked while the file is
-//! parsed. The generators that read them are in `crate::landform`.
+//! parsed. The landform generators read them.
 
 use serde::{Deserialize, Serialize};
 

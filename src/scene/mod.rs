@@ -1,6 +1,6 @@
 //! Tree files: the RON format users edit, its loading and validation, and splicing values
-//! into it. Compiling a scene into a field tree and editing a file (each edit is checked by
-//! compiling) are in `crate::compile`, above the landform generators the compiler runs.
+//! into it. Compiling a scene into a field tree, and editing a file (each edit is checked
+//! by compiling), come above the landform generators the compiler runs.
 
 pub mod heightfield;
 pub mod landform;

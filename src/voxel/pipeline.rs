@@ -12,7 +12,6 @@
 //! Memory therefore follows the surface's area, not the domain's volume, and no level
 //! runs more sweeps as the resolution grows.
 
-use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use glam::{IVec3, Vec2, Vec3};
@@ -20,7 +19,6 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::diffuse::{Sweeps, diffuse_bitangents, diffuse_noise, diffuse_normals};
-use super::disk_cache;
 use super::propagate::{relax, streamlines, waves};
 use super::smooth::smooth;
 use super::sparse::{BRICK, BRICK_NODES, Bricks, LevelGeom, local, prolong};
@@ -677,58 +675,4 @@ fn brick_bounds(bricks: &Bricks, s: &[f32], alpha: &[f32], beta: &[f32]) -> Vec<
             out
         })
         .collect()
-}
-
-/// FNV-1a over bytes: a stable content hash for the cache.
-pub fn content_hash(parts: &[&[u8]]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for p in parts {
-        for &b in *p {
-            h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
-        }
-        h = (h ^ 0xff).wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
-
-/// The content hash of a run: the primitives and the parameters.
-fn run_key(features: &Features, p: &Params) -> u64 {
-    content_hash(&[
-        format!("{features:?}").as_bytes(),
-        format!("{p:?}").as_bytes(),
-    ])
-}
-
-type Cache = Mutex<Vec<(u64, Arc<Volume>)>>;
-static CACHE: Cache = Mutex::new(Vec::new());
-const CACHE_ENTRIES: usize = 8;
-
-/// [`run`], memoised by the content hash of the primitives and the parameters: in-process,
-/// then on disk ([`super::disk_cache`]). Returns the volume and whether it came from a
-/// cache.
-pub fn run_cached(features: &Features, p: &Params) -> Result<(Arc<Volume>, bool), CurveError> {
-    let key = run_key(features, p);
-    if let Some((_, v)) = CACHE
-        .lock()
-        .expect("cache lock")
-        .iter()
-        .find(|(k, _)| *k == key)
-    {
-        return Ok((v.clone(), true));
-    }
-    let disk = disk_cache::key(key);
-    let (v, cached) = match disk_cache::load(disk, p.max_memory) {
-        Some(v) => (Arc::new(v), true),
-        None => {
-            let v = run(features, p)?;
-            disk_cache::store(disk, &v);
-            (Arc::new(v), false)
-        }
-    };
-    let mut c = CACHE.lock().expect("cache lock");
-    if c.len() >= CACHE_ENTRIES {
-        c.remove(0);
-    }
-    c.push((key, v.clone()));
-    Ok((v, cached))
 }

@@ -78,7 +78,7 @@ pub fn wgsl_header() -> String {
     ));
     f32s(
         &mut line,
-        "Sky occlusion at cave scale (src/render/shade.rs): tilt, ramp, floor; directions, steps.",
+        "Sky occlusion at cave scale (the renderer's shade.rs): tilt, ramp, floor; directions, steps.",
         &[
             ("CAVE_TILT", CAVE_TILT),
             ("CAVE_RAMP", CAVE_RAMP),

@@ -1,4 +1,5 @@
-//! The voxel pipeline's results kept on disk between runs.
+//! The voxel pipeline's results kept between runs: in memory for the process, and on
+//! disk for the next one ([`run_cached`]).
 //!
 //! A Feature Volume's pipeline (diffusion, propagation, bounds) is most of the time of
 //! compiling a tree that holds one: about 2 CPU-seconds for the main job's two volumes,
@@ -21,12 +22,13 @@
 //! The results are bit-identical to a fresh run: the file holds the run's own arrays.
 
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::sync::{Arc, Mutex, OnceLock};
 
 use glam::{IVec3, Vec3};
 
-use super::pipeline::{BrickBounds, Stats, Volume};
+use super::pipeline::{BrickBounds, Params, Stats, Volume, run};
 use super::sparse::{BRICK_NODES, Bricks, LevelGeom};
+use crate::curves::{CurveError, Features};
 
 /// The most bytes the cache directory keeps.
 pub const MAX_BYTES: u64 = 1 << 30;
@@ -63,13 +65,13 @@ pub fn key(content: u64) -> u64 {
                 .and_then(|t| t.duration_since(std::time::UNIX_EPOCH).ok());
             format!("{} {:?}", m.len(), t)
         });
-        super::pipeline::content_hash(&[
+        content_hash(&[
             MAGIC,
             env!("CARGO_PKG_VERSION").as_bytes(),
             stamp.unwrap_or_default().as_bytes(),
         ])
     });
-    super::pipeline::content_hash(&[&exe.to_le_bytes(), &content.to_le_bytes()])
+    content_hash(&[&exe.to_le_bytes(), &content.to_le_bytes()])
 }
 
 fn path(dir: &Path, key: u64) -> PathBuf {
@@ -247,6 +249,60 @@ fn decode(file: &[u8], key: u64) -> Option<Volume> {
         && r.0.is_empty()
         && (v.normals.is_empty() || v.normals.len() == v.levels.len());
     complete.then_some(v)
+}
+
+/// FNV-1a over bytes: a stable content hash for the cache.
+pub fn content_hash(parts: &[&[u8]]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for p in parts {
+        for &b in *p {
+            h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        h = (h ^ 0xff).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// The content hash of a run: the primitives and the parameters.
+fn run_key(features: &Features, p: &Params) -> u64 {
+    content_hash(&[
+        format!("{features:?}").as_bytes(),
+        format!("{p:?}").as_bytes(),
+    ])
+}
+
+type Cache = Mutex<Vec<(u64, Arc<Volume>)>>;
+static CACHE: Cache = Mutex::new(Vec::new());
+const CACHE_ENTRIES: usize = 8;
+
+/// [`run`], memoised by the content hash of the primitives and the parameters: in-process,
+/// then on disk (this module's files). Returns the volume and whether it came from a
+/// cache.
+pub fn run_cached(features: &Features, p: &Params) -> Result<(Arc<Volume>, bool), CurveError> {
+    let content = run_key(features, p);
+    if let Some((_, v)) = CACHE
+        .lock()
+        .expect("cache lock")
+        .iter()
+        .find(|(k, _)| *k == content)
+    {
+        return Ok((v.clone(), true));
+    }
+    let disk = key(content);
+    let (v, cached) = match load(disk, p.max_memory) {
+        Some(v) => (Arc::new(v), true),
+        None => {
+            let v = run(features, p)?;
+            store(disk, &v);
+            (Arc::new(v), false)
+        }
+    };
+    let mut c = CACHE.lock().expect("cache lock");
+    if c.len() >= CACHE_ENTRIES {
+        c.remove(0);
+    }
+    c.push((content, v.clone()));
+    Ok((v, cached))
 }
 
 #[cfg(test)]
