@@ -3,31 +3,21 @@
 //! A DEM becomes an implicit primitive, Feature Curves become an S-field primitive, and
 //! both combine with skeletal primitives through blend, carve and warp nodes. The compiled
 //! [`field`] tree is the single thing the mesher and the tracers consume.
+//!
+//! This crate gathers the workspace's layers under one name; each is a crate of its own,
+//! which a library user can take alone (ARCHITECTURE.md): `karstic-core` (the field, the
+//! value types, I/O), `karstic-dem`, `karstic-mesh`, `karstic-volume` (Feature Curves and
+//! the voxel pipeline), `karstic-elevation`, `karstic-geology`, `karstic-render` (the
+//! tracers, wgpu), `karstic-scene` (tree files and what runs them) and `karstic-editor`.
 
-// `!(a < b)` is how this crate says "not less, or NaN": the negation is the point.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
-pub mod analysis;
-mod cache;
-pub mod compile;
-pub mod curves;
-pub mod dem;
-pub mod editor;
-pub mod elevation;
-pub mod erosion;
-pub mod field;
-pub mod geology;
-pub mod heightmap;
-pub mod io;
-pub mod job;
-pub mod landform;
-pub mod mesh;
-pub mod picture;
-pub mod procedural;
-pub mod render;
-pub mod rng;
-pub mod scene;
-pub mod tape;
-pub mod tiles;
-pub mod value;
-pub mod voxel;
+pub use karstic_core::{cache, field, io, rng, value};
+pub use karstic_dem::dem;
+pub use karstic_editor::editor;
+pub use karstic_elevation::elevation;
+pub use karstic_geology::geology;
+pub use karstic_mesh::mesh;
+pub use karstic_render::{render, tape};
+pub use karstic_scene::{
+    analysis, compile, erosion, heightmap, job, landform, picture, procedural, scene, tiles,
+};
+pub use karstic_volume::{curves, voxel};

@@ -9,10 +9,10 @@ use std::path::{Path, PathBuf};
 /// The folders and top-level files whose text is checked.
 const CHECKED: &[&str] = &[
     "src",
+    "crates",
     "tests",
     "benches",
     "docs",
-    "shaders",
     "trees",
     "examples",
     "README.md",

@@ -17,7 +17,8 @@ use karstic::tape::{Combine, FEATURES, Profile, Shape, Tape, TapeBuilder};
 
 #[test]
 fn every_shader_parses_and_validates_with_naga() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(karstic::render::gpu::header::SHADER_DIR);
     let mut files: Vec<String> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

@@ -7,7 +7,7 @@ use std::collections::BTreeSet;
 use std::path::Path;
 
 use karstic::render::gpu::SHADER_MODULES;
-use karstic::render::gpu::header::HEADER_PATH;
+use karstic::render::gpu::header::{HEADER_PATH, SHADER_DIR};
 use karstic::render::gpu::wgsl_header;
 
 fn read(rel: &str) -> String {
@@ -93,7 +93,9 @@ fn tape_header_is_the_generated_text() {
 fn tape_header_constants_are_the_shaders_only_copies() {
     let header = declared(&wgsl_header());
     assert!(header.len() > 100, "{} constants", header.len());
-    let file = HEADER_PATH.trim_start_matches("shaders/");
+    let file = HEADER_PATH
+        .trim_start_matches(SHADER_DIR)
+        .trim_start_matches('/');
     let mut checked = 0;
     for (module, parts) in SHADER_MODULES {
         assert_eq!(
@@ -102,7 +104,7 @@ fn tape_header_constants_are_the_shaders_only_copies() {
             "{module} starts with the header"
         );
         for part in &parts[1..] {
-            let src = read(&format!("shaders/{part}"));
+            let src = read(&format!("{SHADER_DIR}/{part}"));
             let own = declared(&src);
             let again: Vec<_> = own.intersection(&header).collect();
             assert!(again.is_empty(), "{part} declares {again:?} again");

@@ -7,6 +7,7 @@ use anyhow::Context;
 use glam::Vec3;
 
 use super::Budget;
+use clap::builder::TypedValueParser;
 use karstic::io::progress;
 use karstic::render::{Device, Frame, Method, Renderable, cpu};
 
@@ -22,7 +23,7 @@ pub(super) struct RenderArgs {
     #[arg(long, num_args = 2, value_names = ["W", "H"], default_values_t = [960, 540])]
     size: Vec<u32>,
     /// Step rule: `segment` (local Lipschitz bounds) or `sphere` (global bound; slow).
-    #[arg(long, value_enum, default_value_t = Method::Segment)]
+    #[arg(long, default_value = "segment", value_parser = method_names())]
     method: Method,
     /// Also write the steps-per-pixel image to this PNG.
     #[arg(long)]
@@ -57,6 +58,12 @@ pub(super) struct RenderArgs {
     /// No progress bar and no summary line.
     #[arg(long)]
     quiet: bool,
+}
+
+/// `--method`'s parser: one of [`Method::NAMES`], listed in `--help`.
+fn method_names() -> impl TypedValueParser<Value = Method> {
+    clap::builder::PossibleValuesParser::new(Method::NAMES.map(|(n, _)| n))
+        .map(|s| s.parse::<Method>().expect("a listed name"))
 }
 
 /// Runs `karstic render`.
