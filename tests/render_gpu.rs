@@ -30,7 +30,7 @@ fn every_shader_parses_and_validates_with_naga() {
             SHADER_MODULES
                 .iter()
                 .any(|(_, parts)| parts.contains(&f.as_str())),
-            "shaders/{f} belongs to no module, so nothing validates it"
+            "crates/render/shaders/{f} belongs to no module, so nothing validates it"
         );
     }
     for (name, parts) in SHADER_MODULES {

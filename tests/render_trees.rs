@@ -733,7 +733,7 @@ fn cave_interiors_lie_in_shade() {
 }
 
 /// `karstic render` meshes the part of the job's region its camera sees to guide the
-/// tracer (`job::view_guides`), in levels: the job's cell near the eye, then twice as
+/// tracer (`picture::view_guides`), in levels: the job's cell near the eye, then twice as
 /// coarse each where those cells still span at most 8 pixels. The main view's region
 /// guides span most of the region; a narrow view from the same eye a part of it, holding
 /// every point of the region a fine grid of its pixel rays crosses. A close-up whose cells
@@ -839,7 +839,7 @@ fn view_guides_cover_what_the_camera_sees_of_the_region() {
     );
 }
 
-/// Beyond the job's region, `job::view_guides` meshes the terrain the camera sees in
+/// Beyond the job's region, `picture::view_guides` meshes the terrain the camera sees in
 /// backdrop levels twice as coarse each, swept towards the sun: on the main view the
 /// points of every primary ray's span in the support and of every shadow ray from its
 /// hit up to the support's top lie in a guide (there the ray follows a mesh instead of

@@ -1,5 +1,5 @@
 //! The WGSL constant header generated from the tape's Rust definitions: the checked-in
-//! `shaders/tape_consts.wgsl` is what `wgsl_header` generates (regenerate it with
+//! `crates/render/shaders/tape_consts.wgsl` is what `wgsl_header` generates (regenerate it with
 //! `KARSTIC_BLESS=1 cargo test --locked --test tests tape_header`), and every constant a
 //! shader uses is declared by the header or by that shader itself.
 

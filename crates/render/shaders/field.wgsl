@@ -1,8 +1,8 @@
-// The field tape evaluator: the GPU twin of `Tape::eval` in src/tape/interpreter.rs.
+// The field tape evaluator: the GPU twin of `Tape::eval` in crates/render/src/tape/interpreter.rs.
 // One pass at (p, c, r) returns vec2(f(p), Lipschitz bound of f over the ball B(c, r)).
 // The op codes, flags, limits and parameter offsets come from tape_consts.wgsl, generated
-// from src/tape/format.rs; the `USE_*` overrides there say which parts of this evaluator
-// a pipeline keeps (src/tape/features.rs).
+// from crates/render/src/tape/format.rs; the `USE_*` overrides there say which parts of this evaluator
+// a pipeline keeps (crates/render/src/tape/features.rs).
 
 // x = op, y = flags, z = jump, w = param offset.
 @group(0) @binding(1) var<storage, read> instrs: array<vec4<u32>>;
@@ -257,7 +257,7 @@ fn bilinear_at(o: u32, off: u32, x: f32, y: f32) -> f32 {
     return bottom + (top - bottom) * c.fy;
 }
 
-// Catmull-Rom weights of samples -1..=2 at t (src/dem/interp.rs cr_weights).
+// Catmull-Rom weights of samples -1..=2 at t (crates/dem/src/dem/interp.rs cr_weights).
 fn cr_weights(t: f32) -> vec4<f32> {
     let t2 = t * t;
     let t3 = t2 * t;

@@ -1,6 +1,6 @@
-// Seeded 3D simplex noise and fBm: the GPU twin of src/field/noise.rs (same hash, same
+// Seeded 3D simplex noise and fBm: the GPU twin of crates/core/src/field/noise.rs (same hash, same
 // gradients, same corner order, f32, its constants from tape_consts.wgsl), and the noisy
-// primitive and turbulence warp of the tape (src/tape/noise.rs). An encoded fBm at `o` in
+// primitive and turbulence warp of the tape (crates/render/src/tape/noise.rs). An encoded fBm at `o` in
 // `params` is FBM_*: [index, seed & 0xffff, seed >> 16, 1/λ, octaves, norm, Lipschitz].
 
 // Gradient `n` of noise.rs GRADIENTS (the 12 cube-edge midpoints, `|g| = √2`; 12..15

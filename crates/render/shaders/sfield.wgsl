@@ -1,5 +1,5 @@
-// S-field leaves: the GPU twin of SField::value (src/voxel/sfield.rs, sparse.rs locate and
-// trilinear, tricubic.rs blend) and of the ball bound of src/tape/sfield.rs, on the
+// S-field leaves: the GPU twin of SField::value (crates/volume/src/voxel/sfield.rs, sparse.rs locate and
+// trilinear, tricubic.rs blend) and of the ball bound of crates/render/src/tape/sfield.rs, on the
 // buffers laid out there. Parameters at `o` (SF_*): domain min, max, R, R_f, ±1, noisy,
 // levels, L_S', tricubic, weights offset, fbm, then from SF_HEAD one block of SF_LEVEL_LEN
 // per level (SF_LEVEL_*): origin, h, dims, offsets of its table, S, α, β.

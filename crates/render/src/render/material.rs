@@ -14,7 +14,7 @@
 //! soft, so the strata a tree file writes show on cliffs and canyon walls as they do in
 //! section (`karstic geology section`).
 //!
-//! Colours are linear RGB albedos in `[0, 1]`. The GPU shader (`shaders/trace.wgsl`)
+//! Colours are linear RGB albedos in `[0, 1]`. The GPU shader (`crates/render/shaders/trace.wgsl`)
 //! mirrors [`Materials::cover`] and [`Materials::albedo`]; keep the two in step. It has no
 //! geology trees: a scene whose rock is coloured by one renders on the CPU.
 

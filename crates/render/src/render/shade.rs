@@ -35,7 +35,7 @@
 //!   the terrain.
 //! * **Tone mapping.** Narkowicz's fit of the ACES filmic curve, then sRGB.
 //!
-//! Colours are linear RGB. The GPU shader (`shaders/trace.wgsl`) mirrors these formulas;
+//! Colours are linear RGB. The GPU shader (`crates/render/shaders/trace.wgsl`) mirrors these formulas;
 //! keep the two in step.
 
 use glam::Vec3;

@@ -2,7 +2,7 @@
 //! evaluator's limits, and the named offset of every parameter of every op.
 //!
 //! These are the definitions: the CPU interpreter reads parameters through them and
-//! `shaders/tape_consts.wgsl`, generated from them (`render::gpu::header`),
+//! `crates/render/shaders/tape_consts.wgsl`, generated from them (`render::gpu::header`),
 //! gives the shaders the same names (`PRIM_RADIUS`, `HEIGHT_PYRAMID`, …). Each module
 //! below becomes one block of WGSL constants named `PREFIX_NAME`.
 

@@ -1,4 +1,4 @@
-//! The CPU interpreter of a [`Tape`]: the twin of `eval_tape` in `shaders/field.wgsl`, with
+//! The CPU interpreter of a [`Tape`]: the twin of `eval_tape` in `crates/render/shaders/field.wgsl`, with
 //! the same arithmetic, so the CPU tracer renders exactly what the GPU renders (the tests
 //! compare the two), and the tape is a [`Field`] like the tree it encodes.
 
@@ -47,7 +47,7 @@ impl Tape {
     }
 
     /// `(f(p), λ)` with `λ` a Lipschitz bound of `f` over the ball `B(c, r)`: the CPU twin
-    /// of `eval_tape` in `shaders/field.wgsl`.
+    /// of `eval_tape` in `crates/render/shaders/field.wgsl`.
     pub fn eval(&self, p: Vec3, c: Vec3, r: f32) -> (f32, f32) {
         self.run::<true>(p, c, r)
     }

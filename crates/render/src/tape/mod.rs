@@ -24,10 +24,10 @@
 //!
 //! * [`mod@format`]: the instruction word, op codes, shape kinds, flags, limits and the named
 //!   offset of every parameter — the definitions.
-//! * [`header`]: `shaders/tape_consts.wgsl`, the WGSL constants generated from them.
+//! * [`header`]: `crates/render/shaders/tape_consts.wgsl`, the WGSL constants generated from them.
 //! * [`builder`]: [`TapeBuilder`], which emits a tape and checks its balance and depth.
 //! * [`from_tree`]: a compiled [`crate::field::Tree`] as a tape ([`tape_from_tree`]).
-//! * [`interpreter`]: [`Tape`] and its CPU interpreter, the twin of `shaders/field.wgsl`:
+//! * [`interpreter`]: [`Tape`] and its CPU interpreter, the twin of `crates/render/shaders/field.wgsl`:
 //!   the CPU tracer renders exactly what the GPU renders.
 //! * [`features`]: which parts of the WGSL evaluator a tape uses.
 //! * The leaves' encodings and CPU twins: [`mod@shape`] (`PRIM`), [`mod@height`]

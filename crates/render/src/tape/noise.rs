@@ -1,4 +1,4 @@
-//! Noise on the tape: the encoding of an [`Fbm`] for `shaders/noise.wgsl` (the same seeded
+//! Noise on the tape: the encoding of an [`Fbm`] for `crates/render/shaders/noise.wgsl` (the same seeded
 //! simplex noise, hash and gradients, in f32), the noisy primitive `NPRIM` (the
 //! anisotropic distance of Paris et al. 2019 §5.2) and the turbulence warp `TWARP`
 //! (Paris et al. 2019 §5.3), with their CPU twins.
@@ -24,7 +24,7 @@ use super::shape::project;
 use crate::field::falloff::{wyvill, wyvill_slope};
 use crate::field::{Aabb, Fbm, Interval, Noise, Warp};
 
-/// `f` as `shaders/noise.wgsl` reads it ([`fbm`]); `index` is its place in
+/// `f` as `crates/render/shaders/noise.wgsl` reads it ([`fbm`]); `index` is its place in
 /// [`super::Tape::noises`].
 pub fn encode_fbm(index: usize, f: &Fbm) -> [f32; fbm::LEN] {
     let seed = f.seed();
@@ -128,7 +128,7 @@ fn noisy_d(r: f32, a: f32, sd: f32, t: f32) -> f32 {
 }
 
 /// The turbulence of a noisy primitive for `x`, projected at `(s, ρ)` (`ρ > 0`): read at
-/// `s + R·(x − s)/ρ`, as `shaders/noise.wgsl` reads it.
+/// `s + R·(x − s)/ρ`, as `crates/render/shaders/noise.wgsl` reads it.
 fn turbulence(t: &Fbm, r: f32, x: Vec3, (s, rho): (Vec3, f32)) -> f32 {
     t.value(s + (x - s) * (r / rho))
 }

@@ -1,6 +1,6 @@
 //! S-field leaves ([`SField`]: Feature Curves through the voxel pipeline) on the tape: the
 //! `SFIELD` op, whose sparse bricks travel in two storage buffers read by
-//! `shaders/sfield.wgsl`.
+//! `crates/render/shaders/sfield.wgsl`.
 //!
 //! * `sf_table` (`u32`): per level, its brick table (`u32::MAX` for a missing brick), x
 //!   fastest.
@@ -130,7 +130,7 @@ pub fn encode(
 }
 
 /// A Lipschitz bound of the S-field leaf over the ball `B(c, r)` (see the module's
-/// documentation): the CPU twin of `sf_bound` in `shaders/sfield.wgsl`, given
+/// documentation): the CPU twin of `sf_bound` in `crates/render/shaders/sfield.wgsl`, given
 /// `s_c = S'(c)` ([`SField::s_value`]).
 pub fn bound(sf: &SField, s_c: f32, c: Vec3, r: f32) -> f32 {
     let p = sf.params();

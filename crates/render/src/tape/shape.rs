@@ -1,6 +1,6 @@
 //! Primitive shapes on the tape: the `PRIM` op's encoding of a [`Shape`] and a
 //! [`Profile`], and its CPU twin, `project` (the closest point and signed distance, as
-//! `project` in `shaders/field.wgsl` computes them) and `primitive`.
+//! `project` in `crates/render/shaders/field.wgsl` computes them) and `primitive`.
 //!
 //! | shape | parameters (after [`prim::SHAPE`]) |
 //! | --- | --- |
@@ -188,7 +188,7 @@ pub enum Profile {
 }
 
 /// `(closest point, signed distance)` of the shape `kind` with parameters `q` to `p`: the
-/// twin of `project` in `shaders/field.wgsl` (a prism has no closest point: `p`).
+/// twin of `project` in `crates/render/shaders/field.wgsl` (a prism has no closest point: `p`).
 pub(super) fn project(kind: u32, q: &[f32], p: Vec3) -> (Vec3, f32) {
     match kind {
         shape::SPHERE => {
@@ -240,7 +240,7 @@ pub(super) fn project(kind: u32, q: &[f32], p: Vec3) -> (Vec3, f32) {
 
 /// `(closest point, distance)` of the cone `q` ([`cone`]) to `p`:
 /// [`crate::field::skeleton::Cone`]'s projection onto the triangle `(0, 0), (r, 0), (0, h)`
-/// of the half-plane `(ρ, z)` through the axis, in f32 as `shaders/field.wgsl` computes it.
+/// of the half-plane `(ρ, z)` through the axis, in f32 as `crates/render/shaders/field.wgsl` computes it.
 /// The distance is the 2D one (equal to the 3D one, without the cancellation of
 /// `|p − s(p)|`).
 fn cone_projection(q: &[f32], p: Vec3) -> (Vec3, f32) {
@@ -279,7 +279,7 @@ fn cone_projection(q: &[f32], p: Vec3) -> (Vec3, f32) {
 /// `F(t) = Σ (eᵢyᵢ/(t + eᵢ²))² − 1` from the same lower bound of the root, in f32 (WGSL has
 /// no f64), stopping at the root, after [`limit::ELLIPSOID_NEWTON`] steps (as the CPU's)
 /// or after a step below `10⁻⁶·(t + e²_max)` (the iterates climb monotonically and
-/// converge quadratically, so what is left is far smaller), as `shaders/field.wgsl`
+/// converge quadratically, so what is left is far smaller), as `crates/render/shaders/field.wgsl`
 /// computes it. The distance is `|y·t/(t + e²)|`, the same `|y − s|` without the
 /// cancellation near the surface.
 fn ellipsoid_projection(q: &[f32], p: Vec3) -> (Vec3, f32) {

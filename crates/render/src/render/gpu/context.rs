@@ -1,4 +1,4 @@
-//! wgpu plumbing: adapter and device, the compute pipelines of `shaders/trace.wgsl`,
+//! wgpu plumbing: adapter and device, the compute pipelines of `crates/render/shaders/trace.wgsl`,
 //! buffer upload, dispatch and read-back.
 
 use std::collections::HashMap;
@@ -216,7 +216,7 @@ impl GpuContext {
         Ok(())
     }
 
-    /// The tape's buffers, bound at 1, 2, 3, 11 and 12 of `shaders/`.
+    /// The tape's buffers, bound at 1, 2, 3, 11 and 12 of `crates/render/shaders/`.
     fn tape_buffers(&self, tape: &Tape) -> Result<[(u32, wgpu::Buffer); 5], GpuError> {
         self.check_size("the tape's parameters", 4 * tape.params.len() as u64)?;
         self.check_size("the tape's heightfields", 4 * tape.heights.len() as u64)?;
@@ -368,7 +368,7 @@ impl GpuContext {
     /// The image goes in tiles of rows; each tile is dispatched until every pixel is done.
     /// One dispatch finishes them all except on lavapipe, whose invocations stop their
     /// loops after 65,535 iterations: there an interrupted pixel saves its state and the
-    /// next dispatch (pass) resumes it (see `budget_left` in `shaders/trace.wgsl`).
+    /// next dispatch (pass) resumes it (see `budget_left` in `crates/render/shaders/trace.wgsl`).
     pub fn render(
         &self,
         tape: &Tape,
@@ -486,7 +486,7 @@ impl GpuContext {
         self.run_probes(&self.pipelines(tape)?.probe, &bindings, points)
     }
 
-    /// Evaluates the turbulence `fbm` at each point on the GPU (`shaders/noise.wgsl`), to
+    /// Evaluates the turbulence `fbm` at each point on the GPU (`crates/render/shaders/noise.wgsl`), to
     /// compare the port with [`Fbm::value`].
     pub fn probe_fbm(&self, fbm: &Fbm, points: &[Vec3]) -> Result<Vec<f32>, GpuError> {
         let params = self.storage("params", bytemuck::cast_slice(&encode_fbm(0, fbm)));

@@ -4,7 +4,7 @@
 //!
 //! * [`context`]: adapter, device, pipelines, buffers, dispatch and read-back.
 //!
-//! The WGSL lives in `shaders/` and is assembled by [`shader_source`], starting with the
+//! The WGSL lives in `crates/render/shaders/` and is assembled by [`shader_source`], starting with the
 //! constant header generated from the tape's Rust definitions
 //! ([`header`]); the tests validate every module with naga so shader errors
 //! fail without a GPU.
@@ -43,7 +43,7 @@ pub enum GpuError {
     Run(#[source] Box<dyn std::error::Error + Send + Sync>),
 }
 
-/// The WGSL modules, each the concatenation of these files of `shaders/` (WGSL has no
+/// The WGSL modules, each the concatenation of these files of `crates/render/shaders/` (WGSL has no
 /// includes). The tests check that every file there belongs to some module.
 pub const SHADER_MODULES: &[(&str, &[&str])] = &[(
     "trace",
