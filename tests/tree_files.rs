@@ -316,3 +316,99 @@ fn asset_paths_are_relative_to_the_tree_file() {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("trees")
     );
 }
+
+/// The offsets just after each `(` of `text` that opens a struct with named fields (the
+/// next token is `name:`), outside strings and comments.
+fn struct_openings(text: &str) -> Vec<usize> {
+    let b = text.as_bytes();
+    let skip_blank = |mut i: usize| {
+        loop {
+            while i < b.len() && b[i].is_ascii_whitespace() {
+                i += 1;
+            }
+            if b[i..].starts_with(b"//") {
+                while i < b.len() && b[i] != b'\n' {
+                    i += 1;
+                }
+            } else {
+                return i;
+            }
+        }
+    };
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < b.len() {
+        match b[i] {
+            b'"' => {
+                i += 1;
+                while i < b.len() && b[i] != b'"' {
+                    i += if b[i] == b'\\' { 2 } else { 1 };
+                }
+            }
+            b'/' if b.get(i + 1) == Some(&b'/') => {
+                while i < b.len() && b[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            b'(' => {
+                let j = skip_blank(i + 1);
+                let k = (j..b.len())
+                    .find(|&k| !(b[k].is_ascii_alphanumeric() || b[k] == b'_'))
+                    .unwrap_or(b.len());
+                let colon = skip_blank(k);
+                if k > j
+                    && b[j].is_ascii_lowercase()
+                    && b.get(colon) == Some(&b':')
+                    && b.get(colon + 1) != Some(&b':')
+                {
+                    out.push(i + 1);
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    out
+}
+
+/// Every type of the file format refuses a field it does not know (a misspelled
+/// `on_terain` must not validate "ok" while the feature it meant to set is silently
+/// left at its default): an unknown field put into each struct of each scene of `trees/`
+/// (the Feature Volumes' curve specs, the solver, the landforms, the geology, the job…)
+/// is an error that names it.
+#[test]
+fn every_struct_of_every_tree_refuses_an_unknown_field() {
+    let mut files = tree_files();
+    let curves = repo().join("trees").join("curves");
+    files.extend(
+        std::fs::read_dir(&curves)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "ron")),
+    );
+    let mut tried = 0;
+    for f in &files {
+        let text = std::fs::read_to_string(f).unwrap();
+        parse_scene(&text, f).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        let openings = struct_openings(&text);
+        assert!(!openings.is_empty(), "{}: no struct found", f.display());
+        for at in openings {
+            let bad = format!("{}zz_unknown_field: 0, {}", &text[..at], &text[at..]);
+            let line = text[..at].lines().count();
+            match parse_scene(&bad, f) {
+                Ok(_) => panic!(
+                    "{}:{line}: a struct accepted an unknown field:\n{}",
+                    f.display(),
+                    text.lines().nth(line - 1).unwrap_or("")
+                ),
+                Err(e) => assert!(
+                    e.to_string().contains("zz_unknown_field"),
+                    "{}:{line}: the error does not name the field: {e}",
+                    f.display()
+                ),
+            }
+            tried += 1;
+        }
+    }
+    assert!(tried > 300, "only {tried} structs tried");
+}

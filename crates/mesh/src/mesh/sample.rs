@@ -48,6 +48,7 @@ pub fn sample_grid(
 
 /// The JSON sidecar of a sampled `.npy` grid.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Sidecar {
     /// NumPy shape `[nz, ny, nx]`.
     pub shape: [usize; 3],

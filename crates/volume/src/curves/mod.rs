@@ -54,9 +54,10 @@ pub enum CurveError {
         /// What is wrong.
         msg: String,
     },
-    /// The grids would exceed the memory budget.
+    /// A file cannot be read as asked (not a regular file, larger than allowed), or the
+    /// grids would exceed the memory budget.
     #[error(transparent)]
-    Budget(#[from] crate::io::IoError),
+    Io(#[from] crate::io::IoError),
 }
 
 impl CurveError {

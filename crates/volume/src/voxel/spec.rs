@@ -58,6 +58,7 @@ fn zero() -> NonNegative {
 
 /// A Constraint Point.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ConstraintSpec {
     /// Position on the curve, in `[0, 1]`.
     pub t: Unit,
@@ -79,6 +80,7 @@ fn yes() -> bool {
 
 /// A Feature Curve.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct CurveSpec {
     /// A name for messages.
     #[serde(default)]
@@ -97,6 +99,7 @@ pub struct CurveSpec {
 
 /// A quad; the normal follows the corners' winding (counter-clockwise seen from the air).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct QuadSpec {
     /// Corners in order.
     pub corners: [Point; 4],
@@ -113,6 +116,7 @@ pub struct QuadSpec {
 
 /// A disc.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DiscSpec {
     /// Centre.
     pub center: Point,
@@ -142,6 +146,7 @@ pub enum ProfileSpec {
 
 /// A tunnel (an elliptic tube around `path`); tunnels sharing a point branch.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct TunnelSpec {
     /// A name for messages.
     #[serde(default)]
@@ -162,6 +167,7 @@ pub struct TunnelSpec {
 
 /// A natural arch: a rock slab from foot to foot, thinnest at the crown.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ArchSpec {
     /// One foot (the centre of the slab where it meets the ground).
     pub from: Point,
@@ -195,6 +201,7 @@ pub struct ArchSpec {
 
 /// The modelling primitives of a curve file.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct FeatureSet {
     /// Feature Curves.
     #[serde(default)]
@@ -224,7 +231,7 @@ pub enum CurveSource {
 
 /// Solver settings of the pipeline (all have defaults).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct SolverSpec {
     /// Perona–Malik edge parameter `k` (§4.3.1).
     pub k: Positive,
@@ -291,7 +298,7 @@ pub struct ExpansionSpec {
 /// A tree node: Feature Curves compiled by the voxel pipeline into an S-field primitive.
 /// Written `FeatureVolume(..)` in RON.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(rename = "FeatureVolume")]
+#[serde(rename = "FeatureVolume", deny_unknown_fields)]
 pub struct FeatureVolumeSpec {
     /// A name for messages.
     #[serde(default)]
@@ -357,11 +364,17 @@ pub fn parse_ron<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Res
         })
 }
 
-/// Reads and parses a RON file.
+/// The largest curves file read, in bytes: far above any hand-written or generated set of
+/// curves, and a bound on what a mistaken path (a disk image, a log) costs.
+pub const MAX_CURVES_FILE: u64 = 256 << 20;
+
+/// Reads and parses a RON file: a regular file (a FIFO would block, `/dev/zero` never
+/// ends) of at most [`MAX_CURVES_FILE`] bytes, in UTF-8.
 pub fn load_ron<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, CurveError> {
-    let text = std::fs::read_to_string(path).map_err(|source| CurveError::Read {
+    let bytes = crate::io::read_regular(path, MAX_CURVES_FILE)?;
+    let text = String::from_utf8(bytes).map_err(|e| CurveError::Read {
         path: path.to_path_buf(),
-        source,
+        source: std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()),
     })?;
     parse_ron(&text, path)
 }
