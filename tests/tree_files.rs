@@ -412,3 +412,37 @@ fn every_struct_of_every_tree_refuses_an_unknown_field() {
     }
     assert!(tried > 300, "only {tried} structs tried");
 }
+
+/// A curves file is read as the DEMs are: a device or a FIFO named as one is refused at
+/// once (`/dev/zero` was read to 8 GB, a FIFO blocked forever), and so is a file past the
+/// size bound.
+#[test]
+fn curves_files_must_be_regular_files() {
+    use karstic::voxel::FeatureSet;
+    use karstic::voxel::spec::load_ron;
+    let e = load_ron::<FeatureSet>(Path::new("/dev/zero")).unwrap_err();
+    assert!(e.to_string().contains("not a regular file"), "{e}");
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("curves.ron");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if made.is_ok_and(|s| s.success()) {
+        let e = load_ron::<FeatureSet>(&fifo).unwrap_err();
+        assert!(e.to_string().contains("not a regular file"), "{e}");
+    }
+    // The scene names the file: validation fails with it, quickly.
+    let tree = dir.path().join("t.ron");
+    std::fs::write(
+        &tree,
+        r#"(version: 1, root: FeatureVolume(name: "v", curves: Path("/dev/zero"),
+            domain: ((0, 0, 0), (10, 10, 10)), voxel: 1.0))"#,
+    )
+    .unwrap();
+    let t = std::time::Instant::now();
+    let e = scene::load(&tree).and_then(|f| f.compile().map(|_| ()));
+    let e = karstic::io::chain(&e.unwrap_err());
+    assert!(
+        e.contains("/dev/zero") && e.contains("not a regular file"),
+        "{e}"
+    );
+    assert!(t.elapsed().as_secs() < 5, "took {:?}", t.elapsed());
+}
