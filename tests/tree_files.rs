@@ -287,9 +287,11 @@ fn validation_is_linear_in_named_nodes_and_instance_chains() {
         defs.join(",\n")
     );
     let started = std::time::Instant::now();
-    for text in [&many, &chain] {
-        scene::parse_scene(text, Path::new("big.ron")).unwrap();
-    }
+    scene::parse_scene(&many, Path::new("big.ron")).unwrap();
+    // The chain is checked as fast, and refused: 4,000 levels deep (each link a
+    // Transform and an instance) is past what the compiler and evaluators take.
+    let e = scene::parse_scene(&chain, Path::new("chain.ron")).unwrap_err();
+    assert!(e.to_string().contains("nests deeper than"), "{e}");
     let took = started.elapsed();
     assert!(took.as_secs_f64() < 5.0, "validation took {took:?}");
     // A cycle at the end of a long chain is still found, and named.
@@ -445,4 +447,82 @@ fn curves_files_must_be_regular_files() {
         "{e}"
     );
     assert!(t.elapsed().as_secs() < 5, "took {:?}", t.elapsed());
+}
+
+/// `depth` Blends, each the only child of the next, around a point.
+fn nested_blends(depth: usize) -> String {
+    let mut s = "Primitive(shape: Point(center: (0, 0, 0)), falloff: 1.0, energy: 1.0)".to_string();
+    for _ in 0..depth {
+        s = format!("Blend(children: [{s}])");
+    }
+    format!("(version: 1, root: {s})")
+}
+
+/// Deep trees get a clear error, never a stack overflow: a chain of 1,700 instance links
+/// (each node a `Union` of an instance of the one before, the last one instanced first)
+/// aborted every command; 20 nested Blends answered with the parser's API ("increase
+/// `recursion_limit`"), and now parse, compile and render; past the format's nesting the
+/// message says how deep a file may go.
+#[test]
+fn deep_trees_are_refused_clearly_not_overflowed() {
+    let mut chain = String::from("(version: 1, root: Union(children: [Instance(of: \"n1699\"), ");
+    chain.push_str(
+        "Primitive(name: \"n0\", shape: Point(center: (0, 0, 0)), falloff: 1.0, energy: 1.0)",
+    );
+    for i in 1..1700 {
+        chain.push_str(&format!(
+            ", Union(name: \"n{i}\", children: [Instance(of: \"n{}\")])",
+            i - 1
+        ));
+    }
+    chain.push_str("]))");
+    let e = parse_scene(&chain, Path::new("chain.ron"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("nests deeper than 256 levels"), "{e}");
+    assert!(e.starts_with("chain.ron:1:"), "{e}");
+
+    let twenty = parse_scene(&nested_blends(20), Path::new("t.ron")).unwrap();
+    let file = scene::SceneFile {
+        scene: twenty,
+        path: PathBuf::from("t.ron"),
+        base_dir: PathBuf::from("."),
+    };
+    let tree = file.compile().unwrap().tree;
+    assert!(karstic::field::Field::value(&tree, glam::Vec3::ZERO) > 0.5);
+
+    let e = parse_scene(&nested_blends(400), Path::new("deep.ron"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("nest deeper than 1024 levels"), "{e}");
+    assert!(!e.contains("recursion_limit"), "{e}");
+}
+
+/// A diamond of shared instances (`Blend([Instance(next), Instance(next)])` at each of 64
+/// levels) validated in no time and then never finished compiling or evaluating: an
+/// instance is evaluated wherever it is used, 2⁶⁴ times here. It is refused at once, in
+/// time linear in the file, with the size it would have.
+#[test]
+fn a_diamond_of_instances_is_refused_at_once() {
+    let mut parts = vec![
+        "Primitive(name: \"d64\", shape: Point(center: (0, 0, 0)), falloff: 1.0, energy: 1.0)"
+            .to_string(),
+    ];
+    for i in (0..64).rev() {
+        parts.push(format!(
+            "Blend(name: \"d{i}\", children: [Instance(of: \"d{}\"), Instance(of: \"d{}\")])",
+            i + 1,
+            i + 1
+        ));
+    }
+    let text = format!(
+        "(version: 1, root: Union(children: [{}]))",
+        parts.join(", ")
+    );
+    let t = std::time::Instant::now();
+    let e = parse_scene(&text, Path::new("diamond.ron"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("instances expanded"), "{e}");
+    assert!(t.elapsed().as_secs_f32() < 1.0, "{:?}", t.elapsed());
 }

@@ -226,11 +226,30 @@ pub struct BoxSpec {
     pub max: P3,
 }
 
-/// The RON options of tree files: `Some` may be left out, and a node's fields may be
-/// written straight inside its kind, `Blend(children: [...])`.
+/// How deep the brackets of a file of the format may nest: about 160 nodes inside one
+/// another (a node takes about six levels), and within what the parser's recursion takes
+/// on a thread's stack.
+pub const MAX_NESTING: usize = 1024;
+
+/// The RON options of tree files: `Some` may be left out, a node's fields may be written
+/// straight inside its kind, `Blend(children: [...])`, and brackets nest at most
+/// [`MAX_NESTING`] deep.
 pub fn ron_options() -> ron::Options {
     ron::Options::default()
         .with_default_extension(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_VARIANT_NEWTYPES)
+        .with_recursion_limit(MAX_NESTING)
+}
+
+/// A RON parse error in words for the user: as RON says it, but a file nested past
+/// [`MAX_NESTING`] is said so (RON's own words name its API).
+pub fn ron_message(e: &ron::Error) -> String {
+    match e {
+        ron::Error::ExceededRecursionLimit => format!(
+            "brackets nest deeper than {MAX_NESTING} levels here: karstic reads files nested \
+             up to that depth (about 160 nodes inside one another)"
+        ),
+        e => e.to_string(),
+    }
 }
 
 #[cfg(test)]

@@ -157,7 +157,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
             path: path.to_path_buf(),
             line: e.span.start.line,
             col: e.span.start.col,
-            message: e.code.to_string(),
+            message: crate::value::ron_message(&e.code),
         })?;
     if scene.version != FORMAT_VERSION {
         return Err(SceneError::at(

@@ -1,7 +1,9 @@
 //! What a tree file must satisfy beyond its types: node names valid and unique, every
 //! instance naming an existing node and none inside what it instances, operators with
-//! children, a job section that `karstic run` can carry out. One pass over the scene and
-//! one over the instance graph: linear in the number of nodes.
+//! children, a tree no deeper and, its instances expanded, no larger than the compiler and
+//! the evaluators take ([`MAX_DEPTH`], [`MAX_EXPANDED`]), a job section that `karstic run`
+//! can carry out. A few passes over the scene and the instance graph, none recursive:
+//! linear in the number of nodes.
 
 use std::collections::HashMap;
 
@@ -55,6 +57,7 @@ pub fn validate(scene: &Scene) -> Result<(), Problem> {
     if let Some(p) = graph.empty_operator {
         return Err(p);
     }
+    check_extent(scene)?;
     if let Some(job) = &scene.job {
         check_job(job).map_err(|(key, message)| Problem {
             message: format!("job.{key}: {message}"),
@@ -62,6 +65,90 @@ pub fn validate(scene: &Scene) -> Result<(), Problem> {
         })?;
     }
     Ok(())
+}
+
+/// The deepest a tree may nest, counting nodes inside nodes and following instances: far
+/// beyond any scene written by hand or expanded from landforms, and shallow enough for the
+/// compiler and the evaluators, which recurse, on any thread's stack.
+pub const MAX_DEPTH: usize = 256;
+
+/// The most nodes a tree may have once its instances are expanded. An instance is
+/// evaluated wherever it is used, so instances of instances multiply the work: a
+/// `Blend([Instance(next), Instance(next)])` at each of 64 levels is 2⁶⁴ evaluations.
+pub const MAX_EXPANDED: u64 = 10_000_000;
+
+/// Checks the root's depth and expanded size (instances followed) without recursion, each
+/// node measured once: `(depth, size)` of a node is `1 +` the deepest and the sum of its
+/// children's (an instance's child is the node it names).
+fn check_extent(scene: &Scene) -> Result<(), Problem> {
+    let mut named: HashMap<&str, &NodeSpec> = HashMap::new();
+    for root in scene.defs.iter().chain(std::iter::once(&scene.root)) {
+        root.walk(&mut |n, _| {
+            if let Some(name) = n.name() {
+                named.insert(name, n);
+            }
+        });
+    }
+    fn kids<'a>(n: &'a NodeSpec, named: &HashMap<&str, &'a NodeSpec>) -> Vec<&'a NodeSpec> {
+        match n {
+            NodeSpec::Instance(i) => named.get(i.of.as_str()).copied().into_iter().collect(),
+            _ => n.children(),
+        }
+    }
+    // A node is measured once, keyed by its address (instances share their target).
+    let mut measured: HashMap<*const NodeSpec, (usize, u64)> = HashMap::new();
+    // (node, its children, the next to visit, deepest and size so far)
+    let mut stack = vec![(&scene.root, kids(&scene.root, &named), 0, 0usize, 1u64)];
+    while let Some(top) = stack.last_mut() {
+        if let Some(&k) = top.1.get(top.2) {
+            top.2 += 1;
+            if let Some(&(d, n)) = measured.get(&std::ptr::from_ref(k)) {
+                top.3 = top.3.max(d);
+                top.4 = top.4.saturating_add(n);
+            } else if stack.len() >= MAX_DEPTH {
+                return Err(too_deep(stack.iter().rev().find_map(|f| f.0.name())));
+            } else {
+                stack.push((k, kids(k, &named), 0, 0, 1));
+            }
+            continue;
+        }
+        let (n, _, _, deepest, size) = stack.pop().expect("a frame is on the stack");
+        let measure = (deepest + 1, size);
+        if measure.0 > MAX_DEPTH {
+            let at = n
+                .name()
+                .or_else(|| stack.iter().rev().find_map(|f| f.0.name()));
+            return Err(too_deep(at));
+        }
+        measured.insert(std::ptr::from_ref(n), measure);
+        if let Some(parent) = stack.last_mut() {
+            parent.3 = parent.3.max(measure.0);
+            parent.4 = parent.4.saturating_add(measure.1);
+        } else if size > MAX_EXPANDED {
+            return Err(Problem {
+                message: format!(
+                    "the tree, its instances expanded, has {size} nodes (at most {MAX_EXPANDED}): \
+                     an instance is evaluated wherever it is used, so instances of instances \
+                     multiply"
+                ),
+                at: None,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The problem of a tree deeper than [`MAX_DEPTH`], at the named node `at` when known.
+fn too_deep(at: Option<&str>) -> Problem {
+    let message = format!(
+        "the tree nests deeper than {MAX_DEPTH} levels (nodes inside nodes, instances \
+         followed){}: karstic compiles and evaluates trees up to that depth",
+        at.map_or(String::new(), |n| format!(" at node {n:?}"))
+    );
+    match at {
+        Some(n) => Problem::quoted("name", n, 0, message),
+        None => Problem { message, at: None },
+    }
 }
 
 /// A node name must be a simple identifier so `NAME.PARAM` paths stay unambiguous.
