@@ -360,3 +360,51 @@ fn data_file_errors_do_not_echo_content() {
         assert!(err.contains("d."), "names the file: {err}");
     }
 }
+
+/// Requests past the machine are refused at once, never an abort: a tile plan of two
+/// billion tiles allocated 12 GB first (SIGABRT), the editor's screenshot at the largest
+/// picture side reached 24 GB (OOM-killed) where `render` refused it, and a DEM whose
+/// header claims 2·10¹⁰ values aborted on the allocation once `--max-memory` was raised.
+#[test]
+fn requests_past_the_machine_are_errors_not_aborts() {
+    let (dir, tree) = with_arch();
+    let caves = trees().join("jacksboro_caves.ron");
+    let plan = dir.path().join("tiles");
+    let (ok, err, took) = karstic_with(
+        &["tile", "plan", s(&caves), "--cell", "0.001", "-o", s(&plan)],
+        "",
+        Duration::from_secs(60),
+    );
+    assert!(
+        !ok && err.contains("tiles") && err.contains("at most"),
+        "{err}"
+    );
+    assert!(took < Duration::from_secs(10), "{took:?}");
+
+    let shot = dir.path().join("e.png");
+    let (ok, err, took) = karstic_with(
+        &[
+            "edit",
+            s(&tree),
+            "--screenshot",
+            s(&shot),
+            "--size",
+            "32768",
+            "32768",
+        ],
+        "",
+        Duration::from_secs(60),
+    );
+    assert!(!ok && err.contains("memory budget"), "{err}");
+    assert!(took < Duration::from_secs(10), "{took:?}");
+    assert!(!shot.exists());
+
+    let asc = dir.path().join("huge_claim.asc");
+    std::fs::write(
+        &asc,
+        "ncols 200000\nnrows 100000\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n",
+    )
+    .unwrap();
+    let (ok, err) = karstic(&["dem", "info", s(&asc), "--max-memory", "1T"]);
+    assert!(!ok && err.contains("values, but the file"), "{err}");
+}

@@ -232,6 +232,7 @@ fn editor_viewport_shows_the_tracers_image() {
         graph: false,
         backend: Backend::Cpu,
         timeout: Duration::from_secs(120),
+        budget: karstic::io::DEFAULT_MEMORY_BUDGET,
     };
     let mut h = karstic::editor::headless(a, &how).unwrap();
     let image = h.render().unwrap();
@@ -294,6 +295,7 @@ fn editor_refines_the_viewport_on_the_gpu_when_asked() {
         graph: false,
         backend: Backend::Gpu,
         timeout: Duration::from_secs(300),
+        budget: karstic::io::DEFAULT_MEMORY_BUDGET,
     };
     let h = karstic::editor::headless(&paths[0], &how).unwrap();
     let shown = h.state().shown().unwrap().clone();

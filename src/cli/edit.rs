@@ -33,6 +33,8 @@ pub(super) struct EditArgs {
     /// Refine the viewport on the CPU even when a hardware GPU adapter is there.
     #[arg(long)]
     cpu: bool,
+    #[command(flatten)]
+    budget: super::Budget,
 }
 
 /// Runs `karstic edit`.
@@ -59,6 +61,7 @@ pub(super) fn run(args: EditArgs) -> anyhow::Result<()> {
                 graph: args.graph,
                 backend,
                 timeout: Duration::from_secs_f64(args.timeout),
+                budget: args.budget.max_memory,
             };
             let t = karstic::editor::screenshot(&args.tree, out, &how)?;
             eprintln!(

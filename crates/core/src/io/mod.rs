@@ -87,6 +87,14 @@ pub enum IoError {
         /// The input it names.
         input: PathBuf,
     },
+    /// Memory the budget allowed could not be had from the system.
+    #[error("cannot allocate {} for {what}: the system refused it (lower --max-memory, or free memory)", human_bytes(*.need))]
+    Alloc {
+        /// What the memory was for.
+        what: String,
+        /// Bytes asked for.
+        need: u64,
+    },
     /// An image could not be encoded.
     #[error("cannot encode the image {path}")]
     Encode {
@@ -104,6 +112,25 @@ pub enum IoError {
         /// The one that would overwrite it.
         second: PathBuf,
     },
+}
+
+/// A vector of `len` copies of `value`, its memory asked of the system first: a refusal
+/// (a budget raised past the machine's memory) is an error naming `what`, not an abort.
+pub fn try_filled<T: Clone>(len: usize, value: T, what: &str) -> Result<Vec<T>, IoError> {
+    let mut v = try_with_capacity(len, what)?;
+    v.resize(len, value);
+    Ok(v)
+}
+
+/// An empty vector with room for `len` elements, asked of the system first (see
+/// [`try_filled`]).
+pub fn try_with_capacity<T>(len: usize, what: &str) -> Result<Vec<T>, IoError> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(len).map_err(|_| IoError::Alloc {
+        what: what.to_string(),
+        need: (len as u64).saturating_mul(std::mem::size_of::<T>() as u64),
+    })?;
+    Ok(v)
 }
 
 /// Reads the regular file `path` (symbolic links followed), refusing anything else (a

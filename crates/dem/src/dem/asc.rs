@@ -159,7 +159,21 @@ pub fn read_bytes(
     check_grid_size(path, h.ncols as u64, h.nrows as u64, 8, opts.memory_budget)?;
 
     let n = h.ncols * h.nrows;
-    let mut vals = Vec::with_capacity(n);
+    // Each value takes a digit and a separator: a header claiming more than the file can
+    // hold lies (or the file is cut short), and is refused before anything is allocated.
+    if n > text.len() / 2 + 1 {
+        return Err(DemError::Malformed {
+            path: path.to_path_buf(),
+            what: format!(
+                "{}×{} = {n} values, but the file's {} bytes hold at most {}",
+                h.ncols,
+                h.nrows,
+                text.len(),
+                text.len() / 2 + 1
+            ),
+        });
+    }
+    let mut vals = crate::io::try_with_capacity(n, "the grid's values")?;
     for (ln, line) in lines {
         for tok in line.split_ascii_whitespace() {
             if vals.len() == n {

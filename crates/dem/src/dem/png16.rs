@@ -167,7 +167,7 @@ pub fn read_bytes(
         what,
     })?;
 
-    let mut buf = vec![0u8; dec.total_bytes() as usize];
+    let mut buf = crate::io::try_filled(dec.total_bytes() as usize, 0u8, "the PNG's pixels")?;
     dec.read_image(&mut buf).map_err(png_err)?;
     let vals: Vec<f64> = if bits == 8 {
         buf.iter().map(|&b| f64::from(b)).collect()

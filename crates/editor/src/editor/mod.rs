@@ -86,7 +86,14 @@ pub struct Headless<'a> {
     pub backend: Backend,
     /// The longest wait for the viewport to settle.
     pub timeout: Duration,
+    /// The most memory the window's pictures may take, in bytes ([`SCREEN_BYTES_PER_PIXEL`]).
+    pub budget: u64,
 }
+
+/// Bytes a pixel of the headless window takes at most: the viewport's frame (the
+/// renderer's [`crate::render::image::BYTES_PER_PIXEL`]) and three RGBA copies (the GPU's
+/// render target, its read-back, the image written).
+pub const SCREEN_BYTES_PER_PIXEL: u64 = crate::render::image::BYTES_PER_PIXEL + 3 * 4;
 
 /// The editor drawn headless (egui_kittest on a wgpu adapter, software ones included) on
 /// the tree file at `path` as `how` says, stepped until the viewport has settled (the
@@ -96,6 +103,11 @@ pub fn headless(
     how: &Headless<'_>,
 ) -> anyhow::Result<egui_kittest::Harness<'static, Editor>> {
     let (width, height) = how.size;
+    crate::io::check_budget(
+        format!("a {width} × {height} editor window"),
+        u64::from(width) * u64::from(height) * SCREEN_BYTES_PER_PIXEL,
+        how.budget,
+    )?;
     let mut editor = Editor::open_with(path, how.backend);
     if let Some(name) = how.select {
         anyhow::ensure!(

@@ -14,6 +14,10 @@ use crate::io::{read_regular, write_bytes_atomic};
 use crate::mesh::GridSpec;
 use crate::mesh::columns::TILE;
 
+/// The most tiles a plan holds: a 256 km square at 1 m in tiles of 256 cells, far past
+/// what one array job meshes, and a plan file of tens of megabytes.
+pub const MAX_TILES: u64 = 1_000_000;
+
 /// Version of the plan file format.
 pub const PLAN_VERSION: u32 = 1;
 
@@ -122,6 +126,17 @@ impl Plan {
             georeference: "local: the tree's frame (no terrain with a CRS)".into(),
             tiles: Vec::new(),
         };
+        let count = (0..levels)
+            .map(|level| {
+                let [nx, ny] = plan.tile_counts(level);
+                (nx as u64).saturating_mul(ny as u64)
+            })
+            .fold(0u64, u64::saturating_add);
+        ensure!(
+            count <= MAX_TILES,
+            "a plan of {count} tiles at {cell} m cells and {tile_cells} cells a tile: at most \
+             {MAX_TILES} (give a coarser --cell or larger --tile)"
+        );
         for level in 0..levels {
             let [nx, ny] = plan.tile_counts(level);
             for y in 0..ny {
