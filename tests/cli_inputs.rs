@@ -408,3 +408,25 @@ fn requests_past_the_machine_are_errors_not_aborts() {
     let (ok, err) = karstic(&["dem", "info", s(&asc), "--max-memory", "1T"]);
     assert!(!ok && err.contains("values, but the file"), "{err}");
 }
+
+/// Counts past what a generator takes are refused with the limit, not quietly cut down
+/// (`--faults 4000000000` made 100,000 faults, a 10⁶ × 10⁶ deposition 10⁸ particles).
+#[test]
+fn generator_counts_past_their_limits_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("g.tif");
+    let grid = ["--size", "33", "33", "--cell", "10", "--relief", "100"];
+    let run = |kind: &str, extra: &[&str]| {
+        let mut args = vec!["generate", kind, "-o", s(&out)];
+        args.extend_from_slice(&grid);
+        args.extend_from_slice(extra);
+        karstic(&args)
+    };
+    let (ok, err) = run("faults", &["--faults", "4000000000"]);
+    assert!(!ok && err.contains("at most 100000"), "{err}");
+    let (ok, err) = run("deposition", &["--deposition", "1000000", "1000000", "8"]);
+    assert!(!ok && err.contains("100000000 particles"), "{err}");
+    assert!(!out.exists());
+    let (ok, err) = run("faults", &["--faults", "100000"]);
+    assert!(ok, "{err}");
+}

@@ -61,13 +61,14 @@ pub(super) struct GenerateArgs {
     /// diamond-square: the Hurst exponent H in [0, 1] (1 smooth).
     #[arg(long, default_value_t = 0.8)]
     roughness: f32,
-    /// faults: how many.
+    /// faults: how many (at most 100,000).
     #[arg(long, default_value_t = 200)]
     faults: u32,
     /// faults: width of the cosine step, metres.
     #[arg(long, value_name = "METRES", default_value_t = 0.0)]
     width: f32,
-    /// deposition: vents, particles per vent, and the drop radius in cells.
+    /// deposition: vents, particles per vent (at most 10⁸ particles in all), and the drop
+    /// radius in cells.
     #[arg(long, num_args = 3, value_names = ["SERIES", "PARTICLES", "RADIUS"],
           default_values_t = [5, 20000, 8])]
     deposition: Vec<u32>,

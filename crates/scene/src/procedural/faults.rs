@@ -33,7 +33,7 @@ pub const MAX_FAULTS: u32 = 100_000;
 /// The samples of an `nx × ny` grid of `cell`-metre cells: the sum of every fault's
 /// signed offset (1 for the first fault, falling linearly towards 0 for the last).
 pub fn generate(s: &FaultSpec, nx: usize, ny: usize, cell: f32, seed: u32) -> Vec<f32> {
-    let count = s.count.min(MAX_FAULTS);
+    let count = s.count;
     // Faults in grid units: a point and a unit normal, with their offsets.
     let faults: Vec<(Vec2, Vec2, f32)> = (0..count)
         .map(|f| {

@@ -43,6 +43,33 @@ pub enum Generator {
     Deposition(deposition::DepositionSpec),
 }
 
+impl Generator {
+    /// Checks the counts a parser cannot bound, naming the field: more faults or particles
+    /// than a generator takes are refused, not quietly cut down.
+    pub fn validate(&self) -> Result<(), DemError> {
+        let bad = |what: String| Err(DemError::Invalid { what });
+        match self {
+            Generator::Faults(f) if f.count > faults::MAX_FAULTS => bad(format!(
+                "Faults.count: at most {}, got {}",
+                faults::MAX_FAULTS,
+                f.count
+            )),
+            Generator::Deposition(d)
+                if u64::from(d.series) * u64::from(d.particles) > deposition::MAX_PARTICLES =>
+            {
+                bad(format!(
+                    "Deposition: series × particles = {} × {} is over the {} particles a \
+                     deposition takes",
+                    d.series,
+                    d.particles,
+                    deposition::MAX_PARTICLES
+                ))
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
 /// A generated (and optionally eroded) heightfield in a tree file or on the command line:
 ///
 /// ```ron
@@ -95,6 +122,7 @@ impl GenerateSpec {
             n.saturating_mul(per),
             budget,
         )?;
+        self.kind.validate()?;
         for s in &self.erosion {
             s.validate().map_err(|e| DemError::Invalid {
                 what: format!("generate.erosion: {e}"),
