@@ -526,3 +526,33 @@ fn a_diamond_of_instances_is_refused_at_once() {
     assert!(e.contains("instances expanded"), "{e}");
     assert!(t.elapsed().as_secs_f32() < 1.0, "{:?}", t.elapsed());
 }
+
+/// A feature placed wholly outside its Feature Volume's domain validated and ran, and the
+/// cave was simply missing: it is now an error naming the feature and the domain, while
+/// a tunnel that opens out of the domain (`trees/curves/tunnel.ron`) still builds.
+#[test]
+fn a_feature_wholly_outside_its_domain_is_an_error() {
+    let path = repo().join("trees/curves/tunnel.ron");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let open = scene::SceneFile {
+        scene: parse_scene(&text, &path).unwrap(),
+        path: path.clone(),
+        base_dir: repo().join("trees/curves"),
+    };
+    open.compile().unwrap();
+    let moved = text
+        .replace("Abs(-12, 30, 30)", "Abs(-12, 300, 30)")
+        .replace("Abs(40, 22, 27)", "Abs(40, 220, 27)")
+        .replace("Abs(88, 42, 35)", "Abs(88, 420, 35)")
+        .replace("Abs(139, 32, 30)", "Abs(139, 320, 30)");
+    assert_ne!(moved, text);
+    let away = scene::SceneFile {
+        scene: parse_scene(&moved, &path).unwrap(),
+        ..open
+    };
+    let e = karstic::io::chain(&away.compile().map(|_| ()).unwrap_err());
+    assert!(
+        e.contains("tunnel 0 \"main\"") && e.contains("wholly outside the volume's domain"),
+        "{e}"
+    );
+}

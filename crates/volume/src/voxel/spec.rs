@@ -711,6 +711,7 @@ impl FeatureVolumeSpec {
                 },
                 e => e,
             })?;
+        self.check_inside(&set, &features)?;
         if self.on_terrain {
             if self.orientation != Orientation::Solid {
                 return Err(CurveError::invalid(
@@ -727,6 +728,75 @@ impl FeatureVolumeSpec {
             features.terrain = Some(self.terrain_surface(&features, ground));
         }
         Ok(features)
+    }
+
+    /// Errors when a primitive lies wholly outside the domain: the pipeline would draw
+    /// nothing of it, and the feature the user placed would be silently missing. A
+    /// curve lies in the hull of its control points, a tube within its largest section
+    /// of them; a primitive that leaves the domain in part (a tunnel opening out of it)
+    /// is what the domain's faces fade, and is kept.
+    fn check_inside(&self, set: &FeatureSet, features: &Features) -> Result<(), CurveError> {
+        let domain = Aabb::new(self.domain.0.0, self.domain.1.0);
+        let reach = |points: &[Vec3], pad: f32| {
+            let b = Aabb::from_points(points.iter().copied());
+            Aabb::new(b.min - Vec3::splat(pad), b.max + Vec3::splat(pad))
+        };
+        let tube = |t: &Tube| reach(t.path.control(), 0.5 * t.width.max().max(t.height.max()));
+        let reaches = features
+            .curves
+            .iter()
+            .zip(&set.curves)
+            .enumerate()
+            .map(|(i, (c, spec))| {
+                let pad = c.ribbon.unwrap_or(0.0);
+                (
+                    label("curve", i, &spec.name),
+                    reach(c.spline.control(), pad),
+                )
+            })
+            .chain(
+                features
+                    .quads
+                    .iter()
+                    .enumerate()
+                    .map(|(i, q)| (format!("quad {i}"), reach(&q.corners, 0.0))),
+            )
+            .chain(
+                features
+                    .discs
+                    .iter()
+                    .enumerate()
+                    .map(|(i, d)| (format!("disc {i}"), reach(&[d.center], d.radius))),
+            )
+            .chain(
+                features
+                    .tunnels
+                    .iter()
+                    .zip(&set.tunnels)
+                    .enumerate()
+                    .map(|(i, (t, spec))| (label("tunnel", i, &spec.name), tube(t))),
+            )
+            .chain(
+                features
+                    .arches
+                    .iter()
+                    .enumerate()
+                    .map(|(i, a)| (format!("arch {i}"), tube(&a.beam()))),
+            );
+        for (what, b) in reaches {
+            if !b.overlaps(&domain) {
+                return Err(CurveError::invalid(
+                    format!("{}: {what}", self.label()),
+                    format!(
+                        "lies wholly outside the volume's domain {:?} .. {:?}: nothing of it \
+                         would be drawn (move it, or widen `domain`)",
+                        domain.min.to_array(),
+                        domain.max.to_array()
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// The terrain under the volume, sampled over its domain, with room made for the
