@@ -211,3 +211,64 @@ fn the_citation_scanner_reads_every_form() {
         ]
     );
 }
+
+/// The RON of the pages is what the program reads: every ```` ```ron ```` block of
+/// `README.md` and `docs/` parses, as a tree file, a node, a curve or a section of a tree
+/// file (`geology:`, `job:`), the fields and values the page shows included. A block that
+/// elides parts with `(..)`, `[..]` or a `/* … */` placeholder is a sketch and is not read.
+#[test]
+fn the_pages_ron_parses() {
+    use karstic::scene::parse_scene;
+    let opts = karstic::value::ron_options();
+    let point = "Primitive(shape: Point(center: (0, 0, 0)), falloff: 1, energy: 1)";
+    let mut read = 0;
+    let mut pages = vec![root().join("README.md")];
+    pages.extend(
+        text_files("docs")
+            .into_iter()
+            .filter(|p| p.extension().is_some_and(|e| e == "md")),
+    );
+    for page in pages {
+        let text = std::fs::read_to_string(&page).unwrap();
+        for (k, block) in text.split("```ron\n").skip(1).enumerate() {
+            let block = block.split("```").next().unwrap();
+            if ["(..)", "[..]", "/*"]
+                .iter()
+                .any(|sketch| block.contains(sketch))
+            {
+                continue;
+            }
+            let body: String = block
+                .lines()
+                .filter(|l| !l.trim_start().starts_with("//"))
+                .collect::<Vec<_>>()
+                .join("\n");
+            let body = body.trim();
+            let at = || format!("{} block {}", page.display(), k + 1);
+            let result = if body.starts_with('(') && body.contains("version:") {
+                parse_scene(body, &page)
+                    .map(|_| ())
+                    .map_err(|e| e.to_string())
+            } else if body.starts_with("(") {
+                opts.from_str::<karstic::voxel::spec::CurveSpec>(body)
+                    .map(|_| ())
+                    .map_err(|e| e.to_string())
+            } else if body.starts_with(|c: char| c.is_ascii_lowercase()) {
+                let scene = format!("(version: 1, root: {point}, {body})");
+                parse_scene(&scene, &page)
+                    .map(|_| ())
+                    .map_err(|e| e.to_string())
+            } else {
+                let scene = format!("(version: 1, root: {body})");
+                parse_scene(&scene, &page)
+                    .map(|_| ())
+                    .map_err(|e| e.to_string())
+            };
+            if let Err(e) = result {
+                panic!("{}: {e}\n{body}", at());
+            }
+            read += 1;
+        }
+    }
+    assert!(read >= 10, "only {read} blocks read");
+}

@@ -1,20 +1,20 @@
 //! The `Heightfield(...)` node of tree files: a DEM implicitized as in Paris et al. 2019 §5.1.
 //!
 //! ```ron
-//! Heightfield((
-//!     name: Some("jacksboro"),
+//! Heightfield(
+//!     name: "jacksboro",
 //!     source: "../shared/data/dem/jacksboro_utm16n_90m.tif", // relative to the tree file
 //!     falloff: 60.0,            // R, metres
-//!     base_depth: Some(100.0),  // prism floor below the lowest point (default: falloff)
+//!     base_depth: 100.0,        // prism floor below the lowest point (default: falloff)
 //!     vertical_scale: 1.0,
 //!     vertical_offset: 0.0,
-//!     placement: Some((0.0, 0.0)), // where the south-west sample goes
-//!     domain: None,             // or Some([(x, y), ...]) polygon in the tree frame
+//!     placement: (0.0, 0.0),    // where the south-west sample goes
+//!     domain: None,             // or [(x, y), ...]: a polygon in the tree frame
 //!     interpolation: Bilinear,  // or Bicubic
-//!     cell_size: Some(30.0),    // resample to 30 m cells first
+//!     cell_size: 30.0,          // resample to 30 m cells first
 //!     // rock-scale relief (Frasson et al. §5): 3D fBm, rougher on steep and high ground
 //!     detail: (noise: (amplitude: 4.0, wavelength: 48.0, octaves: 4), flat: 0.2),
-//! ))
+//! )
 //! ```
 //!
 //! Instead of `source`, `generate: (kind: Ridged(wavelength: 2000), ...)` makes the
