@@ -430,3 +430,59 @@ fn generator_counts_past_their_limits_are_refused() {
     let (ok, err) = run("faults", &["--faults", "100000"]);
     assert!(ok, "{err}");
 }
+
+/// Messages say what is wrong: a NaN flag is named as such where it is given (it was
+/// "the heightmap region … is empty"), a far-away camera is far away (it was "eye and
+/// target coincide"), a heightmap past the samples allowed says so (it was "at least 2×2
+/// samples is needed"), and a tile's summary that is a folder is not "not run".
+#[test]
+fn messages_name_the_real_problem() {
+    let (dir, tree) = with_arch();
+    let out = dir.path().join("h.tif");
+    let (ok, err) = karstic(&[
+        "heightmap",
+        s(&tree),
+        "-o",
+        s(&out),
+        "--cell",
+        "1",
+        "--region",
+        "0",
+        "0",
+        "NaN",
+        "5",
+    ]);
+    assert!(
+        !ok && err.contains("NaN is not a finite number") && err.contains("--region"),
+        "{err}"
+    );
+    let (ok, err) = karstic(&["heightmap", s(&tree), "-o", s(&out), "--cell", "0.00001"]);
+    assert!(!ok && err.contains("is more than 1e12 samples"), "{err}");
+    let png = dir.path().join("far.png");
+    let (ok, err) = karstic(&[
+        "render",
+        s(&tree),
+        "-o",
+        s(&png),
+        "--size",
+        "32",
+        "18",
+        "--camera",
+        "1e30",
+        "0",
+        "0",
+        "0",
+        "0",
+        "0",
+    ]);
+    assert!(ok && !err.contains("coincide"), "{err}");
+    let tiles = dir.path().join("tiles");
+    let (ok, err) = karstic(&["tile", "plan", s(&tree), "-o", s(&tiles), "--cell", "1"]);
+    assert!(ok, "{err}");
+    std::fs::create_dir_all(tiles.join("tiles/0/0_0.json")).unwrap();
+    let (ok, err) = karstic(&["tile", "merge", s(&tiles)]);
+    assert!(
+        !ok && err.contains("not a regular file") && !err.contains("have not run"),
+        "{err}"
+    );
+}

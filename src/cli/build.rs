@@ -26,10 +26,10 @@ pub(super) struct BuildArgs {
     #[arg(short, long)]
     output: PathBuf,
     /// Box to mesh (default: the tree's support box).
-    #[arg(long = "box", num_args = 6, value_names = ["XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"], allow_negative_numbers = true)]
+    #[arg(value_parser = super::finite, long = "box", num_args = 6, value_names = ["XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"], allow_negative_numbers = true)]
     bbox: Option<Vec<f32>>,
     /// Cell size in metres.
-    #[arg(long, conflicts_with = "res")]
+    #[arg(value_parser = super::finite, long, conflicts_with = "res")]
     cell: Option<f32>,
     /// Cells along the box's longest axis (default 256).
     #[arg(long)]

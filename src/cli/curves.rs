@@ -50,7 +50,7 @@ pub(super) struct BuildArgs {
     #[arg(long)]
     node: Option<String>,
     /// Mesh cell size in metres (default: the volume's voxel).
-    #[arg(long)]
+    #[arg(value_parser = super::finite, long)]
     cell: Option<f32>,
     /// Also write the proxy ribbon meshes (finest level) as OBJ.
     #[arg(long)]

@@ -23,25 +23,25 @@ pub(super) struct ErodeArgs {
     #[arg(long, default_value_t = 100)]
     steps: u32,
     /// Length of a step, years.
-    #[arg(long, value_name = "YEARS", default_value_t = 2e4)]
+    #[arg(value_parser = super::finite, long, value_name = "YEARS", default_value_t = 2e4)]
     dt: f32,
     /// Uplift rate of the interior, metres per year.
-    #[arg(long, value_name = "M_PER_YR", default_value_t = 1e-3)]
+    #[arg(value_parser = super::finite, long, value_name = "M_PER_YR", default_value_t = 1e-3)]
     uplift: f32,
     /// Erodibility K of the stream-power law.
-    #[arg(long, default_value_t = 2e-4)]
+    #[arg(value_parser = super::finite, long, default_value_t = 2e-4)]
     k: f32,
     /// Drainage-area exponent m.
-    #[arg(long, default_value_t = 0.4)]
+    #[arg(value_parser = super::finite, long, default_value_t = 0.4)]
     m: f32,
     /// Slope exponent n.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(value_parser = super::finite, long, default_value_t = 1.0)]
     n: f32,
     /// Hillslope diffusivity, m²/yr (0: none).
-    #[arg(long, value_name = "M2_PER_YR", default_value_t = 0.0)]
+    #[arg(value_parser = super::finite, long, value_name = "M2_PER_YR", default_value_t = 0.0)]
     diffusion: f32,
     /// Then thermal erosion down to this talus angle, degrees.
-    #[arg(long, value_name = "DEGREES")]
+    #[arg(value_parser = super::finite, long, value_name = "DEGREES")]
     talus: Option<f32>,
     /// Print the median time of a stream-power step.
     #[arg(long)]

@@ -44,28 +44,28 @@ pub(super) struct GenerateArgs {
     #[arg(long, num_args = 2, value_names = ["NX", "NY"], default_values_t = [513, 513])]
     size: Vec<u32>,
     /// Sample spacing, metres.
-    #[arg(long, value_name = "METRES", default_value_t = 10.0)]
+    #[arg(value_parser = super::finite, long, value_name = "METRES", default_value_t = 10.0)]
     cell: f32,
     /// Elevations span [0, RELIEF] metres.
-    #[arg(long, value_name = "METRES", default_value_t = 1000.0)]
+    #[arg(value_parser = super::finite, long, value_name = "METRES", default_value_t = 1000.0)]
     relief: f32,
     /// Seed of every random choice.
     #[arg(long, default_value_t = 0)]
     seed: u32,
     /// fbm, ridged, hybrid: wavelength of the first octave, metres.
-    #[arg(long, value_name = "METRES", default_value_t = 2000.0)]
+    #[arg(value_parser = super::finite, long, value_name = "METRES", default_value_t = 2000.0)]
     wavelength: f32,
     /// fbm, ridged, hybrid: octaves (1 to 12).
     #[arg(long, default_value_t = 8)]
     octaves: u32,
     /// diamond-square: the Hurst exponent H in [0, 1] (1 smooth).
-    #[arg(long, default_value_t = 0.8)]
+    #[arg(value_parser = super::finite, long, default_value_t = 0.8)]
     roughness: f32,
     /// faults: how many (at most 100,000).
     #[arg(long, default_value_t = 200)]
     faults: u32,
     /// faults: width of the cosine step, metres.
-    #[arg(long, value_name = "METRES", default_value_t = 0.0)]
+    #[arg(value_parser = super::finite, long, value_name = "METRES", default_value_t = 0.0)]
     width: f32,
     /// deposition: vents, particles per vent (at most 10⁸ particles in all), and the drop
     /// radius in cells.

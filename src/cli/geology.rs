@@ -29,10 +29,10 @@ struct SectionArgs {
     /// Tree file (.ron) with a `geology:` (a scene without one is uniform).
     tree: PathBuf,
     /// The cut's two ends on the map, metres: from (X0, Y0) to (X1, Y1).
-    #[arg(long, num_args = 4, value_names = ["X0", "Y0", "X1", "Y1"], allow_negative_numbers = true, required = true)]
+    #[arg(value_parser = super::finite, long, num_args = 4, value_names = ["X0", "Y0", "X1", "Y1"], allow_negative_numbers = true, required = true)]
     plane: Vec<f32>,
     /// Altitude range (default: the job's region, else the tree's support).
-    #[arg(long, num_args = 2, value_names = ["ZMIN", "ZMAX"], allow_negative_numbers = true)]
+    #[arg(value_parser = super::finite, long, num_args = 2, value_names = ["ZMIN", "ZMAX"], allow_negative_numbers = true)]
     z: Option<Vec<f32>>,
     /// Image width in pixels; the height keeps metres square unless `--height` is given.
     #[arg(long, default_value_t = 800)]

@@ -18,11 +18,11 @@ pub(super) struct GridArgs {
     cell: Option<f64>,
     /// Tree-frame rectangle to cover (default: the terrain DEM's extent, or the tree's
     /// support without one).
-    #[arg(long, num_args = 4, value_names = ["XMIN", "YMIN", "XMAX", "YMAX"], allow_negative_numbers = true)]
+    #[arg(value_parser = super::finite, long, num_args = 4, value_names = ["XMIN", "YMIN", "XMAX", "YMAX"], allow_negative_numbers = true)]
     region: Option<Vec<f32>>,
     /// Locate each column's top to within this many metres (default: a thousandth of
     /// the cell).
-    #[arg(long, value_name = "METRES")]
+    #[arg(value_parser = super::finite, long, value_name = "METRES")]
     tolerance: Option<f32>,
 }
 

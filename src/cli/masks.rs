@@ -20,11 +20,11 @@ pub(super) struct MasksArgs {
     #[arg(short, long)]
     output: PathBuf,
     /// Pixel size in metres (default: the DEM's cell, or 1/512 of the support's width).
-    #[arg(long)]
+    #[arg(value_parser = super::finite, long)]
     cell: Option<f32>,
     /// Box whose footprint the masks cover (default: the DEM's extent, or the tree's
     /// support). `karstic build --box` with the same box gives UVs over the same frame.
-    #[arg(long = "box", num_args = 6, value_names = ["XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"], allow_negative_numbers = true)]
+    #[arg(value_parser = super::finite, long = "box", num_args = 6, value_names = ["XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"], allow_negative_numbers = true)]
     bbox: Option<Vec<f32>>,
     /// File-name stem (default: the tree file's).
     #[arg(long)]

@@ -81,6 +81,20 @@ struct Budget {
     max_memory: u64,
 }
 
+/// The parser of every number flag: a finite number (NaN and the infinities name no
+/// place, size or rate, and would only fail later, under another name).
+fn finite(s: &str) -> Result<f32, String> {
+    let v: f32 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not a number"))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("{s} is not a finite number"))
+    }
+}
+
 /// The box of a `--box XMIN YMIN ZMIN XMAX YMAX ZMAX` flag (clap checks there are six).
 fn corners(v: &[f32]) -> Aabb {
     Aabb::new(Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]))

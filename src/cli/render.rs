@@ -30,11 +30,11 @@ pub(super) struct RenderArgs {
     cost: Option<PathBuf>,
     /// Camera eye and target (default: the tree's `job` camera when it has one, else the
     /// box where the surface lies framed from the south-east and above).
-    #[arg(long, num_args = 6, allow_negative_numbers = true,
+    #[arg(value_parser = super::finite, long, num_args = 6, allow_negative_numbers = true,
           value_names = ["EYE_X", "EYE_Y", "EYE_Z", "TARGET_X", "TARGET_Y", "TARGET_Z"])]
     camera: Option<Vec<f32>>,
     /// Vertical field of view, degrees (default: the job's, else 40).
-    #[arg(long)]
+    #[arg(value_parser = super::finite, long)]
     fov: Option<f32>,
     /// Trace on the GPU (wgpu); falls back to the CPU with a message when no hardware
     /// adapter can.

@@ -17,7 +17,7 @@ pub(super) struct SampleArgs {
     /// Tree file (.ron).
     tree: PathBuf,
     /// Box spanned by the samples, corner to corner (default: the tree's support box).
-    #[arg(long = "box", num_args = 6, value_names = ["XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"], allow_negative_numbers = true)]
+    #[arg(value_parser = super::finite, long = "box", num_args = 6, value_names = ["XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"], allow_negative_numbers = true)]
     bbox: Option<Vec<f32>>,
     /// Samples along x, y and z.
     #[arg(long, num_args = 3, value_names = ["NX", "NY", "NZ"], required = true)]

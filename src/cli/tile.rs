@@ -39,10 +39,10 @@ struct PlanArgs {
     #[arg(long, default_value_t = 1)]
     levels: usize,
     /// Finest cell size in metres (default: the job's `cell`, else 1/256 of the region).
-    #[arg(long)]
+    #[arg(value_parser = super::finite, long)]
     cell: Option<f32>,
     /// Region to tile (default: the tree's support box).
-    #[arg(long = "box", num_args = 6, value_names = ["XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"], allow_negative_numbers = true, conflicts_with = "job_region")]
+    #[arg(value_parser = super::finite, long = "box", num_args = 6, value_names = ["XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"], allow_negative_numbers = true, conflicts_with = "job_region")]
     bbox: Option<Vec<f32>>,
     /// Tile the job's region instead of the tree's support box.
     #[arg(long)]

@@ -78,7 +78,15 @@ impl Camera {
             ));
         }
         check_fov(fov_y)?;
-        let forward = (target - eye).normalize_or_zero();
+        let towards = target - eye;
+        if !towards.is_finite() {
+            return Err(RenderError::BadCamera(format!(
+                "eye {eye} and target {target} are too far apart to aim from one at the other"
+            )));
+        }
+        // Scaled first: the square of a length past about 1e19 m overflows f32.
+        let forward =
+            (towards / towards.abs().max_element().max(f32::MIN_POSITIVE)).normalize_or_zero();
         if forward == Vec3::ZERO {
             return Err(RenderError::BadCamera("eye and target coincide".into()));
         }

@@ -20,6 +20,10 @@ use rayon::prelude::*;
 use crate::dem::{Dem, DemError, Georef, Heightfield, HeightfieldField};
 use crate::field::{Rect, Tree};
 
+/// The most samples a heightmap may have, whatever the memory budget: past this a
+/// request is a mistaken cell or region, not a terrain.
+const MAX_SAMPLES: f64 = 1e12;
+
 /// Where a heightmap's samples lie.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HeightmapGrid {
@@ -91,9 +95,19 @@ impl HeightmapGrid {
         let (i0, i1) = range(rect.min.x, rect.max.x, anchor.x, step[0]);
         let (j0, j1) = range(rect.min.y, rect.max.y, anchor.y, step[1]);
         let (nx, ny) = (i1 - i0 + 1.0, j1 - j0 + 1.0);
-        if !(nx >= 2.0 && ny >= 2.0) || nx * ny > 1e12 {
+        let cells = format!(
+            "{nx}×{ny} samples of {} × {} m over ({}, {}) .. ({}, {})",
+            step[0], step[1], rect.min.x, rect.min.y, rect.max.x, rect.max.y
+        );
+        if !(nx >= 2.0 && ny >= 2.0) {
             return invalid(format!(
-                "a heightmap of at least 2×2 samples is needed: {nx}×{ny} samples of {step:?} m fit in {rect:?}"
+                "a heightmap needs at least 2×2 samples: {cells} (give a finer cell or a larger region)"
+            ));
+        }
+        if nx * ny > MAX_SAMPLES {
+            return invalid(format!(
+                "a heightmap of {cells} is more than {MAX_SAMPLES:e} samples (give a coarser cell \
+                 or a smaller region)"
             ));
         }
         let offset = [i0 * step[0], j0 * step[1]];

@@ -133,6 +133,12 @@ impl Plan {
             })
             .fold(0u64, u64::saturating_add);
         ensure!(
+            count > 0,
+            "the region {:?} .. {:?} holds no tile at {cell} m cells",
+            region.min.to_array(),
+            region.max.to_array()
+        );
+        ensure!(
             count <= MAX_TILES,
             "a plan of {count} tiles at {cell} m cells and {tile_cells} cells a tile: at most \
              {MAX_TILES} (give a coarser --cell or larger --tile)"
@@ -172,6 +178,9 @@ impl Plan {
         .map_err(|e| bad(format!("the grid: {e}")))?;
         if self.transform.as_ref().is_some_and(|m| m.len() != 16) {
             return Err(bad("transform: expected 16 numbers".into()));
+        }
+        if self.tiles.is_empty() {
+            return Err(bad("tiles: the plan lists none".into()));
         }
         for (i, t) in self.tiles.iter().enumerate() {
             let ok = t.level < self.levels && {

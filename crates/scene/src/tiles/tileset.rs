@@ -64,7 +64,12 @@ pub fn read_summaries(dir: &Path, plan: &Plan) -> anyhow::Result<Vec<TileSummary
                 }
                 out.push(s);
             }
-            Err(_) => missing.push(i),
+            Err(crate::io::IoError::Read { source, .. })
+                if source.kind() == std::io::ErrorKind::NotFound =>
+            {
+                missing.push(i)
+            }
+            Err(e) => return Err(e).context(format!("tile {i}'s summary")),
         }
     }
     for (list, what) in [
