@@ -94,3 +94,30 @@ fn errors_name_the_file_and_exit_non_zero() {
     ]);
     assert!(ok, "an explicit range replaces the sidecar: {err}");
 }
+
+/// `dem info` prints the origin of a tree's frame, the south-west sample's centre: half a
+/// cell inside the header's outer corner (the main job's docs said the corner, 45 m and
+/// 90 m off), and the heightmap export's geotransform agrees with it.
+#[test]
+fn dem_info_prints_the_frame_origin_the_exports_use() {
+    let crop = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/data/jacksboro_crop.asc");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_karstic"))
+        .args(["dem", "info"])
+        .arg(&crop)
+        .output()
+        .unwrap();
+    let text = String::from_utf8(out.stdout).unwrap();
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("origin"))
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(
+        line.contains("(744664.219465799, 4037591.162225269)"),
+        "{line}"
+    );
+    let d = karstic::dem::read(&crop, &karstic::dem::ReadOptions::default()).unwrap();
+    assert_eq!(
+        d.georef.local_to_crs([0.0, 0.0]),
+        [744664.219465799, 4037591.162225269]
+    );
+}

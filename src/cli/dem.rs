@@ -139,6 +139,7 @@ fn describe(name: &str, d: &Dem) -> String {
          cell size   {:.3} m × {:.3} m\n\
          CRS         {}\n\
          north-west  ({}, {}) (outer corner, CRS units)\n\
+         origin      ({}, {}) (the south-west sample's centre, CRS units: (0, 0) of a tree's frame)\n\
          z range     {lo:.2} .. {hi:.2} m\n\
          nodata      {nodata} samples ({:.1}%)\n\
          max slope   {:.3} (bilinear Lipschitz bound)\n",
@@ -151,6 +152,8 @@ fn describe(name: &str, d: &Dem) -> String {
         g.crs.describe(),
         nw[0],
         nw[1],
+        g.origin[0],
+        g.origin[1],
         100.0 * nodata as f64 / n as f64,
         h.lipschitz(Interpolation::Bilinear),
     )
