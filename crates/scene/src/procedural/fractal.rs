@@ -7,7 +7,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::field::noise::{Fbm, Octaves, simplex};
+use crate::field::noise::{Fbm, LACUNARITY, OCTAVE_SHIFT, Octaves, simplex};
 use crate::value::Positive;
 
 fn default_octaves() -> Octaves {
@@ -25,9 +25,6 @@ pub struct FractalSpec {
     pub octaves: Octaves,
 }
 
-/// Frequency ratio of successive octaves.
-const LACUNARITY: f32 = 2.0;
-
 /// The samples of `f(x, y)` over an `nx × ny` grid of `cell`-metre cells, rows in parallel.
 fn sample(nx: usize, ny: usize, cell: f32, f: impl Fn(f32, f32) -> f32 + Sync) -> Vec<f32> {
     let mut z = vec![0.0f32; nx * ny];
@@ -41,10 +38,10 @@ fn sample(nx: usize, ny: usize, cell: f32, f: impl Fn(f32, f32) -> f32 + Sync) -
 
 /// The noise of octave `k` at `(x, y)` in first-octave lattice units.
 fn octave(seed: u32, k: u32, x: f32, y: f32) -> f32 {
-    let s = 2f32.powi(k as i32);
+    let s = LACUNARITY.powi(k as i32);
     simplex(
         seed.wrapping_add(k.wrapping_mul(0x9e37_79b9)),
-        Vec3::new(x * s, y * s, 0.0) + k as f32 * crate::field::noise::OCTAVE_SHIFT,
+        Vec3::new(x * s, y * s, 0.0) + k as f32 * OCTAVE_SHIFT,
     )
 }
 
