@@ -486,3 +486,26 @@ fn messages_name_the_real_problem() {
         "{err}"
     );
 }
+
+/// `--quiet` is quiet: the loader's notices (a geographic DEM's cells taken as metres) are
+/// printed without it and not with it.
+#[test]
+fn quiet_runs_print_no_notices() {
+    let dir = tempfile::tempdir().unwrap();
+    let tree = dir.path().join("geo.ron");
+    let dem = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/dem/jacksboro.asc");
+    std::fs::write(
+        &tree,
+        format!(
+            "(version: 1, root: Heightfield(source: {:?}, falloff: 200))",
+            s(&dem)
+        ),
+    )
+    .unwrap();
+    let png = dir.path().join("g.png");
+    let render = ["render", s(&tree), "-o", s(&png), "--size", "32", "18"];
+    let (ok, err) = karstic(&render);
+    assert!(ok && err.contains("notice: geographic DEM"), "{err}");
+    let (ok, err) = karstic(&[&render[..], &["--quiet"]].concat());
+    assert!(ok && err.is_empty(), "{err}");
+}

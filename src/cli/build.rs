@@ -81,7 +81,8 @@ pub(super) fn run(args: BuildArgs) -> anyhow::Result<()> {
         };
         (mesh, stats, opts)
     } else {
-        let (file, compiled) = super::load_compiled(&args.tree, args.budget.max_memory, &outputs)?;
+        let (file, compiled) =
+            super::load_compiled(&args.tree, args.budget.max_memory, &outputs, args.quiet)?;
         let (mesh, stats) = build_from_field(&compiled.tree, &args)?;
         let support = compiled.tree.support();
         let bbox = args.bbox.as_deref().map(super::corners);

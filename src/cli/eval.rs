@@ -62,7 +62,7 @@ fn parse_point(line: &str) -> Option<Result<Vec3, String>> {
 
 /// Runs `karstic eval`.
 pub(super) fn run(args: EvalArgs) -> anyhow::Result<()> {
-    let tree = &super::load_tree(&args.tree, args.budget.max_memory, &[] as &[&Path])?;
+    let tree = &super::load_tree(&args.tree, args.budget.max_memory, &[] as &[&Path], false)?;
     let (source, reader): (String, Box<dyn BufRead>) = match &args.points {
         Some(p) => (
             p.display().to_string(),

@@ -63,6 +63,7 @@ fn section(args: SectionArgs) -> anyhow::Result<()> {
         &args.tree,
         args.budget.max_memory,
         std::slice::from_ref(&args.output),
+        false,
     )?;
     let from = Vec2::new(args.plane[0], args.plane[1]);
     let to = Vec2::new(args.plane[2], args.plane[3]);

@@ -70,9 +70,10 @@ pub(super) fn tree_heightmap(
     grid: &GridArgs,
     budget: u64,
     outputs: &[PathBuf],
+    quiet: bool,
 ) -> anyhow::Result<TreeHeightmap> {
     let started = Instant::now();
-    let (_, compiled) = super::load_compiled(tree, budget, outputs)?;
+    let (_, compiled) = super::load_compiled(tree, budget, outputs, quiet)?;
     let compile = started.elapsed();
     let t = &compiled.tree;
     let region = grid
@@ -110,11 +111,15 @@ pub(super) fn tree_heightmap(
 pub(super) fn run(args: HeightmapArgs) -> anyhow::Result<()> {
     let outputs = dem::files_written(&args.output)?;
     let started = Instant::now();
-    let made = tree_heightmap(&args.tree, &args.grid, args.budget.max_memory, &outputs)?;
+    let made = tree_heightmap(
+        &args.tree,
+        &args.grid,
+        args.budget.max_memory,
+        &outputs,
+        args.quiet,
+    )?;
     let dem = made.dem;
-    for n in &dem.notices {
-        eprintln!("notice: {n}");
-    }
+    super::notify(&dem.notices, args.quiet);
     dem::write(&dem, &args.output)?;
     if !args.quiet {
         let hf = &dem.heightfield;

@@ -46,7 +46,8 @@ pub(super) fn run(args: MasksArgs) -> anyhow::Result<()> {
     });
     karstic::io::check_file_name(&stem).map_err(|e| anyhow::anyhow!("--stem: {e}"))?;
     let outputs = Masks::files(&args.output, &stem);
-    let (file, compiled) = super::load_compiled(&args.tree, args.budget.max_memory, &outputs)?;
+    let (file, compiled) =
+        super::load_compiled(&args.tree, args.budget.max_memory, &outputs, args.quiet)?;
     let tree = &compiled.tree;
     let support = tree.support();
     anyhow::ensure!(

@@ -100,15 +100,25 @@ fn corners(v: &[f32]) -> Aabb {
     Aabb::new(Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]))
 }
 
+/// Prints `notices` (a DEM's units, a fallback taken) to standard error, unless `quiet`.
+fn notify(notices: &[String], quiet: bool) {
+    if !quiet {
+        for n in notices {
+            eprintln!("notice: {n}");
+        }
+    }
+}
+
 /// Loads a tree file, refuses `outputs` that are among the files it reads (the tree, its
 /// DEMs and curve files), and compiles it within `budget` bytes, printing the loader's
-/// notices.
+/// notices unless `quiet`.
 fn load_tree(
     path: &Path,
     budget: u64,
     outputs: &[impl AsRef<Path>],
+    quiet: bool,
 ) -> anyhow::Result<karstic::field::Tree> {
-    Ok(load_compiled(path, budget, outputs)?.1.tree)
+    Ok(load_compiled(path, budget, outputs, quiet)?.1.tree)
 }
 
 /// [`load_tree`], keeping the file and what the compiler knows besides the tree (its
@@ -117,13 +127,12 @@ fn load_compiled(
     path: &Path,
     budget: u64,
     outputs: &[impl AsRef<Path>],
+    quiet: bool,
 ) -> anyhow::Result<(karstic::scene::SceneFile, karstic::compile::Compiled)> {
     let file = karstic::scene::load(path)?;
     karstic::io::check_outputs(&file.inputs(), outputs)?;
     let compiled = file.compile_with(budget)?;
-    for n in &compiled.notices {
-        eprintln!("notice: {n}");
-    }
+    notify(&compiled.notices, quiet);
     Ok((file, compiled))
 }
 

@@ -75,9 +75,7 @@ pub(super) fn run(args: RenderArgs) -> anyhow::Result<()> {
     let file = karstic::scene::load(&args.tree)?;
     karstic::io::check_outputs(&file.inputs(), &outputs)?;
     let compiled = file.compile_with(args.budget.max_memory)?;
-    for n in &compiled.notices {
-        eprintln!("notice: {n}");
-    }
+    super::notify(&compiled.notices, args.quiet);
     let look = args
         .camera
         .as_deref()

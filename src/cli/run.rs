@@ -57,9 +57,7 @@ pub(super) fn run(args: RunArgs) -> anyhow::Result<()> {
         masks: args.masks,
     };
     let report = job::run(&args.tree, &opts)?;
-    for n in &report.notices {
-        eprintln!("notice: {n}");
-    }
+    super::notify(&report.notices, args.quiet);
     let r = &report.region;
     println!(
         "region [{:.0}, {:.0}, {:.0}]..[{:.0}, {:.0}, {:.0}] at {} m cells: {} vertices, {} triangles",

@@ -37,7 +37,7 @@ pub(super) struct SampleArgs {
 pub(super) fn run(args: SampleArgs) -> anyhow::Result<()> {
     let side = Sidecar::path_for(&args.output);
     let outputs = [&args.output, &side];
-    let field = load_tree(&args.tree, args.budget.max_memory, &outputs)?;
+    let field = load_tree(&args.tree, args.budget.max_memory, &outputs, args.quiet)?;
     let bbox = args
         .bbox
         .as_deref()

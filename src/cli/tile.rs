@@ -101,7 +101,7 @@ pub(super) fn run(args: TileArgs) -> anyhow::Result<()> {
 
 fn plan(a: PlanArgs) -> anyhow::Result<()> {
     let out = a.output.join(tiles::plan::PLAN_FILE);
-    let (file, compiled) = super::load_compiled(&a.tree, a.budget.max_memory, &[&out])?;
+    let (file, compiled) = super::load_compiled(&a.tree, a.budget.max_memory, &[&out], false)?;
     let tree = &compiled.tree;
     let job = file.scene.job.as_ref();
     let region = match (&a.bbox, a.job_region) {

@@ -51,13 +51,11 @@ pub(super) fn run(args: TinArgs) -> anyhow::Result<()> {
     let dem = if is_tree(&args.source) {
         // In the tree's frame, like the meshes of `karstic build`; the ring where the
         // implicit terrain ends has no top: triangulate inside it.
-        let made = tree_heightmap(&args.source, &args.grid, budget, &outputs)?;
+        let made = tree_heightmap(&args.source, &args.grid, budget, &outputs, args.quiet)?;
         let mut dem = made.dem;
         dem.heightfield = dem.heightfield.with_origin(made.origin);
         let dem = trim_nodata_border(dem);
-        for n in &dem.notices {
-            eprintln!("notice: {n}");
-        }
+        super::notify(&dem.notices, args.quiet);
         dem
     } else {
         anyhow::ensure!(
