@@ -711,3 +711,88 @@ fn the_fin_arch_scene_meshes_into_one_piece() {
         r.mesh.component_sizes()
     );
 }
+
+/// A carving landform fades inside its region and stops at its faces: every carving
+/// sphere's support lies inside the region, the spheres within a quarter of the fade band
+/// of a face keep at most 16% of the strongest energy in the core, and just outside the
+/// faces the field is the base's, bit for bit (the canyon and the sea notch stopped dead
+/// at the region's sides before).
+#[test]
+fn carving_landforms_fade_inside_their_region_and_stop_at_its_faces() {
+    use karstic::field::SkeletonSpec;
+    let mut sf = tree_scene("jacksboro_canyon.ron");
+    let l = root_landform(&mut sf).clone();
+    let r = l.region.expect("the canyon gives its region");
+    let region = Aabb::new(r.min.0, r.max.0);
+    let width = karstic::landform::fade_width(&region, l.cell.0);
+    let expanded = sf.expand().unwrap();
+    let mut carves: Vec<NodeSpec> = Vec::new();
+    expanded.root.walk(&mut |n, _| {
+        if n.name() == Some("canyon-carves") {
+            carves = n.children().into_iter().cloned().collect();
+        }
+    });
+    assert!(carves.len() > 100, "{} carves", carves.len());
+    let (mut core, mut band, mut in_band) = (0f32, 0f32, 0);
+    for n in &carves {
+        let NodeSpec::Primitive(p) = n else {
+            panic!("a carve is a {}", n.kind())
+        };
+        let SkeletonSpec::Point { center } = p.shape else {
+            panic!("a carve is not a sphere")
+        };
+        let c = center.0;
+        let inside = (c - region.min).min(region.max - c).min_element();
+        assert!(
+            p.falloff.0 <= inside + 1e-3,
+            "a sphere at {c} reaches past the faces"
+        );
+        let e = p.energy.0.abs();
+        if inside < 0.25 * width {
+            band = band.max(e);
+            in_band += 1;
+        } else if inside > width {
+            core = core.max(e);
+        }
+    }
+    assert!(
+        in_band > 0,
+        "no carve near the faces: the test shows nothing"
+    );
+    assert!(
+        band <= 0.16 * core,
+        "near the faces {band}, in the core {core}"
+    );
+    // Outside the faces, the field is the base's.
+    let tree = sf.compile().unwrap().tree;
+    let mut scene = sf.scene.clone();
+    scene.root = (*l.base).clone();
+    let base = SceneFile { scene, ..sf }.compile().unwrap().tree;
+    let mut checked = 0;
+    for k in 0..400 {
+        let t = (k as f32 + 0.5) / 400.0;
+        let (x, y) = match k % 4 {
+            0 => (
+                region.min.x - 0.5,
+                region.min.y + t * (region.max.y - region.min.y),
+            ),
+            1 => (
+                region.max.x + 0.5,
+                region.min.y + t * (region.max.y - region.min.y),
+            ),
+            2 => (
+                region.min.x + t * (region.max.x - region.min.x),
+                region.min.y - 0.5,
+            ),
+            _ => (
+                region.min.x + t * (region.max.x - region.min.x),
+                region.max.y + 0.5,
+            ),
+        };
+        let z = region.min.z + ((k * 37) % 100) as f32 / 100.0 * (region.max.z - region.min.z);
+        let p = Vec3::new(x, y, z);
+        assert_eq!(tree.value(p), base.value(p), "at {p}");
+        checked += 1;
+    }
+    assert_eq!(checked, 400);
+}

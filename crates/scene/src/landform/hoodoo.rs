@@ -23,7 +23,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::{Ground, LandformError, Poisson, solid};
+use super::{Ground, LandformError, Poisson, smoothstep, solid};
 use crate::analysis::flow::{drainage_area, fill_depressions};
 use crate::analysis::relief::slope;
 use crate::field::noise::Octaves;
@@ -79,11 +79,6 @@ fn inside(poly: &[P2], p: Vec2) -> bool {
         }
     }
     odd
-}
-
-fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
-    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
 }
 
 impl HoodooSpec {

@@ -203,6 +203,49 @@ pub fn point(center: Vec3, falloff: f32, energy: f32) -> NodeSpec {
     })
 }
 
+/// Hermite step from 0 at `a` to 1 at `b`.
+pub(crate) fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// The band inside a landform region's faces over which its carving fades in: four cells
+/// of its analysis grid, and at least 8% of the region's smaller horizontal side.
+pub fn fade_width(region: &Aabb, cell: f32) -> f32 {
+    let size = region.size();
+    (4.0 * cell).max(0.08 * size.x.min(size.y))
+}
+
+/// Carving spheres faded at the region's faces: a sphere whose centre lies `d` inside the
+/// nearest face keeps `smoothstep(0, width, d)` of its energy and a falloff of at most
+/// `d`, so the carving fades over `width` and nothing reaches beyond the faces (a sea
+/// notch or a canyon no longer stops dead at the region's side). Spheres left with less
+/// than a thousandth of their energy, or a falloff under a millimetre, are dropped;
+/// those wholly inside and past the band are kept as they were.
+pub fn fade_at_faces(primitives: Vec<NodeSpec>, region: &Aabb, width: f32) -> Vec<NodeSpec> {
+    primitives
+        .into_iter()
+        .filter_map(|n| {
+            let NodeSpec::Primitive(p) = &n else {
+                return Some(n);
+            };
+            let SkeletonSpec::Point { center } = p.shape else {
+                return Some(n);
+            };
+            let c = center.0;
+            let inside = (c - region.min).min(region.max - c).min_element();
+            let (falloff, energy) = (p.falloff.0, p.energy.0);
+            let w = smoothstep(0.0, width, inside);
+            if w >= 1.0 && falloff <= inside {
+                return Some(n);
+            }
+            let (falloff, energy) = (falloff.min(inside), energy * w);
+            (energy.abs() >= 1e-3 * p.energy.0.abs() && falloff >= 1e-3)
+                .then(|| point(c, falloff, energy))
+        })
+        .collect()
+}
+
 /// Poisson-disk acceptance in 3D: a point is taken only if no taken point lies closer
 /// than the spacing (a hash grid of cells of the spacing's side).
 pub struct Poisson {
@@ -252,6 +295,7 @@ impl Poisson {
 }
 
 /// How a generator's primitives join the base.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Joining {
     /// `Blend([base, Blend(carves)])`: negative spheres summed into the terrain.
     Carve,
@@ -291,7 +335,7 @@ pub struct Generated {
 impl LandformSpec {
     /// Runs the generator on `ground`.
     pub fn generate(&self, ground: &Ground) -> Result<Generated, LandformError> {
-        Ok(match &self.generator {
+        let mut generated = match &self.generator {
             GeneratorSpec::Karst(k) => Generated {
                 primitives: k.generate(ground)?,
                 joining: Joining::Carve,
@@ -312,7 +356,12 @@ impl LandformSpec {
                 primitives: a.generate(ground)?,
                 joining: Joining::Accrete,
             },
-        })
+        };
+        if generated.joining == Joining::Carve {
+            let width = fade_width(&ground.region, self.cell.0);
+            generated.primitives = fade_at_faces(generated.primitives, &ground.region, width);
+        }
+        Ok(generated)
     }
 
     /// The seed of the generator: the node's, mixed with the scene's.
