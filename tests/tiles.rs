@@ -499,3 +499,67 @@ fn a_slurm_job_array_gives_the_single_process_bytes() {
         "{text}"
     );
 }
+
+/// `tile merge` checks what it merges: a tile's mesh truncated (or deleted) since its run,
+/// and tiles run on different versions of an input (the DEM changed between two tasks of
+/// the array) are refused, naming the tile; run again, the tiles merge.
+#[test]
+fn merge_refuses_changed_meshes_and_mixed_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let asc = dir.path().join("dem.asc");
+    std::fs::copy(root().join("trees/data/jacksboro_crop.asc"), &asc).unwrap();
+    let tree = dir.path().join("t.ron");
+    std::fs::write(
+        &tree,
+        "(version: 1, root: Heightfield(source: \"dem.asc\", falloff: 60))",
+    )
+    .unwrap();
+    let tiles = dir.path().join("tiles");
+    let (t, d) = (tree.to_str().unwrap(), tiles.to_str().unwrap());
+    let (ok, out) = karstic(
+        &["tile", "plan", t, "-o", d, "--cell", "90", "--tile", "32"],
+        &[],
+    );
+    assert!(ok, "{out}");
+    let (ok, out) = karstic(&["tile", "run", d, "--all"], &[]);
+    assert!(ok, "{out}");
+    let (ok, out) = karstic(&["tile", "merge", d], &[]);
+    assert!(ok, "{out}");
+    // A mesh cut short after its run.
+    let glb = tiles.join("tiles/0/0_0.glb");
+    let bytes = std::fs::read(&glb).unwrap();
+    std::fs::write(&glb, &bytes[..bytes.len() / 2]).unwrap();
+    let (ok, out) = karstic(&["tile", "merge", d], &[]);
+    assert!(
+        !ok && out.contains("0_0.glb") && out.contains("run tile"),
+        "{out}"
+    );
+    std::fs::remove_file(&glb).unwrap();
+    let (ok, out) = karstic(&["tile", "merge", d], &[]);
+    assert!(!ok && out.contains("0_0.glb"), "{out}");
+    // The DEM raised by 50 m before one more task ran.
+    let raised: String = std::fs::read_to_string(&asc)
+        .unwrap()
+        .lines()
+        .enumerate()
+        .map(|(i, l)| match i < 6 {
+            true => format!("{l}\n"),
+            false => {
+                let v: Vec<String> = l
+                    .split_whitespace()
+                    .map(|v| format!("{}", v.parse::<f64>().unwrap() + 50.0))
+                    .collect();
+                format!("{}\n", v.join(" "))
+            }
+        })
+        .collect();
+    std::fs::write(&asc, raised).unwrap();
+    let (ok, out) = karstic(&["tile", "run", d, "--index", "0"], &[]);
+    assert!(ok, "{out}");
+    let (ok, out) = karstic(&["tile", "merge", d], &[]);
+    assert!(!ok && out.contains("different versions"), "{out}");
+    let (ok, out) = karstic(&["tile", "run", d, "--all"], &[]);
+    assert!(ok, "{out}");
+    let (ok, out) = karstic(&["tile", "merge", d], &[]);
+    assert!(ok, "{out}");
+}

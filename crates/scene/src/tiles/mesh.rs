@@ -38,6 +38,32 @@ pub struct TileSummary {
     pub min: [f32; 3],
     /// Maximum corner of the written mesh.
     pub max: [f32; 3],
+    /// Bytes of the written mesh file (0 without one).
+    pub mesh_bytes: u64,
+    /// FNV-1a hash of the written mesh file: the merge checks the file is the one this run
+    /// wrote (not deleted, truncated or replaced since).
+    pub mesh_hash: String,
+    /// FNV-1a hash of the contents of every file the tree reads (the tree, its DEMs and
+    /// curve files): tiles run on different versions of an input do not merge.
+    pub inputs: String,
+}
+
+/// The hash of the contents of `files`, in order (see [`TileSummary::inputs`]); a file
+/// that is not there (a sidecar a reader would have taken) counts as absent.
+pub fn inputs_hash(files: &[std::path::PathBuf]) -> anyhow::Result<String> {
+    let mut all = Vec::new();
+    for f in files {
+        match crate::io::read_regular(f, crate::io::DEFAULT_MEMORY_BUDGET) {
+            Ok(bytes) => all.extend_from_slice(super::plan::fnv1a(&bytes).as_bytes()),
+            Err(crate::io::IoError::Read { source, .. })
+                if source.kind() == std::io::ErrorKind::NotFound =>
+            {
+                all.extend_from_slice(b"absent")
+            }
+            Err(e) => return Err(e).with_context(|| format!("hashing the input {}", f.display())),
+        }
+    }
+    Ok(super::plan::fnv1a(&all))
 }
 
 /// The surface in `tile`'s core, meshed on its level's grid window: the triangles of the
@@ -189,6 +215,10 @@ pub fn run_tile(
         };
         export::write(&mesh, &glb, &opts)?;
     }
+    let written = match mesh.triangles.is_empty() {
+        true => Vec::new(),
+        false => crate::io::read_regular(&glb, crate::io::DEFAULT_MEMORY_BUDGET)?,
+    };
     let b = mesh.bounds();
     let (min, max) = if mesh.triangles.is_empty() {
         ([0.0; 3], [0.0; 3])
@@ -202,6 +232,9 @@ pub fn run_tile(
         triangles: mesh.triangles.len(),
         min,
         max,
+        mesh_bytes: written.len() as u64,
+        mesh_hash: super::plan::fnv1a(&written),
+        inputs: inputs_hash(&loaded.file.inputs())?,
     };
     let mut text = serde_json::to_string_pretty(&summary)?;
     text.push('\n');

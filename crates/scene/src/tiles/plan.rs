@@ -364,7 +364,7 @@ impl Plan {
 }
 
 /// FNV-1a 64-bit hash of `bytes`, as 16 hexadecimal digits.
-fn fnv1a(bytes: &[u8]) -> String {
+pub(crate) fn fnv1a(bytes: &[u8]) -> String {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for &b in bytes {
         h ^= u64::from(b);

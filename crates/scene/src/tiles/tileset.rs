@@ -59,6 +59,7 @@ pub fn read_summaries(dir: &Path, plan: &Plan) -> anyhow::Result<Vec<TileSummary
                         s.tile
                     );
                 }
+                check_tile(dir, &s, &path)?;
                 if s.plan != id {
                     stale.push(i);
                 }
@@ -71,6 +72,17 @@ pub fn read_summaries(dir: &Path, plan: &Plan) -> anyhow::Result<Vec<TileSummary
             }
             Err(e) => return Err(e).context(format!("tile {i}'s summary")),
         }
+    }
+    if let Some(first) = out.first()
+        && let Some(other) = out.iter().find(|s| s.inputs != first.inputs)
+    {
+        bail!(
+            "{}: tiles {} and {} were run on different versions of the tree's inputs (the tree, \
+             a DEM or a curves file changed between runs): run every tile again",
+            dir.display(),
+            first.tile.stem(),
+            other.tile.stem()
+        );
     }
     for (list, what) in [
         (&missing, "have not run"),
@@ -88,6 +100,34 @@ pub fn read_summaries(dir: &Path, plan: &Plan) -> anyhow::Result<Vec<TileSummary
         }
     }
     Ok(out)
+}
+
+/// Errors unless the tile summarised by `s` (read from `path`) can be merged: its bounds
+/// are finite numbers in order, and its mesh file is there, whole, the one its run wrote.
+fn check_tile(dir: &Path, s: &TileSummary, path: &Path) -> anyhow::Result<()> {
+    if s.triangles == 0 {
+        return Ok(());
+    }
+    let (min, max) = (Vec3::from(s.min), Vec3::from(s.max));
+    if !(min.is_finite() && max.is_finite() && min.cmple(max).all()) {
+        bail!(
+            "{}: the mesh's bounds {min} .. {max} are not a box",
+            path.display()
+        );
+    }
+    let glb = dir.join(s.tile.stem()).with_extension("glb");
+    let bytes = read_regular(&glb, crate::io::DEFAULT_MEMORY_BUDGET)
+        .with_context(|| format!("tile {}'s mesh", s.tile.stem()))?;
+    if bytes.len() as u64 != s.mesh_bytes || super::plan::fnv1a(&bytes) != s.mesh_hash {
+        bail!(
+            "{}: {} bytes, not the {} its run wrote (truncated or replaced since): run tile {} again",
+            glb.display(),
+            bytes.len(),
+            s.mesh_bytes,
+            s.tile.stem()
+        );
+    }
+    Ok(())
 }
 
 /// The first indices of `list`, with an ellipsis when there are more.
