@@ -114,3 +114,55 @@ fn refuses_what_it_cannot_do() {
     let (ok, _, err) = karstic(&["build", g, "-o", o]);
     assert!(!ok && err.contains("ball.json"), "{err}");
 }
+
+/// A section on a plane is one sample thick: `--res NX 1 NZ` over a box flat in y samples
+/// the plane (it was refused: "each axis needs at least 2 samples").
+#[test]
+fn samples_a_section_on_a_plane() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s.npy");
+    let tree = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/arch.ron");
+    let (ok, _, err) = karstic(&[
+        "sample",
+        tree.to_str().unwrap(),
+        "--box",
+        "-20",
+        "0",
+        "0",
+        "20",
+        "0",
+        "30",
+        "--res",
+        "41",
+        "1",
+        "31",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let side: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("s.json")).unwrap()).unwrap();
+    assert_eq!(side["shape"], serde_json::json!([31, 1, 41]));
+    assert_eq!(side["spacing"][1], 0.0);
+    let (ok, _, err) = karstic(&[
+        "sample",
+        tree.to_str().unwrap(),
+        "--box",
+        "-20",
+        "0",
+        "0",
+        "20",
+        "0",
+        "30",
+        "--res",
+        "41",
+        "2",
+        "31",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        !ok && err.contains("positive size on every axis of more than one sample"),
+        "{err}"
+    );
+}

@@ -10,26 +10,33 @@ use super::MeshError;
 use crate::field::{Aabb, Field, Grid, ISO, eval_grid};
 use crate::io::check_budget;
 
-/// `dims` samples spanning `b` corner to corner (each axis needs at least 2).
+/// `dims` samples spanning `b` corner to corner. An axis of one sample takes the box's
+/// middle on that axis, where the box may be flat: a section on a plane is
+/// `--box X0 Y Z0 X1 Y Z1 --res NX 1 NZ`.
 pub fn grid_spanning(b: &Aabb, dims: [usize; 3]) -> Result<Grid, MeshError> {
-    if dims.iter().any(|&d| d < 2) {
+    if dims.contains(&0) {
         return Err(MeshError::GridShape(format!(
-            "resolution {}×{}×{}: each axis needs at least 2 samples",
+            "resolution {}×{}×{}: each axis needs at least 1 sample",
             dims[0], dims[1], dims[2]
         )));
     }
-    super::grid::check_box(b)?;
     let size = b.size();
-    let steps = Vec3::new(
-        dims[0] as f32 - 1.0,
-        dims[1] as f32 - 1.0,
-        dims[2] as f32 - 1.0,
-    );
-    Ok(Grid {
-        origin: b.min,
-        step: size / steps,
-        dims,
-    })
+    let spans = (0..3).all(|a| dims[a] == 1 || size[a] > 0.0);
+    if !(b.min.is_finite() && b.max.is_finite() && b.min.cmple(b.max).all() && spans) {
+        return Err(MeshError::GridShape(format!(
+            "box {} .. {}: expected a finite box with a positive size on every axis of more \
+             than one sample",
+            b.min, b.max
+        )));
+    }
+    let (mut origin, mut step) = (b.min, Vec3::ZERO);
+    for a in 0..3 {
+        match dims[a] {
+            1 => origin[a] = 0.5 * (b.min[a] + b.max[a]),
+            n => step[a] = size[a] / (n - 1) as f32,
+        }
+    }
+    Ok(Grid { origin, step, dims })
 }
 
 /// The values of `field` on `grid` ([`eval_grid`]: x fastest, then y, then z), refused
@@ -134,7 +141,13 @@ mod tests {
         let s = Sidecar::new(&spec);
         assert_eq!(s.shape, [5, 2, 3]);
         assert_eq!(s.spec(), spec);
-        assert!(grid_spanning(&spec_box(), [1, 2, 2]).is_err());
+        assert!(grid_spanning(&spec_box(), [0, 2, 2]).is_err());
+        // One sample on an axis: the box's middle there, a flat box allowed.
+        let plane = grid_spanning(&spec_box(), [1, 2, 2]).unwrap();
+        assert_eq!((plane.origin.x, plane.step.x), (0.5, 0.0));
+        let flat = Aabb::new(Vec3::new(0.0, 2.0, 0.0), Vec3::new(1.0, 2.0, 1.0));
+        assert_eq!(grid_spanning(&flat, [2, 1, 2]).unwrap().origin.y, 2.0);
+        assert!(grid_spanning(&flat, [2, 2, 2]).is_err());
     }
 
     fn spec_box() -> Aabb {
