@@ -187,7 +187,7 @@ fn outputs_never_overwrite_inputs() {
     let before = std::fs::read(&asc).unwrap();
     for out in ["d.asc", "./d.asc"] {
         let out = dir.path().join(out);
-        let (ok, err) = karstic(&["dem", "convert", s(&asc), s(&out)]);
+        let (ok, err) = karstic(&["dem", "convert", s(&asc), "-o", s(&out)]);
         assert!(!ok && err.contains("refusing to overwrite"), "{err}");
         assert_eq!(std::fs::read(&asc).unwrap(), before);
     }
@@ -346,7 +346,13 @@ fn data_file_errors_do_not_echo_content() {
         dir.path().join("x.asc"),
     )
     .unwrap();
-    let (ok, err) = karstic(&["dem", "convert", s(&dir.path().join("x.asc")), s(&png)]);
+    let (ok, err) = karstic(&[
+        "dem",
+        "convert",
+        s(&dir.path().join("x.asc")),
+        "-o",
+        s(&png),
+    ]);
     assert!(ok, "{err}");
     std::fs::write(
         png.with_extension("json"),

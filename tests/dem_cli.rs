@@ -49,6 +49,7 @@ fn convert_resamples_and_writes_readable_files() {
         "dem",
         "convert",
         "../shared/data/dem/jacksboro_utm16n_90m.tif",
+        "-o",
         png_s,
         "--resample",
         "30",

@@ -71,6 +71,7 @@ pub(super) struct ConvertArgs {
     /// Input DEM.
     input: PathBuf,
     /// Output DEM (.tif float32 GeoTIFF, .png 16-bit + .json sidecar, .asc ESRI grid).
+    #[arg(short, long)]
     output: PathBuf,
     /// Resample to square cells of this size in metres.
     #[arg(long, value_name = "METRES")]

@@ -131,7 +131,9 @@ fn load_compiled(
 ) -> anyhow::Result<(karstic::scene::SceneFile, karstic::compile::Compiled)> {
     let file = karstic::scene::load(path)?;
     karstic::io::check_outputs(&file.inputs(), outputs)?;
+    let working = karstic::io::spinner("compiling", quiet);
     let compiled = file.compile_with(budget)?;
+    working.finish_and_clear();
     notify(&compiled.notices, quiet);
     Ok((file, compiled))
 }

@@ -74,7 +74,9 @@ pub(super) fn run(args: RenderArgs) -> anyhow::Result<()> {
     Frame::check_budget(w, h, args.budget.max_memory)?;
     let file = karstic::scene::load(&args.tree)?;
     karstic::io::check_outputs(&file.inputs(), &outputs)?;
+    let working = karstic::io::spinner("compiling", args.quiet);
     let compiled = file.compile_with(args.budget.max_memory)?;
+    working.finish_and_clear();
     super::notify(&compiled.notices, args.quiet);
     let look = args
         .camera

@@ -13,8 +13,13 @@ use karstic::mesh::export::Origin;
 pub(super) struct RunArgs {
     /// Tree file; its `job` section says what region, cell size and camera to use.
     tree: PathBuf,
-    /// Output folder.
-    #[arg(short, long, default_value = "out")]
+    /// Output folder (`--out` is an older name of the flag).
+    #[arg(
+        short = 'o',
+        long = "output",
+        visible_alias = "out",
+        default_value = "out"
+    )]
     out: PathBuf,
     /// Mesh the whole scene at the job's coarse cell size (`full_cell`).
     #[arg(long)]

@@ -77,14 +77,11 @@ fn mesh_with_bar(
     what: &'static str,
 ) -> anyhow::Result<(Mesh, MeshStats)> {
     let opts = MeshOptions {
-        progress: (!quiet).then(|| progress(0, "", false)),
+        progress: (!quiet)
+            .then(|| progress(crate::mesh::polygonize::progress_steps(grid), what, false)),
         budget,
         ..MeshOptions::default()
     };
-    if let Some(b) = &opts.progress {
-        b.set_length(crate::mesh::polygonize::progress_steps(grid));
-        b.set_message(what);
-    }
     let out = polygonize(tree, grid, &opts)?;
     if let Some(b) = &opts.progress {
         b.finish_and_clear();
@@ -133,7 +130,9 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
     let t = Instant::now();
     let file: SceneFile = scene::load(path)?;
     crate::io::check_outputs(&file.inputs(), &outputs(path, &file, opts))?;
+    let working = crate::io::spinner("compiling", opts.quiet);
     let compiled = file.compile_with(opts.budget)?;
+    working.finish_and_clear();
     stages.push(("load + compile", t.elapsed()));
     let tree = compiled.tree;
     let ground = compiled.ground;

@@ -226,6 +226,25 @@ pub fn human_bytes(b: u64) -> String {
     }
 }
 
+/// A spinner saying `message` while work of unknown length runs (compiling a tree: DEMs
+/// read, landforms generated, Feature Volumes built), drawn like [`progress`] bars: on a
+/// terminal's standard error, not when piped or `quiet`.
+pub fn spinner(message: &str, quiet: bool) -> ProgressBar {
+    let target = if quiet {
+        ProgressDrawTarget::hidden()
+    } else {
+        ProgressDrawTarget::stderr()
+    };
+    let bar = ProgressBar::with_draw_target(None, target);
+    bar.set_style(
+        ProgressStyle::with_template("{msg:>12} {spinner} {elapsed_precise}")
+            .expect("static template"),
+    );
+    bar.set_message(message.to_string());
+    bar.enable_steady_tick(std::time::Duration::from_millis(120));
+    bar
+}
+
 /// A progress bar over `len` steps that draws only on a terminal and never with `quiet`.
 pub fn progress(len: u64, message: &str, quiet: bool) -> ProgressBar {
     let target = if quiet {
