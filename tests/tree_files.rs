@@ -556,3 +556,44 @@ fn a_feature_wholly_outside_its_domain_is_an_error() {
         "{e}"
     );
 }
+
+/// The Feature Volume memo is keyed by what the volume is built from, contents included:
+/// a curves file edited in place (same length, its modification time put back) gives
+/// the edited volume, not the one built before (the key was the file's time and length).
+#[test]
+fn a_curves_file_edited_in_place_rebuilds_its_volume() {
+    let dir = tempfile::tempdir().unwrap();
+    let curves = dir.path().join("c.ron");
+    let set = |w: u32| {
+        format!(
+            "(tunnels: [(name: \"main\", path: [Abs(-12, 30, 30), Abs(60, 30, 30), \
+             Abs(139, 32, 30)], width: Const({w}), height: Const(10))])"
+        )
+    };
+    std::fs::write(&curves, set(12)).unwrap();
+    let tree = dir.path().join("t.ron");
+    std::fs::write(
+        &tree,
+        "(version: 1, seed: 3, root: FeatureVolume(name: \"v\", curves: Path(\"c.ron\"), \
+         domain: ((0, 0, 0), (127, 63, 63)), voxel: 1.0))",
+    )
+    .unwrap();
+    let value = || {
+        let t = scene::load(&tree).unwrap().compile().unwrap().tree;
+        karstic::field::Field::value(&t, glam::Vec3::new(60.0, 36.5, 30.0))
+    };
+    let before = value();
+    let stamp = std::fs::metadata(&curves).unwrap().modified().unwrap();
+    std::fs::write(&curves, set(16)).unwrap();
+    std::fs::File::options()
+        .write(true)
+        .open(&curves)
+        .unwrap()
+        .set_modified(stamp)
+        .unwrap();
+    let after = value();
+    assert_ne!(
+        before, after,
+        "the memo served the volume of the file as it was"
+    );
+}

@@ -9,6 +9,7 @@ use std::sync::Mutex;
 
 use glam::{Affine3A, Quat, Vec3};
 
+use crate::scene::load::to_ron_text;
 use crate::scene::spec::{Nary, NodeSpec, Scene};
 use crate::scene::{SceneError, SceneFile};
 use std::sync::Arc;
@@ -23,6 +24,7 @@ use crate::landform::Ground;
 use crate::scene::{DemCache, HeightfieldSpec};
 use crate::voxel::FeatureVolumeSpec;
 use crate::voxel::SField;
+use crate::voxel::cache::content_hash;
 use crate::voxel::spec::BuildOptions;
 use crate::voxel::spec::CurveSource;
 
@@ -49,22 +51,23 @@ pub struct Compiled {
 /// a compile even when their voxels come from the pipeline's cache (the terrain sampled
 /// under them, the cache key, the tricubic bounds), seldom change. An [`SField`] shares
 /// its grids: a copy is cheap.
-static VOLUMES: Mutex<Vec<(String, SField)>> = Mutex::new(Vec::new());
+static VOLUMES: Mutex<Vec<(u64, SField)>> = Mutex::new(Vec::new());
 
 /// Volumes kept in [`VOLUMES`].
 const VOLUME_MEMO: usize = 8;
 
-/// What a Feature Volume is built from: its node's text, the noise seed, the memory
-/// budget, the folder of its curve file, the terrain's node and the scene's seed (the
-/// `Ground(..)` points and the boundary conditions read the terrain), and the
-/// modification times and lengths of the files these read.
+/// What a Feature Volume is built from, hashed: its node in the file format's canonical
+/// text, the noise seed, the memory budget, the folder of its curve file, the terrain's
+/// node and the scene's seed (the `Ground(..)` points and the boundary conditions read
+/// the terrain), and the contents of the files these read (a file not there counts as
+/// absent). Two builds with the same key give the same volume.
 fn volume_key(
     f: &FeatureVolumeSpec,
     seed: u32,
     max_memory: u64,
     base_dir: &Path,
     terrain: Option<(&HeightfieldSpec, u32)>,
-) -> String {
+) -> u64 {
     let mut files: Vec<PathBuf> = Vec::new();
     if let CurveSource::Path(p) = &f.curves {
         files.push(base_dir.join(p));
@@ -75,17 +78,27 @@ fn volume_key(
             &crate::dem::ReadOptions::default(),
         ));
     }
-    let stamps: Vec<_> = files
+    let contents: Vec<Vec<u8>> = files
         .iter()
-        .map(|p| {
-            let m = std::fs::metadata(p).ok();
-            (
-                m.as_ref().and_then(|m| m.modified().ok()),
-                m.map(|m| m.len()),
-            )
-        })
+        .map(
+            |p| match crate::io::read_regular(p, crate::io::DEFAULT_MEMORY_BUDGET) {
+                Ok(bytes) => content_hash(&[&bytes]).to_le_bytes().to_vec(),
+                Err(_) => b"absent".to_vec(),
+            },
+        )
         .collect();
-    format!("{f:?} {seed} {max_memory} {base_dir:?} {terrain:?} {files:?} {stamps:?}")
+    let spec = to_ron_text(f);
+    let terrain_text = terrain.map_or(String::new(), |(t, s)| format!("{} {s}", to_ron_text(t)));
+    let (seed, max_memory) = (seed.to_le_bytes(), max_memory.to_le_bytes());
+    let mut parts: Vec<&[u8]> = vec![
+        spec.as_bytes(),
+        &seed,
+        &max_memory,
+        base_dir.as_os_str().as_encoded_bytes(),
+        terrain_text.as_bytes(),
+    ];
+    parts.extend(contents.iter().map(Vec::as_slice));
+    content_hash(&parts)
 }
 
 /// The node of `scene`'s terrain heightfield (its `terrain`, or its only `Heightfield`),

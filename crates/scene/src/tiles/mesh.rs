@@ -40,10 +40,10 @@ pub struct TileSummary {
     pub max: [f32; 3],
     /// Bytes of the written mesh file (0 without one).
     pub mesh_bytes: u64,
-    /// FNV-1a hash of the written mesh file: the merge checks the file is the one this run
+    /// Content hash of the written mesh file: the merge checks the file is the one this run
     /// wrote (not deleted, truncated or replaced since).
     pub mesh_hash: String,
-    /// FNV-1a hash of the contents of every file the tree reads (the tree, its DEMs and
+    /// Content hash of the contents of every file the tree reads (the tree, its DEMs and
     /// curve files): tiles run on different versions of an input do not merge.
     pub inputs: String,
 }
@@ -54,7 +54,7 @@ pub fn inputs_hash(files: &[std::path::PathBuf]) -> anyhow::Result<String> {
     let mut all = Vec::new();
     for f in files {
         match crate::io::read_regular(f, crate::io::DEFAULT_MEMORY_BUDGET) {
-            Ok(bytes) => all.extend_from_slice(super::plan::fnv1a(&bytes).as_bytes()),
+            Ok(bytes) => all.extend_from_slice(super::plan::hash_hex(&bytes).as_bytes()),
             Err(crate::io::IoError::Read { source, .. })
                 if source.kind() == std::io::ErrorKind::NotFound =>
             {
@@ -63,7 +63,7 @@ pub fn inputs_hash(files: &[std::path::PathBuf]) -> anyhow::Result<String> {
             Err(e) => return Err(e).with_context(|| format!("hashing the input {}", f.display())),
         }
     }
-    Ok(super::plan::fnv1a(&all))
+    Ok(super::plan::hash_hex(&all))
 }
 
 /// The surface in `tile`'s core, meshed on its level's grid window: the triangles of the
@@ -233,7 +233,7 @@ pub fn run_tile(
         min,
         max,
         mesh_bytes: written.len() as u64,
-        mesh_hash: super::plan::fnv1a(&written),
+        mesh_hash: super::plan::hash_hex(&written),
         inputs: inputs_hash(&loaded.file.inputs())?,
     };
     let mut text = serde_json::to_string_pretty(&summary)?;

@@ -114,7 +114,7 @@ impl Plan {
         let mut plan = Plan {
             version: PLAN_VERSION,
             tree,
-            tree_hash: fnv1a(&bytes),
+            tree_hash: hash_hex(&bytes),
             region_min: region.min.to_array(),
             region_max: region.max.to_array(),
             tile_cells,
@@ -290,7 +290,7 @@ impl Plan {
     /// A hash of the plan (FNV-1a of its JSON): the tiles' summaries carry it, so the merge
     /// never mixes tiles of an earlier plan written to the same folder.
     pub fn id(&self) -> String {
-        fnv1a(serde_json::to_string(self).unwrap_or_default().as_bytes())
+        hash_hex(serde_json::to_string(self).unwrap_or_default().as_bytes())
     }
 
     /// Position of `tile` in [`Plan::tiles`].
@@ -352,7 +352,7 @@ impl Plan {
                 plan.tree.display()
             )
         })?;
-        if fnv1a(&tree) != plan.tree_hash {
+        if hash_hex(&tree) != plan.tree_hash {
             bail!(
                 "{}: the tree {} changed since it was planned; plan again",
                 path.display(),
@@ -363,14 +363,10 @@ impl Plan {
     }
 }
 
-/// FNV-1a 64-bit hash of `bytes`, as 16 hexadecimal digits.
-pub(crate) fn fnv1a(bytes: &[u8]) -> String {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &b in bytes {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    }
-    format!("{h:016x}")
+/// The content hash of `bytes` ([`crate::voxel::cache::content_hash`]), as 16
+/// hexadecimal digits.
+pub(crate) fn hash_hex(bytes: &[u8]) -> String {
+    format!("{:016x}", crate::voxel::cache::content_hash(&[bytes]))
 }
 
 #[cfg(test)]

@@ -118,7 +118,7 @@ fn check_tile(dir: &Path, s: &TileSummary, path: &Path) -> anyhow::Result<()> {
     let glb = dir.join(s.tile.stem()).with_extension("glb");
     let bytes = read_regular(&glb, crate::io::DEFAULT_MEMORY_BUDGET)
         .with_context(|| format!("tile {}'s mesh", s.tile.stem()))?;
-    if bytes.len() as u64 != s.mesh_bytes || super::plan::fnv1a(&bytes) != s.mesh_hash {
+    if bytes.len() as u64 != s.mesh_bytes || super::plan::hash_hex(&bytes) != s.mesh_hash {
         bail!(
             "{}: {} bytes, not the {} its run wrote (truncated or replaced since): run tile {} again",
             glb.display(),
