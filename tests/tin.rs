@@ -144,11 +144,9 @@ fn a_zero_bound_keeps_every_grid_point_that_is_off_a_plane() {
 }
 
 #[test]
-fn voids_and_bad_bounds_are_errors() {
-    let mut z = vec![1.0f32; 16];
-    z[5] = f32::NAN;
-    let hf = Heightfield::new(4, 4, Vec2::ZERO, Vec2::ONE, z).unwrap();
-    assert!(matches!(greedy(&hf, 1.0, BUDGET), Err(TinError::NoData(1))));
+fn empty_grids_and_bad_bounds_are_errors() {
+    let hf = Heightfield::new(4, 4, Vec2::ZERO, Vec2::ONE, vec![f32::NAN; 16]).unwrap();
+    assert!(matches!(greedy(&hf, 1.0, BUDGET), Err(TinError::NoData)));
     let hf = procedural(5, 5);
     for e in [-1.0, f64::NAN, f64::INFINITY] {
         assert!(
@@ -219,4 +217,71 @@ fn cli_writes_a_valid_gltf_tin_of_a_dem_and_of_a_tree() {
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("--cell"), "{err}");
+}
+
+/// A DEM with nodata (the bundled UTM DEM's rotated edges: 6,742 void samples) is
+/// triangulated over its valid area: no vertex in a void, no triangle over a void sample,
+/// the bound held at every valid grid point it covers, and every valid point whose 3 × 3
+/// neighbourhood is valid covered (it refused: "a TIN needs every grid point").
+#[test]
+fn a_dem_with_voids_is_triangulated_over_its_valid_area() {
+    let d = dem::read(
+        std::path::Path::new("../shared/data/dem/jacksboro_utm16n_90m.tif"),
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    let hf = &d.heightfield;
+    assert!(hf.nodata_count() > 1000);
+    let tin = greedy(hf, 5.0, BUDGET).unwrap();
+    let (lo, hi) = hf.z_range().unwrap();
+    assert!(tin.positions.iter().all(|p| (lo..=hi).contains(&p[2])));
+    let (nx, ny) = (hf.nx(), hf.ny());
+    let (o, c) = (hf.origin(), hf.cell());
+    let mut covered = vec![false; nx * ny];
+    for t in &tin.triangles {
+        let p = t.map(|v| tin.positions[v as usize]);
+        let g = p.map(|q| Vec2::new((q[0] - o.x) / c.x, (q[1] - o.y) / c.y));
+        let (i0, i1) = (
+            g.iter().map(|v| v.x).fold(f32::MAX, f32::min),
+            g.iter().map(|v| v.x).fold(f32::MIN, f32::max),
+        );
+        let (j0, j1) = (
+            g.iter().map(|v| v.y).fold(f32::MAX, f32::min),
+            g.iter().map(|v| v.y).fold(f32::MIN, f32::max),
+        );
+        let area = (g[1] - g[0]).perp_dot(g[2] - g[0]);
+        for j in j0.round() as usize..=j1.round() as usize {
+            for i in i0.round() as usize..=i1.round() as usize {
+                let q = Vec2::new(i as f32, j as f32);
+                let w = [
+                    (g[2] - g[1]).perp_dot(q - g[1]) / area,
+                    (g[0] - g[2]).perp_dot(q - g[2]) / area,
+                    (g[1] - g[0]).perp_dot(q - g[0]) / area,
+                ];
+                if w.iter().any(|&w| w < -1e-4) {
+                    continue;
+                }
+                let h = hf.at(i, j);
+                assert!(!h.is_nan(), "a triangle covers the void sample ({i}, {j})");
+                let z = w[0] * p[0][2] + w[1] * p[1][2] + w[2] * p[2][2];
+                assert!((z - h).abs() <= 5.0 + 1e-2, "({i}, {j}): {z} against {h}");
+                covered[i + nx * j] = true;
+            }
+        }
+    }
+    let inner = |i: usize, j: usize| {
+        i > 0
+            && j > 0
+            && i + 1 < nx
+            && j + 1 < ny
+            && (j - 1..=j + 1).all(|b| (i - 1..=i + 1).all(|a| !hf.at(a, b).is_nan()))
+    };
+    let missed = (0..ny)
+        .flat_map(|j| (0..nx).map(move |i| (i, j)))
+        .filter(|&(i, j)| inner(i, j) && !covered[i + nx * j])
+        .count();
+    assert_eq!(
+        missed, 0,
+        "valid points inside the valid area left uncovered"
+    );
 }

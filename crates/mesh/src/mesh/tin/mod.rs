@@ -12,6 +12,13 @@
 //! removed, when now within the bound) in place, so every pop is a live triangle. The loop
 //! stops when the largest error left is at most the bound, so the TIN is within the bound
 //! at every grid point.
+//!
+//! A grid with nodata (a DEM's rotated edges, voids) is triangulated over its valid area:
+//! the voids are filled far below the lowest valid sample ([`VOID_DROP`]), so any triangle
+//! reaching from valid ground into a void is far off at the valid points it covers and is
+//! refined until the triangles over valid points have valid corners only; the triangles
+//! with a corner in a void are then dropped. The TIN is within the bound at every valid
+//! grid point, and covers every valid point that has a valid neighbour across a cell.
 
 mod delaunay;
 mod queue;
@@ -31,11 +38,9 @@ pub enum TinError {
     /// The bound is negative or not a number.
     #[error("the maximum error must be a finite number ≥ 0 metres, got {0}")]
     Bound(f64),
-    /// The heightfield has nodata samples.
-    #[error(
-        "the heightfield has {0} nodata samples: a TIN needs every grid point (fill the voids first)"
-    )]
-    NoData(usize),
+    /// Every sample is nodata.
+    #[error("the heightfield has no valid sample: nothing to triangulate")]
+    NoData,
     /// The triangulation would exceed the memory budget.
     #[error(transparent)]
     Budget(#[from] crate::io::IoError),
@@ -49,6 +54,12 @@ pub enum TinError {
 /// few per triangle), and room for the vectors' growth.
 const BYTES_PER_VERTEX: u64 = 256;
 
+/// How far below the lowest valid sample nodata samples are set while triangulating: far
+/// enough that a triangle with a corner in a void is off by more than any bound at the
+/// valid points strictly inside it, near enough for f32 heights to stay exact to a
+/// centimetre.
+pub const VOID_DROP: f32 = 1.0e5;
+
 /// A triangulated irregular network over a heightfield's grid points.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tin {
@@ -61,6 +72,39 @@ pub struct Tin {
 }
 
 impl Tin {
+    /// The TIN without its triangles that have a corner in a void (a vertex set
+    /// [`VOID_DROP`] below the valid ground), vertices renumbered.
+    fn without_voids(self) -> Tin {
+        let lo = self
+            .positions
+            .iter()
+            .map(|p| p[2])
+            .fold(f32::INFINITY, f32::min);
+        // Valid heights lie above the fill by about VOID_DROP; voids at the fill.
+        let void = |v: u32| self.positions[v as usize][2] < lo + 0.5 * VOID_DROP;
+        let mut index = vec![u32::MAX; self.positions.len()];
+        let mut positions = Vec::new();
+        let triangles = self
+            .triangles
+            .iter()
+            .filter(|t| !t.iter().any(|&v| void(v)))
+            .map(|t| {
+                t.map(|v| {
+                    if index[v as usize] == u32::MAX {
+                        index[v as usize] = positions.len() as u32;
+                        positions.push(self.positions[v as usize]);
+                    }
+                    index[v as usize]
+                })
+            })
+            .collect();
+        Tin {
+            positions,
+            triangles,
+            max_error: self.max_error,
+        }
+    }
+
     /// The TIN as a mesh with area-weighted vertex normals (pointing up).
     pub fn to_mesh(&self) -> Mesh {
         let pos = |v: u32| Vec3::from(self.positions[v as usize]);
@@ -90,10 +134,14 @@ pub fn greedy(hf: &Heightfield, max_error: f64, budget: u64) -> Result<Tin, TinE
     if !(max_error >= 0.0 && max_error.is_finite()) {
         return Err(TinError::Bound(max_error));
     }
-    let nodata = hf.nodata_count();
-    if nodata > 0 {
-        return Err(TinError::NoData(nodata));
-    }
+    let (lo, _) = hf.z_range().ok_or(TinError::NoData)?;
+    let filled: Option<Vec<f32>> = (hf.nodata_count() > 0).then(|| {
+        hf.samples()
+            .iter()
+            .map(|&z| if z.is_nan() { lo - VOID_DROP } else { z })
+            .collect()
+    });
+    let h = filled.as_deref().unwrap_or(hf.samples());
     let (nx, ny) = (hf.nx(), hf.ny());
     let points = nx as u64 * ny as u64;
     crate::io::check_budget(
@@ -109,9 +157,9 @@ pub fn greedy(hf: &Heightfield, max_error: f64, budget: u64) -> Result<Tin, TinE
         dt: Triangulation::rectangle(
             nx as i32 - 1,
             ny as i32 - 1,
-            [(0, 0), (nx - 1, 0), (nx - 1, ny - 1), (0, ny - 1)].map(|(i, j)| hf.at(i, j)),
+            [(0, 0), (nx - 1, 0), (nx - 1, ny - 1), (0, ny - 1)].map(|(i, j)| h[i + nx * j]),
         ),
-        h: hf.samples(),
+        h,
         nx,
         max_error,
         worst: Vec::new(),
@@ -119,7 +167,11 @@ pub fn greedy(hf: &Heightfield, max_error: f64, budget: u64) -> Result<Tin, TinE
         scanner: Scanner::default(),
     };
     g.run();
-    Ok(g.into_tin(hf))
+    let tin = g.into_tin(hf);
+    Ok(match filled {
+        Some(_) => tin.without_voids(),
+        None => tin,
+    })
 }
 
 /// A queue entry: the triangle's error (as f32 bits, which order like the numbers for

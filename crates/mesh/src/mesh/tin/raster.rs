@@ -142,7 +142,11 @@ impl Scanner {
         let mut worst = Worst::default();
         for k in 0..rows {
             let m = self.most[k];
-            if !m.cmpge(floor).any() || f64::from(m.max_element()) + slack <= worst.error {
+            // A row the triangle misses holds no point (its `most` is only a marker).
+            if hi[k] < lo[k]
+                || !m.cmpge(floor).any()
+                || f64::from(m.max_element()) + slack <= worst.error
+            {
                 continue;
             }
             let y = (v0[1] + k as i64) as f64;
