@@ -20,7 +20,8 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::{Aabb, Interval, Transition};
+use super::bounds::{Aabb, Interval};
+use super::replace::Transition;
 
 /// Rock resistance `ρ(p) ∈ [0, 1]` (Paris et al. 2019 §4): 0 the softest rock, 1 the
 /// hardest, with the bounds the erosion node needs. The field defines it; a geology

@@ -4,9 +4,9 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Mat3A};
 
-use super::Erosion;
 use super::bvh::ChildBvh;
 use super::contract::Field;
+use super::erode::Erosion;
 use super::primitive::Primitive;
 use super::replace::Transition;
 use super::warp::Warp;

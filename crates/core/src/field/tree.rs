@@ -4,10 +4,10 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Vec2, Vec3};
 
-use super::Erosion;
 use super::bounds::{Aabb, Interval, Rect, ZBands};
 use super::bvh::{BVH_MIN_CHILDREN, ChildBvh};
 use super::contract::{Elevation, Field};
+use super::erode::Erosion;
 use super::falloff::ISO;
 use super::node::{Node, NodeId, spectral_norm};
 use super::primitive::{Primitive, Round};
