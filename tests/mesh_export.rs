@@ -351,3 +351,38 @@ fn obj_and_ply_layouts() {
     );
     assert!(!dir.path().join("missing").exists());
 }
+
+/// OBJ vertex colours are written as importers read them, sRGB-encoded, the same bytes'
+/// worth as PLY's (linear values made the OBJ terrain about 3× too dark in Blender beside
+/// the same glTF or PLY).
+#[test]
+fn obj_vertex_colours_are_srgb_like_ply() {
+    let mesh = terrain_mesh();
+    let dir = tempfile::tempdir().unwrap();
+    let opts = ExportOptions {
+        albedo: Some(std::sync::Arc::new(Materials::for_scene(
+            &mesh.bounds(),
+            None,
+        ))),
+        ..ExportOptions::default()
+    };
+    let obj = dir.path().join("t.obj");
+    export::write(&mesh, &obj, &opts).unwrap();
+    let text = std::fs::read_to_string(&obj).unwrap();
+    let albedo = opts.albedo.as_deref().unwrap();
+    let mut checked = 0;
+    for (i, line) in text.lines().filter(|l| l.starts_with("v ")).enumerate() {
+        let v: Vec<f32> = line[2..].split(' ').map(|x| x.parse().unwrap()).collect();
+        let linear = albedo.albedo(mesh.positions[i].into(), mesh.normals[i].into());
+        for k in 0..3 {
+            let want = linear[k].clamp(0.0, 1.0).powf(1.0 / 2.2);
+            assert!(
+                (v[3 + k] - want).abs() < 1e-5,
+                "vertex {i}: {} against {want}",
+                v[3 + k]
+            );
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, mesh.positions.len());
+}

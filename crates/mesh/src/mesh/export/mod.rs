@@ -221,6 +221,13 @@ pub fn written_files(path: &Path) -> Result<Vec<PathBuf>, ExportError> {
     Ok(files)
 }
 
+/// A linear colour channel in `[0, 1]` encoded for display (gamma 2.2, sRGB's
+/// approximation): how OBJ and PLY vertex colours are written, since Blender, MeshLab and
+/// trimesh read them as sRGB (glTF's COLOR_0 stays linear, as its specification says).
+pub(crate) fn display_encoded(c: f32) -> f32 {
+    c.clamp(0.0, 1.0).powf(1.0 / 2.2)
+}
+
 /// karstic's Z-up `(x, y, z)` as Y-up `(x, z, −y)`.
 #[inline]
 pub fn to_y_up(p: [f32; 3]) -> [f32; 3] {

@@ -1,6 +1,6 @@
 //! Wavefront OBJ export (text, Y-up like glTF) with its material library: `v` (with
 //! `r g b` vertex colours when asked for, the extension Blender, MeshLab and trimesh
-//! read), `vt` (planar UVs, OBJ's `v` up), `vn`, and `f v/vt/vn` lines using the material
+//! read, as sRGB: written display-encoded like PLY's), `vt` (planar UVs, OBJ's `v` up), `vn`, and `f v/vt/vn` lines using the material
 //! `terrain` of the `.mtl` beside it.
 
 use std::path::{Path, PathBuf};
@@ -45,7 +45,7 @@ pub fn write_obj(mesh: &Mesh, path: &Path, opts: &ExportOptions) -> Result<(), E
             let [x, y, z] = to_y_up(q);
             match &p.colors {
                 Some(c) => {
-                    let [r, g, b] = c[i];
+                    let [r, g, b] = c[i].map(super::display_encoded);
                     writeln!(w, "v {x} {y} {z} {r} {g} {b}")?;
                 }
                 None => writeln!(w, "v {x} {y} {z}")?,

@@ -50,7 +50,7 @@ pub fn write_ply(mesh: &Mesh, path: &Path, opts: &ExportOptions) -> Result<(), E
             }
             if let Some(c) = &p.colors {
                 // Linear colour to 8-bit sRGB.
-                rec.extend(c[i].map(|x| (x.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0).round() as u8));
+                rec.extend(c[i].map(|x| (super::display_encoded(x) * 255.0).round() as u8));
             }
             let [s, t] = p.uvs[i];
             for v in [s, 1.0 - t] {
