@@ -233,7 +233,7 @@ fn leaf(tree: &Tree, b: &mut TapeBuilder, id: NodeId, f: &dyn Field) -> Result<(
             tree,
             id,
             "elevation tree",
-            "elevation trees have no GPU encoding: the CPU renders them",
+            "the tape encodes DEM rasters, not 2.5D elevation trees",
         ));
     }
     Err(no_encoding(
