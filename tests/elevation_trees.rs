@@ -405,7 +405,12 @@ fn the_gpu_tape_names_the_elevation_leaf_and_the_scene_renders_on_the_cpu() {
     let e = karstic::tape::tape_from_tree(&compiled.tree)
         .unwrap_err()
         .to_string();
-    assert!(e.contains("elevation tree") && e.contains("CPU"), "{e}");
+    assert!(
+        e.contains("elevation tree")
+            && e.contains("has no GPU encoding")
+            && !e.contains("no GPU encoding: elevation"),
+        "{e}"
+    );
 }
 
 /// The compound bounds above are loose (noise octaves at their proven slope, the warp's
