@@ -8,6 +8,7 @@ use glam::Vec3;
 
 use super::Budget;
 use clap::builder::TypedValueParser;
+use karstic::field::Tree;
 use karstic::io::progress;
 use karstic::render::{Device, Frame, Method, Renderable, cpu};
 
@@ -88,10 +89,18 @@ pub(super) fn run(args: RenderArgs) -> anyhow::Result<()> {
     let mut settings =
         karstic::picture::settings(&file.scene, tree, compiled.ground, &camera, args.method);
     settings.shading.shadows = !args.no_shadows;
+    let mut subject = Renderable::from_tree(compiled.tree, args.gpu);
+    subject.allow_software = args.software_gpu;
+    let gpu = subject.gpu();
     let start = Instant::now();
-    // On the CPU the tracer follows a mesh of the job's region, as `karstic run`'s
-    // pictures do: meshing it costs a fraction of the march it saves.
-    if !(args.gpu || args.no_guide) {
+    // On the CPU (asked for, or the GPU's fallback) the tracer follows a mesh of the job's
+    // region, as `karstic run`'s pictures do: meshing it costs a fraction of the march it
+    // saves.
+    let tree = subject
+        .field
+        .as_any()
+        .and_then(|a| a.downcast_ref::<Tree>());
+    if let Some(tree) = tree.filter(|_| !args.no_guide && !matches!(gpu, Some(Ok(_)))) {
         settings.guides = karstic::picture::view_guides(
             tree,
             file.scene.job.as_ref(),
@@ -103,11 +112,9 @@ pub(super) fn run(args: RenderArgs) -> anyhow::Result<()> {
         .with_context(|| format!("{}: meshing the job's region", args.tree.display()))?;
     }
     let guided = start.elapsed();
-    let mut subject = Renderable::from_tree(compiled.tree, args.gpu);
-    subject.allow_software = args.software_gpu;
     let tiles = w.div_ceil(cpu::TILE) * h.div_ceil(cpu::TILE);
     let bar = progress(tiles as u64, "render", args.quiet);
-    let (frame, device) = subject.render_with_fallback(&camera, &settings, &bar);
+    let (frame, device) = subject.render_on(gpu, &camera, &settings, &bar);
     bar.finish_and_clear();
     if let Device::CpuInstead(why) = &device {
         eprintln!("--gpu: {why}; rendered on the CPU instead");

@@ -80,6 +80,23 @@ impl Renderable {
         }
     }
 
+    /// The device this renders on, decided before anything is drawn: `None` for the CPU
+    /// when the GPU was not wanted, else the GPU's context, or why the CPU renders
+    /// instead (no encoding, no adapter, a software adapter not allowed). A caller that
+    /// prepares the CPU's help (the mesh guides) asks this first.
+    pub fn gpu(&self) -> Option<Result<GpuContext, Fallback<'_>>> {
+        Some(match self.tape.as_ref()? {
+            Err(e) => Err(Fallback::NoTape(e)),
+            Ok(_) => match GpuContext::new() {
+                Ok(ctx) if ctx.software && !self.allow_software => {
+                    Err(Fallback::Software(ctx.adapter.clone()))
+                }
+                Ok(ctx) => Ok(ctx),
+                Err(e) => Err(Fallback::Failed(e)),
+            },
+        })
+    }
+
     /// Renders on the GPU when a tape was built and the GPU takes it, on the CPU
     /// otherwise (`progress` advances once per CPU tile). The image is the same either
     /// way, up to the GPU's arithmetic.
@@ -89,24 +106,26 @@ impl Renderable {
         settings: &RenderSettings,
         progress: &ProgressBar,
     ) -> (Frame, Device<'_>) {
+        self.render_on(self.gpu(), camera, settings, progress)
+    }
+
+    /// [`Self::render_with_fallback`] on the device [`Self::gpu`] chose.
+    pub fn render_on<'s>(
+        &'s self,
+        gpu: Option<Result<GpuContext, Fallback<'s>>>,
+        camera: &Camera,
+        settings: &RenderSettings,
+        progress: &ProgressBar,
+    ) -> (Frame, Device<'s>) {
         let cpu = || cpu::render(self.field.as_ref(), camera, settings, progress);
-        match &self.tape {
-            None => (cpu(), Device::Cpu),
-            Some(Err(e)) => (cpu(), Device::CpuInstead(Fallback::NoTape(e))),
-            Some(Ok(tape)) => {
-                let ctx = match GpuContext::new() {
-                    Ok(ctx) if ctx.software && !self.allow_software => {
-                        let why = Fallback::Software(ctx.adapter.clone());
-                        return (cpu(), Device::CpuInstead(why));
-                    }
-                    Ok(ctx) => ctx,
-                    Err(e) => return (cpu(), Device::CpuInstead(Fallback::Failed(e))),
-                };
-                match ctx.render(tape, camera, settings) {
-                    Ok(frame) => (frame, Device::Gpu(ctx.adapter.clone())),
-                    Err(e) => (cpu(), Device::CpuInstead(Fallback::Failed(e))),
-                }
-            }
+        let tape = self.tape.as_ref().and_then(|t| t.as_ref().ok());
+        match (gpu, tape) {
+            (Some(Ok(ctx)), Some(tape)) => match ctx.render(tape, camera, settings) {
+                Ok(frame) => (frame, Device::Gpu(ctx.adapter.clone())),
+                Err(e) => (cpu(), Device::CpuInstead(Fallback::Failed(e))),
+            },
+            (Some(Err(why)), _) => (cpu(), Device::CpuInstead(why)),
+            _ => (cpu(), Device::Cpu),
         }
     }
 }
