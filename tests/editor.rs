@@ -679,3 +679,25 @@ fn editor_graph_selects_like_the_outline_and_follows_the_file() {
     h.run_steps(2);
     graph_node(&h, "bubble");
 }
+
+/// Ctrl+S answers in the status line (it gave no sign of anything): every edit is already
+/// in the file.
+#[test]
+fn editor_ctrl_s_says_the_file_is_saved() {
+    let (_dir, paths) = scene_dir(&["a.ron"]);
+    let mut h = harness(&paths[0]);
+    h.event(egui::Event::Key {
+        key: egui::Key::S,
+        physical_key: None,
+        pressed: true,
+        repeat: false,
+        modifiers: egui::Modifiers::COMMAND,
+    });
+    h.run_steps(2);
+    let status = h.state().status().to_string();
+    assert!(
+        status.starts_with("saved: every edit is written to"),
+        "{status}"
+    );
+    assert!(status.contains("a.ron"), "{status}");
+}

@@ -297,7 +297,14 @@ impl Editor {
     fn shortcuts(&mut self, ctx: &egui::Context) {
         let undo = KeyboardShortcut::new(Modifiers::COMMAND, Key::Z);
         let redo = KeyboardShortcut::new(Modifiers::COMMAND | Modifiers::SHIFT, Key::Z);
-        if ctx.input_mut(|i| i.consume_shortcut(&redo)) {
+        let save = KeyboardShortcut::new(Modifiers::COMMAND, Key::S);
+        if ctx.input_mut(|i| i.consume_shortcut(&save)) {
+            // Nothing is held back: say so, where a user looks for a sign of saving.
+            self.status = format!(
+                "saved: every edit is written to {} when it is made",
+                self.path.display()
+            );
+        } else if ctx.input_mut(|i| i.consume_shortcut(&redo)) {
             self.redo();
         } else if ctx.input_mut(|i| i.consume_shortcut(&undo)) {
             self.undo();
