@@ -275,7 +275,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
                 let (w, h) = job
                     .as_ref()
                     .and_then(|j| j.view_image)
-                    .unwrap_or((camera.width / 3, camera.height / 3));
+                    .unwrap_or((camera.width / 2, camera.height / 2));
                 let fov = job.as_ref().map_or(DEFAULT_FOV, |j| j.fov.0);
                 let mut frames = vec![frame];
                 for name in file.scene.feature_names() {

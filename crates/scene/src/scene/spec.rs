@@ -215,7 +215,7 @@ pub struct JobSpec {
     /// suit (`karstic run` writes a view of each named feature).
     #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub views: std::collections::BTreeMap<String, CameraSpec>,
-    /// Size of the feature views in pixels (default: a third of the preview's).
+    /// Size of the feature views in pixels (default: half the preview's on each side).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub view_image: Option<(u32, u32)>,
     /// Altitude (metres) above which flats turn to snow (default: no snow).
