@@ -138,6 +138,14 @@ fn editor_refuses_an_invalid_value_with_the_loaders_message() {
         h.query_all_by_label(&message).count() > 0,
         "{message} not shown"
     );
+    // The message is about the node left: selecting another one clears it.
+    select(&mut h, "grotto");
+    assert_eq!(
+        h.query_all_by_label(&message).count(),
+        0,
+        "{message} still shown"
+    );
+    assert!(h.state().status().is_empty(), "{}", h.state().status());
 }
 
 #[test]

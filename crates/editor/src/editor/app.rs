@@ -47,6 +47,9 @@ pub struct Editor {
     history: History,
     inspector: Inspector,
     status: String,
+    /// Whether the status line holds why an edit failed (cleared when another node is
+    /// selected: the message is about the node left).
+    failed: bool,
     /// What a click in the viewport does.
     pub tool: Tool,
     /// Radius of placed spheres, metres; offset of placed anchors above the ground.
@@ -118,6 +121,7 @@ impl Editor {
             history: History::default(),
             inspector: Inspector::default(),
             status: String::new(),
+            failed: false,
             tool: Tool::View,
             place_radius: 20.0,
             place_offset: 0.0,
@@ -250,11 +254,13 @@ impl Editor {
         match r {
             Ok(what) => {
                 self.status = what.unwrap_or_default();
+                self.failed = false;
                 self.reload();
                 true
             }
             Err(e) => {
                 self.status = crate::io::chain(&e);
+                self.failed = true;
                 false
             }
         }
@@ -267,6 +273,7 @@ impl Editor {
         self.watch();
         self.receive(&ctx);
         self.shortcuts(&ctx);
+        let before = self.selected.clone();
         egui::Panel::top("toolbar").show(ui, |ui| self.toolbar(ui));
         egui::Panel::left("outline")
             .default_size(220.0)
@@ -290,6 +297,7 @@ impl Editor {
                 });
         }
         egui::CentralPanel::default().show(ui, |ui| self.viewport_ui(ui));
+        self.selection_changed(&before);
         // The file is watched for outside edits.
         ctx.request_repaint_after(Duration::from_millis(500));
     }
@@ -692,7 +700,16 @@ impl Editor {
 
     /// Selects the node named `name`.
     pub fn select(&mut self, name: Option<String>) {
-        self.selected = name;
+        let before = std::mem::replace(&mut self.selected, name);
+        self.selection_changed(&before);
+    }
+
+    /// Clears the status line's failed edit when the selection left the node it was about.
+    fn selection_changed(&mut self, before: &Option<String>) {
+        if self.failed && self.selected != *before {
+            self.status.clear();
+            self.failed = false;
+        }
     }
 
     /// The file.
