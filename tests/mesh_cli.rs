@@ -122,45 +122,21 @@ fn samples_a_section_on_a_plane() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("s.npy");
     let tree = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/arch.ron");
-    let (ok, _, err) = karstic(&[
-        "sample",
-        tree.to_str().unwrap(),
-        "--box",
-        "-20",
-        "0",
-        "0",
-        "20",
-        "0",
-        "30",
-        "--res",
-        "41",
-        "1",
-        "31",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let sample = |ny: &str| {
+        let (t, o) = (tree.to_str().unwrap(), out.to_str().unwrap());
+        let flat = ["-20", "0", "0", "20", "0", "30"];
+        let mut args = vec!["sample", t, "--box"];
+        args.extend(flat);
+        args.extend(["--res", "41", ny, "31", "-o", o]);
+        karstic(&args)
+    };
+    let (ok, _, err) = sample("1");
     assert!(ok, "{err}");
     let side: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.path().join("s.json")).unwrap()).unwrap();
     assert_eq!(side["shape"], serde_json::json!([31, 1, 41]));
     assert_eq!(side["spacing"][1], 0.0);
-    let (ok, _, err) = karstic(&[
-        "sample",
-        tree.to_str().unwrap(),
-        "--box",
-        "-20",
-        "0",
-        "0",
-        "20",
-        "0",
-        "30",
-        "--res",
-        "41",
-        "2",
-        "31",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
+    let (ok, _, err) = sample("2");
     assert!(
         !ok && err.contains("positive size on every axis of more than one sample"),
         "{err}"

@@ -24,7 +24,7 @@ use crate::landform::Ground;
 use crate::scene::{DemCache, HeightfieldSpec};
 use crate::voxel::FeatureVolumeSpec;
 use crate::voxel::SField;
-use crate::voxel::cache::content_hash;
+use crate::voxel::cache::{content_hash, files_hash};
 use crate::voxel::spec::BuildOptions;
 use crate::voxel::spec::CurveSource;
 
@@ -78,15 +78,7 @@ fn volume_key(
             &crate::dem::ReadOptions::default(),
         ));
     }
-    let contents: Vec<Vec<u8>> = files
-        .iter()
-        .map(
-            |p| match crate::io::read_regular(p, crate::io::DEFAULT_MEMORY_BUDGET) {
-                Ok(bytes) => content_hash(&[&bytes]).to_le_bytes().to_vec(),
-                Err(_) => b"absent".to_vec(),
-            },
-        )
-        .collect();
+    let contents = files_hash(&files).to_le_bytes();
     let spec = to_ron_text(f);
     let terrain_text = terrain.map_or(String::new(), |(t, s)| format!("{} {s}", to_ron_text(t)));
     let (seed, max_memory) = (seed.to_le_bytes(), max_memory.to_le_bytes());
@@ -97,7 +89,7 @@ fn volume_key(
         base_dir.as_os_str().as_encoded_bytes(),
         terrain_text.as_bytes(),
     ];
-    parts.extend(contents.iter().map(Vec::as_slice));
+    parts.push(&contents);
     content_hash(&parts)
 }
 

@@ -17,6 +17,7 @@ use crate::compile::Compiled;
 use crate::mesh::export::{self, ExportOptions, Origin};
 use crate::mesh::{Mesh, MeshOptions, polygonize};
 use crate::scene::SceneFile;
+use crate::voxel::cache::files_hash;
 
 /// Skirt depth in cells of the tile's level.
 pub const SKIRT_CELLS: f32 = 2.0;
@@ -46,24 +47,6 @@ pub struct TileSummary {
     /// Content hash of the contents of every file the tree reads (the tree, its DEMs and
     /// curve files): tiles run on different versions of an input do not merge.
     pub inputs: String,
-}
-
-/// The hash of the contents of `files`, in order (see [`TileSummary::inputs`]); a file
-/// that is not there (a sidecar a reader would have taken) counts as absent.
-pub fn inputs_hash(files: &[std::path::PathBuf]) -> anyhow::Result<String> {
-    let mut all = Vec::new();
-    for f in files {
-        match crate::io::read_regular(f, crate::io::DEFAULT_MEMORY_BUDGET) {
-            Ok(bytes) => all.extend_from_slice(super::plan::hash_hex(&bytes).as_bytes()),
-            Err(crate::io::IoError::Read { source, .. })
-                if source.kind() == std::io::ErrorKind::NotFound =>
-            {
-                all.extend_from_slice(b"absent")
-            }
-            Err(e) => return Err(e).with_context(|| format!("hashing the input {}", f.display())),
-        }
-    }
-    Ok(super::plan::hash_hex(&all))
 }
 
 /// The surface in `tile`'s core, meshed on its level's grid window: the triangles of the
@@ -234,7 +217,7 @@ pub fn run_tile(
         max,
         mesh_bytes: written.len() as u64,
         mesh_hash: super::plan::hash_hex(&written),
-        inputs: inputs_hash(&loaded.file.inputs())?,
+        inputs: format!("{:016x}", files_hash(&loaded.file.inputs())),
     };
     let mut text = serde_json::to_string_pretty(&summary)?;
     text.push('\n');

@@ -263,6 +263,22 @@ pub fn content_hash(parts: &[&[u8]]) -> u64 {
     h
 }
 
+/// The content hash of the files `files`, in order: each file's contents, or a marker for
+/// one that cannot be read (a sidecar a reader would have taken when present). What the
+/// Feature Volume memo and the tiles key their inputs by.
+pub fn files_hash(files: &[std::path::PathBuf]) -> u64 {
+    let parts: Vec<[u8; 8]> = files
+        .iter()
+        .map(
+            |f| match crate::io::read_regular(f, crate::io::DEFAULT_MEMORY_BUDGET) {
+                Ok(bytes) => content_hash(&[&bytes]).to_le_bytes(),
+                Err(_) => *b"absent\0\0",
+            },
+        )
+        .collect();
+    content_hash(&parts.iter().map(|p| p.as_slice()).collect::<Vec<_>>())
+}
+
 /// The content hash of a run: the primitives and the parameters.
 fn run_key(features: &Features, p: &Params) -> u64 {
     content_hash(&[
