@@ -796,3 +796,165 @@ fn carving_landforms_fade_inside_their_region_and_stop_at_its_faces() {
     }
     assert_eq!(checked, 400);
 }
+
+/// A slope of 1 in 2 falling east, under a sandstone bed from z = −6 to 10 that crops
+/// out across it (its base meets the ground at x = 12), with a rock shelter.
+const CAPROCK_SCENE: &str = "(version: 1, seed: 2, \
+    root: Landform(name: \"cliff\", seed: 4, cell: 2, region: (min: (-100, -80, -60), max: (100, 80, 60)), \
+        base: Transform(name: \"ground\", rotate: (axis: (0, 1, 0), degrees: 26.56505), \
+            child: Primitive(shape: Box(center: (0, 0, -100), half_size: (400, 400, 100)), falloff: 1.0)), \
+        generator: Caprock(top: 10, thickness: 16, joints: 8, strike: 15, \
+            recesses: [(at: (14, 0), length: 20, depth: 8, height: 7)])))";
+
+fn caprock() -> (karstic::landform::CliffLine, Tree, Tree) {
+    let file = scene_file(CAPROCK_SCENE);
+    let NodeSpec::Landform(l) = &file.scene.root else {
+        panic!("a landform")
+    };
+    let GeneratorSpec::Caprock(spec) = &l.generator else {
+        panic!("a caprock")
+    };
+    let mut bare = file.clone();
+    bare.scene.root = (*l.base).clone();
+    let base = bare.compile().unwrap().tree;
+    let rho = |_: Vec3| 0.5;
+    let region = Aabb::new(
+        Vec3::new(-100.0, -80.0, -60.0),
+        Vec3::new(100.0, 80.0, 60.0),
+    );
+    let ground = Ground::new(&base, region, 2.0, &rho, l.full_seed(2)).unwrap();
+    let line = spec.shape(&ground).unwrap();
+    assert_eq!(
+        line,
+        spec.shape(&ground).unwrap(),
+        "the same seed, the same cliff"
+    );
+    (line, file.compile().unwrap().tree, base)
+}
+
+/// The slope's height at `x` (the box's rounding lifts it by half a metre).
+fn slope_at(x: f32) -> f32 {
+    -0.5 * x + 0.5
+}
+
+#[test]
+fn a_caprock_stands_as_a_cliff_where_its_bed_crops_out() {
+    let (line, tree, base) = caprock();
+    assert_eq!(line.bed, Vec2::new(10.0, -6.0));
+    // Across the middle, clear of the sides' fade: walking east at each y, the top drops
+    // by at least half the bed within 3 m, where the bed's base meets the slope (±8 m,
+    // the joints' reach), and nowhere else by more than a metre per metre beyond the
+    // slope's half.
+    for k in 0..12 {
+        let y = -27.5 + 5.0 * k as f32;
+        let tops: Vec<f32> = (0..=140)
+            .map(|i| top_at(&tree, Vec2::new(-40.0 + 0.5 * i as f32, y), -60.0, 60.0).unwrap())
+            .collect();
+        let (drop, i) = (3..tops.len())
+            .map(|i| (tops[i - 6.min(i)] - tops[i], i))
+            .fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });
+        let x = -40.0 + 0.5 * i as f32;
+        assert!(drop > 8.0, "y {y}: the top drops by {drop} m at most");
+        // Blocks stand where the ground reaches the base within a quarter of the bed (8 m
+        // along this slope), and a block reaches a joint spacing beyond its middle.
+        assert!(
+            (x - 12.0).abs() < 16.0,
+            "y {y}: the cliff stands at x = {x}"
+        );
+        // Its top is the bed's top, not the slope's.
+        assert!(
+            (tops[i - 6] - 10.0).abs() < 2.0,
+            "y {y}: the cliff's top at {}",
+            tops[i - 6]
+        );
+    }
+    // Upslope, beyond the bed's top, and far downslope the terrain is the slope's.
+    for &(x, y) in &[(-60.0, 0.0), (-90.0, 40.0), (80.0, -20.0), (95.0, 70.0)] {
+        let p = Vec3::new(x, y, slope_at(x));
+        for dz in [-1.0, 0.0, 1.0] {
+            let q = p + Vec3::Z * dz;
+            assert!(
+                (tree.value(q) - base.value(q)).abs() < 1e-6,
+                "changed at {q}"
+            );
+        }
+    }
+    // Past the region's sides nothing changes; toward them the cliff dies out.
+    for i in 0..=40 {
+        let x = -20.0 + i as f32;
+        for y in [-80.5, 80.5] {
+            for z in [-10.0, 0.0, 10.0] {
+                let p = Vec3::new(x, y, z);
+                assert_eq!(tree.value(p), base.value(p), "changed at {p}");
+            }
+        }
+    }
+    let step = |y: f32| {
+        (0..=80)
+            .map(|i| {
+                let x = -20.0 + 0.5 * i as f32;
+                top_at(&tree, Vec2::new(x, y), -60.0, 60.0).unwrap() - slope_at(x)
+            })
+            .fold(0.0f32, f32::max)
+    };
+    let (middle, side) = (step(0.0), step(77.0));
+    assert!(
+        middle > 8.0 && side < 0.25 * middle,
+        "rises {middle} m mid-line, {side} m at the side"
+    );
+}
+
+#[test]
+fn a_caprock_shelter_is_a_hollow_under_a_lip_of_its_bed() {
+    let (line, tree, _) = caprock();
+    let r = &line.recesses[0];
+    let t = line.bed.x - line.bed.y;
+    assert!(r.out.x > 0.9, "the shelter looks downslope: {}", r.out);
+    // Its floor is the ground before the face, which stands where the bed's base meets the
+    // slope.
+    assert!(
+        (r.mouth.z - slope_at(r.mouth.x)).abs() < 2.0,
+        "floor at {}",
+        r.mouth.z
+    );
+    assert!(
+        (r.mouth.z - line.bed.y).abs() < 0.25 * t + 4.0,
+        "floor at {}",
+        r.mouth.z
+    );
+    let mut open = 0;
+    assert_eq!(r.faces.len(), 4, "a piece of face every 6 m");
+    for &face in &r.faces {
+        let inside = face - r.out * (0.3 * r.size.y);
+        // Air in the shelter, rock over it (its lip, the bed) and under it (its floor).
+        open += usize::from(tree.value(inside.extend(r.mouth.z + 0.5 * r.size.z)) < ISO);
+        let lip = r.mouth.z + r.size.z + 0.5 * (line.bed.x - r.mouth.z - r.size.z);
+        assert!(tree.value(inside.extend(lip)) > ISO, "no lip over {inside}");
+        assert!(
+            tree.value(inside.extend(r.mouth.z - 1.5)) > ISO,
+            "no floor at {inside}"
+        );
+    }
+    assert!(open >= 3, "the shelter is open at {open} of 4 points");
+    // Blocks fallen from the face lie on the slope below the cliff, half sunk.
+    assert!(!line.fallen.is_empty());
+    for f in &line.fallen {
+        let ground = slope_at(f.center.x);
+        assert!(
+            (f.center.z - ground).abs() < f.half.z + 1.0 || (f.center.z - r.mouth.z).abs() < 1e-3,
+            "a block at {} floats over the ground at {ground}",
+            f.center
+        );
+        // Below the cliff: under the bed's base where the bed is whole, under its top
+        // where it thins out toward the sides.
+        let foot = match f.center.y.abs() < 30.0 {
+            true => line.bed.y + 0.25 * t + 1.0,
+            false => line.bed.x,
+        };
+        assert!(
+            ground < foot,
+            "a block at {} lies above the cliff",
+            f.center
+        );
+    }
+}

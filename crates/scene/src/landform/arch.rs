@@ -27,8 +27,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::{Ground, LandformError, round3, solid};
-use crate::field::noise::Octaves;
+use super::{Ground, LandformError, noise, p3, round3, solid};
 use crate::field::skeleton::Size3;
 use crate::field::{NoiseSpec, SkeletonSpec};
 use crate::rng::Rng;
@@ -36,7 +35,7 @@ use crate::scene::NodeSpec;
 use crate::scene::landform::ArchSpec;
 use crate::scene::spec::{DifferenceSpec, ErodeSpec, Nary, Rotation, TransformSpec};
 use crate::value::BoxSpec;
-use crate::value::{Dir3, Finite, NonNegative, P3, Positive};
+use crate::value::{Dir3, Finite, NonNegative, Positive};
 
 /// Spans the generator accepts, metres: a metre-wide window is a pothole, not an arch,
 /// and no known arch spans more than about 120 m.
@@ -280,19 +279,6 @@ fn talus(
         }
     }
     out
-}
-
-fn p3(v: Vec3) -> P3 {
-    P3(v.to_array().map(round3).into())
-}
-
-fn noise(amplitude: f32, wavelength: f32, octaves: u32, seed_offset: u32) -> Option<NoiseSpec> {
-    Some(NoiseSpec {
-        amplitude: NonNegative(round3(amplitude)),
-        wavelength: Positive(round3(wavelength).max(0.01)),
-        octaves: Octaves::new(octaves).unwrap_or_default(),
-        seed_offset,
-    })
 }
 
 fn primitive(shape: SkeletonSpec, falloff: f32, noise: Option<NoiseSpec>) -> NodeSpec {

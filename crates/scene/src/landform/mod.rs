@@ -1,7 +1,8 @@
 //! Landform generators (Paris et al. 2019 §6): tree-file nodes that read the terrain
 //! below them (its top surface, drainage, the rock's resistance ρ) and emit plain
 //! skeletal primitives — negative spheres that carve caves, sea undercuts and canyon
-//! walls, positive blocks and cones that stand as hoodoos.
+//! walls, positive blocks and cones that stand as hoodoos, arches and caprock cliff lines
+//! (whose recesses are hollows cut into both the blocks and the ground).
 //!
 //! A `Landform(base: …, generator: …)` node is *expanded* when its tree compiles: the
 //! base is compiled on its own, the generator runs on it, and the node becomes
@@ -13,6 +14,7 @@
 
 mod arch;
 mod canyon;
+mod caprock;
 mod hoodoo;
 mod karst;
 mod sea;
@@ -23,15 +25,17 @@ use glam::{IVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 pub use arch::ArchShape;
+pub use caprock::{CliffLine, Fallen, JointBlock, Recess};
 pub use hoodoo::{Hoodoo, Terminal};
 
 use crate::dem::{Heightfield, Interpolation};
+use crate::field::noise::Octaves;
 use crate::field::{Aabb, Field, ISO, NodeId, NoiseSpec, PrimitiveSpec, SkeletonSpec, Tree};
 use crate::heightmap::{Columns, TopOptions};
 use crate::rng::Rng;
 use crate::scene::NodeSpec;
-use crate::scene::spec::{GeneratorSpec, LandformSpec, Nary};
-use crate::value::{Finite, P3, Positive};
+use crate::scene::spec::{DifferenceSpec, GeneratorSpec, LandformSpec, Nary};
+use crate::value::{Finite, NonNegative, P3, Positive};
 
 /// Errors of a generator: bad parameters for the terrain it meets.
 #[derive(Debug, thiserror::Error)]
@@ -178,6 +182,27 @@ fn round3(v: f32) -> f32 {
     (v * 1000.0).round() / 1000.0
 }
 
+/// A point rounded to the millimetre, so expanded files read well.
+pub(crate) fn p3(v: Vec3) -> P3 {
+    P3(v.to_array().map(round3).into())
+}
+
+/// A noise of the given amplitude and wavelength (rounded to the millimetre), octaves and
+/// seed offset, for a generated primitive.
+pub(crate) fn noise(
+    amplitude: f32,
+    wavelength: f32,
+    octaves: u32,
+    seed_offset: u32,
+) -> Option<NoiseSpec> {
+    Some(NoiseSpec {
+        amplitude: NonNegative(round3(amplitude)),
+        wavelength: Positive(round3(wavelength).max(0.01)),
+        octaves: Octaves::new(octaves).unwrap_or_default(),
+        seed_offset,
+    })
+}
+
 /// A solid primitive (energy 1) of `shape`, falloff `falloff` and optional noise: the
 /// rock the accreting generators stand on the terrain.
 pub fn solid(shape: SkeletonSpec, falloff: f32, noise: Option<NoiseSpec>) -> NodeSpec {
@@ -301,6 +326,9 @@ pub enum Joining {
     Carve,
     /// `Union([base, Blend(rocks)])`: new rock standing on the terrain.
     Accrete,
+    /// `Difference(Union([base, Blend(rocks)]), [Union(hollows)])`: rock standing on the
+    /// terrain, then hollows cut into both.
+    Sculpt,
 }
 
 impl Joining {
@@ -308,7 +336,7 @@ impl Joining {
     fn suffix(&self) -> &'static str {
         match self {
             Joining::Carve => "carves",
-            Joining::Accrete => "rocks",
+            Joining::Accrete | Joining::Sculpt => "rocks",
         }
     }
 }
@@ -330,6 +358,8 @@ pub struct Generated {
     pub primitives: Vec<NodeSpec>,
     /// How they join the base.
     pub joining: Joining,
+    /// What is cut out of the base and the primitives afterwards ([`Joining::Sculpt`]).
+    pub hollows: Vec<NodeSpec>,
 }
 
 impl LandformSpec {
@@ -339,23 +369,36 @@ impl LandformSpec {
             GeneratorSpec::Karst(k) => Generated {
                 primitives: k.generate(ground)?,
                 joining: Joining::Carve,
+                hollows: Vec::new(),
             },
             GeneratorSpec::SeaErosion(s) => Generated {
                 primitives: s.generate(ground)?,
                 joining: Joining::Carve,
+                hollows: Vec::new(),
             },
             GeneratorSpec::Canyon(c) => Generated {
                 primitives: c.generate(ground)?,
                 joining: Joining::Carve,
+                hollows: Vec::new(),
             },
             GeneratorSpec::Hoodoos(h) => Generated {
                 primitives: h.generate(ground)?,
                 joining: Joining::Accrete,
+                hollows: Vec::new(),
             },
             GeneratorSpec::Arch(a) => Generated {
                 primitives: a.generate(ground)?,
                 joining: Joining::Accrete,
+                hollows: Vec::new(),
             },
+            GeneratorSpec::Caprock(c) => {
+                let (primitives, hollows) = c.generate(ground)?;
+                Generated {
+                    primitives,
+                    joining: Joining::Sculpt,
+                    hollows,
+                }
+            }
         };
         if generated.joining == Joining::Carve {
             let width = fade_width(&ground.region, self.cell.0);
@@ -376,10 +419,11 @@ impl LandformSpec {
         // An empty blend is refused by the tree file's checks: nothing generated, nothing
         // added.
         if !generated.primitives.is_empty() {
-            children.push(NodeSpec::Blend(Nary {
+            let rocks = Nary {
                 name: self.name.as_ref().map(|n| format!("{n}-{suffix}")),
                 children: generated.primitives,
-            }));
+            };
+            children.push(NodeSpec::Blend(rocks));
         }
         let node = Nary {
             name: self.name,
@@ -388,6 +432,21 @@ impl LandformSpec {
         match generated.joining {
             Joining::Carve => NodeSpec::Blend(node),
             Joining::Accrete => NodeSpec::Union(node),
+            Joining::Sculpt if generated.hollows.is_empty() => NodeSpec::Union(node),
+            Joining::Sculpt => {
+                let name = node.name.clone();
+                NodeSpec::Difference(DifferenceSpec {
+                    name: name.clone(),
+                    base: Box::new(NodeSpec::Union(Nary {
+                        name: None,
+                        children: node.children,
+                    })),
+                    carves: vec![NodeSpec::Union(Nary {
+                        name: name.map(|n| format!("{n}-hollows")),
+                        children: generated.hollows,
+                    })],
+                })
+            }
         }
     }
 }

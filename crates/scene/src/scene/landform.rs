@@ -50,6 +50,56 @@ pub struct ArchSpec {
     pub talus: bool,
 }
 
+fn caprock_default_joints() -> Positive {
+    Positive(12.0)
+}
+
+fn caprock_default_talus() -> NonNegative {
+    NonNegative(0.15)
+}
+
+/// Parameters of a caprock cliff line: a hard bed cropping out across the slopes as a
+/// cliff of joint blocks, with recesses in its foot and fallen blocks below it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CaprockSpec {
+    /// Height of the hard bed's top, metres.
+    pub top: Finite,
+    /// Thickness of the hard bed, metres: the cliff's height where it stands whole.
+    pub thickness: Positive,
+    /// Mean spacing of the joints, metres (default 12).
+    #[serde(default = "caprock_default_joints")]
+    pub joints: Positive,
+    /// Strike of the first joint set, degrees counter-clockwise from east (default 0); the
+    /// second set runs at right angles to it. The GPU tape encodes boxes turned by quarter
+    /// turns only: a multiple of 90° keeps a scene on the GPU.
+    #[serde(default)]
+    pub strike: Finite,
+    /// Recesses in the cliff's foot: rock shelters (long and shallow) and cave mouths
+    /// (narrow and deep), each under a lip of the hard bed.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub recesses: Vec<RecessSpec>,
+    /// Fallen blocks per metre of cliff face (default 0.15; 0 for none).
+    #[serde(default = "caprock_default_talus")]
+    pub talus: NonNegative,
+}
+
+/// A recess in the foot of a caprock cliff: a rock shelter or a cave mouth.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RecessSpec {
+    /// A point near the cliff (tree frame, x and y): the recess opens in the face nearest
+    /// to it.
+    pub at: P2,
+    /// Length along the face, metres.
+    pub length: Positive,
+    /// How far it runs back under the hard bed, metres.
+    pub depth: Positive,
+    /// Height of its mouth above its floor, metres: less than the bed's thickness, the
+    /// rest stands over it as a lip.
+    pub height: Positive,
+}
+
 fn canyon_default_retreat() -> Unit {
     Unit(0.5)
 }

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::landform::{ArchSpec, CanyonSpec, HoodooSpec, KarstSpec, SeaSpec};
+use super::landform::{ArchSpec, CanyonSpec, CaprockSpec, HoodooSpec, KarstSpec, SeaSpec};
 use crate::elevation::ElevationSpec;
 use crate::field::{NoiseSpec, PrimitiveSpec};
 use crate::scene::HeightfieldSpec;
@@ -454,6 +454,8 @@ pub enum GeneratorSpec {
     Canyon(CanyonSpec),
     /// A natural arch: a fin of rock with an opening under its hard bed.
     Arch(ArchSpec),
+    /// A caprock cliff line: a hard bed cropping out as a cliff of joint blocks.
+    Caprock(CaprockSpec),
 }
 
 impl Scene {

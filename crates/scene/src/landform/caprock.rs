@@ -1,0 +1,589 @@
+//! Caprock cliff lines: a hard bed cropping out across the slopes as a cliff.
+//!
+//! Where a resistant sandstone lies over softer shale (the Cumberland Plateau's caprock,
+//! the rimrock of the Colorado Plateau), the slopes do not wear evenly: the soft rock under
+//! the bed weathers back, the bed is undermined and breaks away along its joints, block by
+//! block, and what is left is a cliff line ringing the hills at the bed's level, a bench of
+//! bare rock on the bed's top behind it, and the fallen blocks strewn down the slope below
+//! it (Paris et al. 2019 §6 carve their landforms from the geology's less durable parts;
+//! here the durable part stands).
+//!
+//! The generator builds that from the rock's structure, not from the cliff's outline:
+//!
+//! * **Joint blocks.** Two sets of vertical joints at right angles (`strike`), each joint
+//!   a straight line across the region at an irregular spacing around `joints`; about
+//!   half of them weathered open into a crack of their own width, the others tight (the
+//!   blocks on either side stay one mass). Each cell between joints is a block of the
+//!   bed, rooted below the ground and topped at the bed's top. A block stands where the
+//!   ground at its middle reaches the bed's base (with a jitter of a quarter of the bed, so
+//!   the cliff's plan-form steps from joint to joint into spurs and re-entrants); blocks
+//!   wholly under the ground above the bed are left out (the hill holds them). Toward the
+//!   region's sides the bed thins out (over [`super::fade_width`], at least six joint
+//!   spacings), so the cliff dies into the slope.
+//! * **Bedding.** Each block is three beds, level across the cliff line: the top one
+//!   whole, the middle one and the lower one (the softest, at the cliff's foot) weathered
+//!   back from the joints by their own depths under each block, so bedding ledges run
+//!   along the cliff and its top overhangs.
+//! * **Broken edge.** Some blocks of the face have lost their top beds, and the cliff's
+//!   crest steps down there.
+//! * **Recesses.** Rock shelters and cave mouths are hollows in the cliff's foot: a level
+//!   floor on the ground before the face, a flat roof (the base of a hard bed) under a lip
+//!   of the bed, walls curving back into the hill; a few breakdown blocks lie on the floor
+//!   and before the mouth.
+//! * **Talus.** Blocks fallen from the face lie downslope of it, half sunk, turned at
+//!   random, the larger ones rolled farther (fall sorting).
+//!
+//! The node expands to `Difference(Union([base, Union(rocks)]), [hollows])`: the blocks
+//! stand on the terrain and the recesses cut both.
+
+use glam::{Vec2, Vec3};
+
+use super::{Ground, LandformError, noise, p3, round3, solid};
+use crate::field::skeleton::Size3;
+use crate::field::{NoiseSpec, SkeletonSpec};
+use crate::rng::Rng;
+use crate::scene::NodeSpec;
+use crate::scene::landform::{CaprockSpec, RecessSpec};
+use crate::scene::spec::{Nary, Rotation, TransformSpec};
+use crate::value::{Dir3, Finite};
+
+/// Joint spacings the generator accepts, metres.
+const JOINTS: (f32, f32) = (2.0, 200.0);
+
+/// Bed thicknesses the generator accepts, metres.
+const THICKNESS: (f32, f32) = (1.0, 300.0);
+
+/// At most this many joint blocks: beyond, the joints are too close for the region.
+const MAX_BLOCKS: usize = 20_000;
+
+/// A joint block of the bed, in the tree frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointBlock {
+    /// Middle of its footprint.
+    pub center: Vec2,
+    /// Half extents along the joint frame's two axes.
+    pub half: Vec2,
+    /// Height of its top.
+    pub top: f32,
+    /// Height of its bottom (below the ground).
+    pub root: f32,
+    /// How far the middle and lower beds are weathered back from the joints, metres.
+    pub inset: Vec2,
+    /// Whether it stands in the cliff's face (a neighbour on lower ground is gone).
+    pub face: bool,
+    /// Which of its sides are bare (no block beside them): `+u`, `−u`, `+v`, `−v` of the
+    /// joint frame. The lower beds are weathered back on those only.
+    pub bare: [bool; 4],
+}
+
+/// A recess placed on the face: where its mouth opens and which way it looks.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Recess {
+    /// The mouth's middle on the face, at floor level.
+    pub mouth: Vec3,
+    /// Horizontal direction out of the cliff (downslope), unit.
+    pub out: Vec2,
+    /// Length along the face, depth into the hill and height of the mouth.
+    pub size: Vec3,
+    /// Where the face stands along the mouth, every few metres (the face steps in and out
+    /// at the joints, and the recess follows it).
+    pub faces: Vec<Vec2>,
+}
+
+/// The length of face one piece of a recess follows, metres.
+const PIECE: f32 = 6.0;
+
+/// A block fallen from the face: centre and half extents along the joint frame's axes
+/// (fallen blocks keep their joint faces; the GPU tape encodes boxes turned by quarter
+/// turns only, and a quarter turn of a box is a swap of its extents).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fallen {
+    /// Centre, half sunk into the ground.
+    pub center: Vec3,
+    /// Half extents.
+    pub half: Vec3,
+}
+
+/// The cliff line the generator settled on.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CliffLine {
+    /// Height of the bed's top and base.
+    pub bed: Vec2,
+    /// The bedding planes: the top of the lower bed and of the middle one.
+    pub bedding: Vec2,
+    /// The joint frame's first axis (unit, along the strike).
+    pub axis: Vec2,
+    /// The blocks.
+    pub blocks: Vec<JointBlock>,
+    /// The recesses, in the order of the spec.
+    pub recesses: Vec<Recess>,
+    /// The talus.
+    pub fallen: Vec<Fallen>,
+}
+
+impl CliffLine {
+    /// Whether `xy` lies in the footprint of a block.
+    pub fn in_block(&self, xy: Vec2) -> bool {
+        self.blocks.iter().any(|b| {
+            let d = xy - b.center;
+            let local = Vec2::new(d.dot(self.axis), d.dot(self.axis.perp()));
+            local.abs().cmple(b.half).all()
+        })
+    }
+}
+
+/// The falloff of the blocks for joints `spacing` apart: rounded edges, and small enough
+/// that the blocks' fields do not meet across a joint ([`joint_set`]'s narrowest crack,
+/// 1.4 falloffs, is wider than the 1.2 falloffs over which two blended fields close it).
+fn block_falloff(spacing: f32) -> f32 {
+    (0.06 * spacing).clamp(0.3, 1.5)
+}
+
+/// Joint positions across `[lo, hi]`: a joint before `lo`, then steps of 60% to 140% of
+/// `spacing` until past `hi`; each with the width its weathering opened: 1.4 to 2.8 block
+/// falloffs for half of them, none (a tight joint) for the others.
+fn joint_set(rng: &mut Rng, lo: f32, hi: f32, spacing: f32) -> Vec<(f32, f32)> {
+    let mut out = Vec::new();
+    let mut x = lo - spacing * rng.unit();
+    loop {
+        let open = rng.unit() < 0.5;
+        let gap = block_falloff(spacing) * (1.4 + 1.4 * rng.unit()) * f32::from(u8::from(open));
+        out.push((x, gap));
+        if x > hi {
+            return out;
+        }
+        x += spacing * (0.6 + 0.8 * rng.unit());
+    }
+}
+
+impl CaprockSpec {
+    /// The cliff line on `ground`.
+    pub fn shape(&self, ground: &Ground) -> Result<CliffLine, LandformError> {
+        let (s, t) = (self.joints.0, self.thickness.0);
+        if !(JOINTS.0..=JOINTS.1).contains(&s) {
+            return Err(LandformError::Invalid(format!(
+                "caprock joints {s} m apart: give between {} and {} m",
+                JOINTS.0, JOINTS.1
+            )));
+        }
+        if !(THICKNESS.0..=THICKNESS.1).contains(&t) {
+            return Err(LandformError::Invalid(format!(
+                "a caprock {t} m thick: give between {} and {} m",
+                THICKNESS.0, THICKNESS.1
+            )));
+        }
+        let (top, base) = (self.top.0, self.top.0 - t);
+        let axis = Vec2::from_angle(self.strike.0.to_radians());
+        let across = axis.perp();
+        let to_frame = |p: Vec2| Vec2::new(p.dot(axis), p.dot(across));
+        let to_world = |q: Vec2| axis * q.x + across * q.y;
+        let r = ground.region;
+        let corners = [
+            Vec2::new(r.min.x, r.min.y),
+            Vec2::new(r.max.x, r.min.y),
+            Vec2::new(r.min.x, r.max.y),
+            Vec2::new(r.max.x, r.max.y),
+        ]
+        .map(to_frame);
+        let lo = corners.iter().fold(Vec2::INFINITY, |a, &c| a.min(c));
+        let hi = corners.iter().fold(Vec2::NEG_INFINITY, |a, &c| a.max(c));
+        let mut rng = Rng::new(ground.seed ^ 0xca9_70c4);
+        let (ju, jv) = (
+            joint_set(&mut rng, lo.x, hi.x, s),
+            joint_set(&mut rng, lo.y, hi.y, s),
+        );
+        let (nu, nv) = (ju.len() - 1, jv.len() - 1);
+        if nu * nv > MAX_BLOCKS {
+            return Err(LandformError::Invalid(format!(
+                "caprock joints {s} m apart make {} blocks over the region (at most {MAX_BLOCKS}): \
+                 space them wider or shrink the region",
+                nu * nv
+            )));
+        }
+        let bedding = Vec2::new(
+            top - t * (0.6 + 0.1 * rng.unit()),
+            top - t * (0.25 + 0.1 * rng.unit()),
+        );
+        let fade = super::fade_width(&r, ground.top.cell().x).max(6.0 * s);
+        // Which cells stand: the ground at the middle reaches the base (jittered), and not
+        // every corner is buried over the top.
+        let mut cells: Vec<Option<JointBlock>> = Vec::with_capacity(nu * nv);
+        for j in 0..nv {
+            for i in 0..nu {
+                let (a, b) = (ju[i], ju[i + 1]);
+                let (c, d) = (jv[j], jv[j + 1]);
+                let q0 = Vec2::new(a.0 + 0.5 * a.1, c.0 + 0.5 * c.1);
+                let q1 = Vec2::new(b.0 - 0.5 * b.1, d.0 - 0.5 * d.1);
+                let jitter = 0.25 * (2.0 * rng.unit() - 1.0);
+                let top_jitter = rng.unit();
+                let inset = Vec2::new(0.06 + 0.1 * rng.unit(), 0.03 * rng.unit()) * t;
+                let center = to_world(0.5 * (q0 + q1));
+                let half = 0.5 * (q1 - q0);
+                let heights = [
+                    center,
+                    to_world(q0),
+                    to_world(q1),
+                    to_world(Vec2::new(q0.x, q1.y)),
+                    to_world(Vec2::new(q1.x, q0.y)),
+                ]
+                .map(|p| ground.height(p));
+                let lowest = heights.iter().copied().fold(f32::INFINITY, f32::min);
+                // The bed thins out toward the region's sides: the cliff dies into the
+                // slope instead of stopping at a wall.
+                let side = (center - r.min.truncate()).min(r.max.truncate() - center);
+                let bed = t * super::smoothstep(0.0, fade, side.min_element());
+                // Nothing of the block, its rounding or its roughness, past the sides.
+                let margin = half.length() + block_falloff(s) + 0.12 * s;
+                let stands = heights.iter().all(|h| h.is_finite())
+                    && side.min_element() > margin
+                    && bed > 0.5
+                    && heights[0] >= top - bed * (1.0 - jitter)
+                    && lowest <= top + 1.0
+                    && half.min_element() > 1.0;
+                cells.push(stands.then(|| JointBlock {
+                    center,
+                    half,
+                    top: top + 0.04 * t * (2.0 * top_jitter - 1.0),
+                    root: lowest - 2.0,
+                    inset,
+                    face: false,
+                    bare: [false; 4],
+                }));
+            }
+        }
+        // The face: blocks with a gone neighbour on lower ground. Some have lost their
+        // upper bed.
+        let standing = |i: isize, j: isize| {
+            i >= 0 && j >= 0 && (i as usize) < nu && (j as usize) < nv && {
+                cells[i as usize + nu * j as usize].is_some()
+            }
+        };
+        let mut faces = vec![(false, [false; 4]); nu * nv];
+        for j in 0..nv as isize {
+            for i in 0..nu as isize {
+                let k = i as usize + nu * j as usize;
+                let Some(b) = cells[k] else { continue };
+                let h = ground.height(b.center);
+                let sides = [(1, 0), (-1, 0), (0, 1), (0, -1)];
+                let bare = sides.map(|(di, dj)| !standing(i + di, j + dj));
+                let face = sides.iter().zip(bare).any(|(&(di, dj), bare)| {
+                    let n = b.center + to_world(Vec2::new(di as f32, dj as f32) * 2.0 * b.half);
+                    bare && ground.height(n) < h
+                });
+                faces[k] = (face, bare);
+            }
+        }
+        let blocks: Vec<JointBlock> = cells
+            .into_iter()
+            .zip(faces)
+            .filter_map(|(b, (face, bare))| {
+                let mut b = b?;
+                (b.face, b.bare) = (face, bare);
+                if face && rng.unit() < 0.2 {
+                    b.top = bedding.y + (b.top - bedding.y) * rng.unit() * 0.5;
+                }
+                Some(b)
+            })
+            .collect();
+        let mut line = CliffLine {
+            bed: Vec2::new(top, base),
+            bedding,
+            axis,
+            blocks,
+            recesses: Vec::new(),
+            fallen: Vec::new(),
+        };
+        line.recesses = self
+            .recesses
+            .iter()
+            .enumerate()
+            .map(|(k, r)| recess(&line, ground, r, k))
+            .collect::<Result<_, _>>()?;
+        line.fallen = talus(&line, ground, &mut rng, self.talus.0, t);
+        Ok(line)
+    }
+
+    /// The cliff line's nodes: its rocks and its hollows.
+    pub fn generate(
+        &self,
+        ground: &Ground,
+    ) -> Result<(Vec<NodeSpec>, Vec<NodeSpec>), LandformError> {
+        let line = self.shape(ground)?;
+        Ok((line.rocks(self.joints.0), line.hollows()))
+    }
+}
+
+/// Where recess `k` opens: the last face met walking downslope through the spec's point
+/// (from twice the recess's size above it to as far below), its floor the ground just
+/// before the face.
+fn recess(
+    line: &CliffLine,
+    ground: &Ground,
+    spec: &RecessSpec,
+    k: usize,
+) -> Result<Recess, LandformError> {
+    let at = spec.at.0;
+    let fail = |why: &str| {
+        LandformError::Invalid(format!(
+            "recess {k} at ({}, {}) {why}: put `at` on the cliff line",
+            at.x, at.y
+        ))
+    };
+    // Downslope over the recess's size, not at one sample: a cave already cut there
+    // would turn the local slope every way.
+    let d = spec.length.0.max(spec.depth.0);
+    let h = |dx: f32, dy: f32| ground.height(at + Vec2::new(dx, dy));
+    let grad = Vec2::new(h(d, 0.0) - h(-d, 0.0), h(0.0, d) - h(0.0, -d));
+    if !grad.is_finite() || grad.length() < 1e-3 * d {
+        return Err(fail("is off the region's ground or on level ground"));
+    }
+    let out = -grad.normalize();
+    let height = spec.height.0;
+    if height >= line.bed.x - line.bed.y {
+        return Err(LandformError::Invalid(format!(
+            "recess {k} is {height} m high in a bed {} m thick: leave a lip",
+            line.bed.x - line.bed.y
+        )));
+    }
+    // Walk from well uphill to well downslope; the face is the last point in a block.
+    let reach = 2.0 * d;
+    let steps = (2.0 * reach / 0.5).ceil() as usize;
+    let face_through = |p: Vec2| {
+        (0..=steps)
+            .map(|i| p + out * (-reach + i as f32 * 0.5))
+            .filter(|&q| line.in_block(q))
+            .last()
+    };
+    let face = face_through(at).ok_or_else(|| fail("meets no block of the cliff"))?;
+    let length = spec.length.0;
+    let pieces = (length / PIECE).ceil().max(1.0) as usize;
+    let faces = (0..pieces)
+        .filter_map(|i| {
+            let along = length * ((i as f32 + 0.5) / pieces as f32 - 0.5);
+            face_through(at + out.perp() * along)
+        })
+        .collect();
+    let floor = ground.height(face + out);
+    if !floor.is_finite() {
+        return Err(fail("opens off the region's ground"));
+    }
+    Ok(Recess {
+        mouth: face.extend(floor),
+        out,
+        size: Vec3::new(length, spec.depth.0, height),
+        faces,
+    })
+}
+
+/// Blocks fallen from the face, about `density` per metre of face: from a sixth to a half
+/// of the joint spacing across, lying from a tenth to one and a half of the bed's
+/// thickness off the face, the larger ones farther; a few breakdown blocks at each recess.
+fn talus(line: &CliffLine, ground: &Ground, rng: &mut Rng, density: f32, t: f32) -> Vec<Fallen> {
+    let mut out = Vec::new();
+    for b in line.blocks.iter().filter(|b| b.face) {
+        let (hg, grad) = ground
+            .top
+            .sample_grad(b.center, crate::dem::Interpolation::Bilinear);
+        if !hg.is_finite() || grad.length() < 1e-3 {
+            continue;
+        }
+        let down = -grad.normalize();
+        let width = 2.0 * b.half.max_element();
+        let expected = density * width;
+        let n = expected.floor() as usize + usize::from(rng.unit() < expected.fract());
+        for _ in 0..n {
+            let far = rng.unit();
+            let size = width * (0.15 + 0.35 * rng.unit()) * (0.7 + 0.6 * far);
+            let off = b.half.length() + (0.1 + 1.4 * far) * t;
+            let xy = b.center + down * off + down.perp() * (width * (rng.unit() - 0.5));
+            out.extend(lying(line, ground, rng, xy, size));
+        }
+    }
+    // Breakdown at the recesses too, unless the scene wants no fallen blocks at all.
+    for r in line.recesses.iter().filter(|_| density > 0.0) {
+        let along = r.out.perp();
+        for k in 0..5 {
+            let inside = k < 2;
+            let off = match inside {
+                true => -(0.2 + 0.4 * rng.unit()) * r.size.y,
+                false => (0.3 + 1.2 * rng.unit()) * r.size.z,
+            };
+            let xy =
+                r.mouth.truncate() + r.out * off + along * (r.size.x * 0.8 * (rng.unit() - 0.5));
+            let size = r.size.z * (0.2 + 0.3 * rng.unit());
+            match inside {
+                // On the recess's level floor, not on the hill it was cut from.
+                true => out.push(Fallen {
+                    center: xy.extend(r.mouth.z),
+                    half: quarter_turn(rng, 0.5 * size * Vec3::new(1.0, 0.7, 0.5)),
+                }),
+                false => out.extend(lying(line, ground, rng, xy, size)),
+            }
+        }
+    }
+    out
+}
+
+/// A block of `size` lying half sunk at `xy`, none off the ground or on the cliff.
+fn lying(line: &CliffLine, ground: &Ground, rng: &mut Rng, xy: Vec2, size: f32) -> Option<Fallen> {
+    let h = ground.height(xy);
+    let r = ground.region;
+    let side = (xy - r.min.truncate())
+        .min(r.max.truncate() - xy)
+        .min_element();
+    // Off the cliff, on the region's ground, and wholly inside its sides.
+    if !h.is_finite() || line.in_block(xy) || side < 1.5 * size {
+        return None;
+    }
+    let half = 0.5
+        * size
+        * Vec3::new(
+            0.8 + 0.5 * rng.unit(),
+            0.6 + 0.4 * rng.unit(),
+            0.4 + 0.4 * rng.unit(),
+        );
+    Some(Fallen {
+        // Sunk to below its middle: fallen rock settles into the slope's debris.
+        center: xy.extend(h - 0.3 * half.z),
+        half: quarter_turn(rng, half),
+    })
+}
+
+/// `half` turned by a quarter turn about the vertical, or not, at random.
+fn quarter_turn(rng: &mut Rng, half: Vec3) -> Vec3 {
+    match rng.unit() < 0.5 {
+        true => half,
+        false => Vec3::new(half.y, half.x, half.z),
+    }
+}
+
+fn boxed(center: Vec3, half: Vec3, yaw: f32, falloff: f32, noise: Option<NoiseSpec>) -> NodeSpec {
+    solid(
+        SkeletonSpec::Box {
+            center: p3(center),
+            half_size: Size3(half.map(round3)),
+            yaw: Finite(round3(yaw)),
+        },
+        round3(falloff).max(0.01),
+        noise,
+    )
+}
+
+impl CliffLine {
+    /// The rocks: three beds per joint block, then the fallen blocks, as boxes turned to
+    /// the joint frame (the GPU tape encodes boxes turned by quarter turns only: a strike
+    /// that is a multiple of 90° keeps a scene on the GPU).
+    pub fn rocks(&self, joints: f32) -> Vec<NodeSpec> {
+        let yaw = self.axis.y.atan2(self.axis.x).to_degrees();
+        let falloff = block_falloff(joints);
+        let mut out = Vec::with_capacity(3 * self.blocks.len() + self.fallen.len());
+        for (k, b) in self.blocks.iter().enumerate() {
+            // From the foot up: the lower bed, the middle one, the top one, each over the
+            // one below; a block whose top broke away keeps what lies under its top.
+            let beds = [
+                (b.root, self.bedding.x, b.inset.x),
+                (self.bedding.x, self.bedding.y, b.inset.y),
+                (self.bedding.y, b.top, 0.0),
+            ];
+            for (l, &(lo, hi, inset)) in beds.iter().enumerate() {
+                let hi = hi.min(b.top);
+                if hi - lo < 0.5 {
+                    continue;
+                }
+                // Weathered back on the bare sides only: the bed recedes from the face.
+                let cut = |side: usize| if b.bare[side] { inset } else { 0.0 };
+                let (q0, q1) = (
+                    -b.half + Vec2::new(cut(1), cut(3)),
+                    b.half - Vec2::new(cut(0), cut(2)),
+                );
+                let mid = 0.5 * (q0 + q1);
+                let center = b.center + self.axis * mid.x + self.axis.perp() * mid.y;
+                out.push(boxed(
+                    center.extend(0.5 * (lo + hi)),
+                    (0.5 * (q1 - q0))
+                        .max(Vec2::splat(0.5))
+                        .extend(0.5 * (hi - lo)),
+                    yaw,
+                    falloff,
+                    noise(
+                        0.12 * joints,
+                        0.8 * joints,
+                        4,
+                        200 + 3 * k as u32 + l as u32,
+                    ),
+                ));
+            }
+        }
+        for (k, f) in self.fallen.iter().enumerate() {
+            let size = 2.0 * f.half.max_element();
+            out.push(boxed(
+                f.center,
+                f.half,
+                yaw,
+                (0.35 * size).max(0.2),
+                noise(0.12 * size, 0.7 * size, 3, 100 + k as u32),
+            ));
+        }
+        out
+    }
+
+    /// The recesses: each a level-roofed hollow, turned to face out of the cliff.
+    pub fn hollows(&self) -> Vec<NodeSpec> {
+        self.recesses
+            .iter()
+            .enumerate()
+            .map(|(k, r)| {
+                let (length, depth, height) = (r.size.x, r.size.y, r.size.z);
+                // In the recess's frame x runs along the face and +y into the hill.
+                let along = r.out.perp();
+                // One vault per piece of face, set back into the hill so it opens the face
+                // without cutting the slope before it.
+                let pieces = (length / PIECE).ceil().max(1.0);
+                let vaults = r
+                    .faces
+                    .iter()
+                    .enumerate()
+                    .map(|(i, f)| {
+                        let d = *f - r.mouth.truncate();
+                        let local = Vec2::new(d.dot(along), -d.dot(r.out) + 0.5 * depth);
+                        solid(
+                            SkeletonSpec::Ellipsoid {
+                                center: p3(local.extend(r.mouth.z)),
+                                radii: Size3(
+                                    Vec3::new(length / pieces, 0.75 * depth, 1.3 * height)
+                                        .map(round3),
+                                ),
+                            },
+                            round3((0.15 * height).max(0.5)),
+                            noise(0.1 * height, 0.6 * height, 3, 60 + 16 * k as u32 + i as u32),
+                        )
+                    })
+                    .collect();
+                let vault = NodeSpec::Union(Nary {
+                    name: None,
+                    children: vaults,
+                });
+                let roof = boxed(
+                    Vec3::new(0.0, 0.0, r.mouth.z + 0.5 * height),
+                    Vec3::new(length, 2.0 * depth, 0.5 * height),
+                    0.0,
+                    (0.05 * height).max(0.3),
+                    noise(0.03 * height, 0.4 * length, 2, 80 + k as u32),
+                );
+                NodeSpec::Transform(TransformSpec {
+                    name: None,
+                    translate: p3(r.mouth.truncate().extend(0.0)),
+                    rotate: Some(Rotation {
+                        axis: Dir3(Vec3::Z),
+                        degrees: Finite(round3(along.y.atan2(along.x).to_degrees())),
+                    }),
+                    scale: Default::default(),
+                    child: Box::new(NodeSpec::Intersection(Nary {
+                        name: None,
+                        children: vec![vault, roof],
+                    })),
+                })
+            })
+            .collect()
+    }
+}
