@@ -240,7 +240,7 @@ impl CaprockSpec {
                     && heights[0] >= top - bed * (1.0 - jitter)
                     && lowest <= top + 1.0
                     && half.min_element() > 1.0;
-                cells.push(stands.then(|| JointBlock {
+                cells.push(stands.then_some(JointBlock {
                     center,
                     half,
                     top: top + 0.04 * t * (2.0 * top_jitter - 1.0),
@@ -351,8 +351,7 @@ fn recess(
     let face_through = |p: Vec2| {
         (0..=steps)
             .map(|i| p + out * (-reach + i as f32 * 0.5))
-            .filter(|&q| line.in_block(q))
-            .last()
+            .rfind(|&q| line.in_block(q))
     };
     let face = face_through(at).ok_or_else(|| fail("meets no block of the cliff"))?;
     let length = spec.length.0;
