@@ -798,12 +798,14 @@ fn carving_landforms_fade_inside_their_region_and_stop_at_its_faces() {
 }
 
 /// A slope of 1 in 2 falling east, under a sandstone bed from z = −6 to 10 that crops
-/// out across it (its base meets the ground at x = 12), with a rock shelter.
+/// out across it (its base meets the ground at x = 12), with a rock shelter and a spur with
+/// a window.
 const CAPROCK_SCENE: &str = "(version: 1, seed: 2, \
     root: Landform(name: \"cliff\", seed: 4, cell: 2, region: (min: (-100, -80, -60), max: (100, 80, 60)), \
         base: Transform(name: \"ground\", rotate: (axis: (0, 1, 0), degrees: 26.56505), \
             child: Primitive(shape: Box(center: (0, 0, -100), half_size: (400, 400, 100)), falloff: 1.0)), \
         generator: Caprock(top: 10, thickness: 16, joints: 8, strike: 15, \
+            spurs: [(from: (12, 25), to: (42, 25), width: 9, window: 14)], \
             recesses: [(at: (14, 0), length: 20, depth: 8, height: 7)])))";
 
 fn caprock() -> (karstic::landform::CliffLine, Tree, Tree) {
@@ -842,10 +844,9 @@ fn a_caprock_stands_as_a_cliff_where_its_bed_crops_out() {
     let (line, tree, base) = caprock();
     assert_eq!(line.bed, Vec2::new(10.0, -6.0));
     // Across the middle, clear of the sides' fade: walking east at each y, the top drops
-    // by at least half the bed within 3 m, where the bed's base meets the slope (±8 m,
-    // the joints' reach), and nowhere else by more than a metre per metre beyond the
-    // slope's half.
-    for k in 0..12 {
+    // by at least half the bed within 3 m, near where the bed's base meets the slope.
+    // (North of y = 14 the spur stands out from the face.)
+    for k in 0..9 {
         let y = -27.5 + 5.0 * k as f32;
         let tops: Vec<f32> = (0..=140)
             .map(|i| top_at(&tree, Vec2::new(-40.0 + 0.5 * i as f32, y), -60.0, 60.0).unwrap())
@@ -856,9 +857,10 @@ fn a_caprock_stands_as_a_cliff_where_its_bed_crops_out() {
         let x = -40.0 + 0.5 * i as f32;
         assert!(drop > 8.0, "y {y}: the top drops by {drop} m at most");
         // Blocks stand where the ground reaches the base within a quarter of the bed (8 m
-        // along this slope), and a block reaches a joint spacing beyond its middle.
+        // along this slope), a block reaches a joint spacing beyond its middle, and the
+        // warp moves faces by a quarter spacing more.
         assert!(
-            (x - 12.0).abs() < 16.0,
+            (x - 12.0).abs() < 18.0,
             "y {y}: the cliff stands at x = {x}"
         );
         // Its top is the bed's top, not the slope's.
@@ -930,8 +932,11 @@ fn a_caprock_shelter_is_a_hollow_under_a_lip_of_its_bed() {
         open += usize::from(tree.value(inside.extend(r.mouth.z + 0.5 * r.size.z)) < ISO);
         let lip = r.mouth.z + r.size.z + 0.5 * (line.bed.x - r.mouth.z - r.size.z);
         assert!(tree.value(inside.extend(lip)) > ISO, "no lip over {inside}");
+        // Rock under the floor (or under the slope, where the face steps out and the floor
+        // runs above it).
+        let floor = r.mouth.z.min(slope_at(inside.x));
         assert!(
-            tree.value(inside.extend(r.mouth.z - 1.5)) > ISO,
+            tree.value(inside.extend(floor - 1.5)) > ISO,
             "no floor at {inside}"
         );
     }
@@ -957,4 +962,30 @@ fn a_caprock_shelter_is_a_hollow_under_a_lip_of_its_bed() {
             f.center
         );
     }
+}
+
+#[test]
+fn a_caprock_spur_window_is_an_arch_under_the_beds_top_layer() {
+    let (line, tree, _) = caprock();
+    let w = line.windows[0];
+    assert_eq!(w.along, Vec2::X);
+    // Its floor is the highest ground under the span, its roof the base of the top layer.
+    assert!((w.floor.z - slope_at(27.0 - 7.0)).abs() < 1.0, "floor at {}", w.floor.z);
+    assert_eq!(w.roof, line.bedding.y);
+    // Across the spur's middle: open from above the floor to below the roof, rock over it
+    // (the lintel, up to the spur's worn top), and the same all along the middle third of
+    // the span.
+    let mut open = 0;
+    let mut total = 0;
+    for i in -2..=2 {
+        let xy = w.floor.truncate() + w.along * (i as f32 * w.span / 12.0);
+        for k in 1..8 {
+            let z = w.floor.z + 1.0 + (w.roof - w.floor.z - 2.0) * k as f32 / 8.0;
+            open += usize::from(tree.value(xy.extend(z)) < ISO);
+            total += 1;
+        }
+        let lintel = w.roof + 1.0;
+        assert!(tree.value(xy.extend(lintel)) > ISO, "no lintel over {xy}");
+    }
+    assert!(open * 10 >= total * 9, "the window is open at {open} of {total} points");
 }

@@ -43,8 +43,8 @@ use crate::field::skeleton::Size3;
 use crate::field::{NoiseSpec, SkeletonSpec};
 use crate::rng::Rng;
 use crate::scene::NodeSpec;
-use crate::scene::landform::{CaprockSpec, RecessSpec};
-use crate::scene::spec::{Nary, Rotation, TransformSpec};
+use crate::scene::landform::{CaprockSpec, RecessSpec, SpurSpec};
+use crate::scene::spec::{Nary, Rotation, TransformSpec, WarpSpec};
 use crate::value::{Dir3, Finite};
 
 /// Joint spacings the generator accepts, metres.
@@ -69,6 +69,9 @@ pub struct JointBlock {
     pub root: f32,
     /// How far the middle and lower beds are weathered back from the joints, metres.
     pub inset: Vec2,
+    /// The block's bedding planes: the top of its lower bed and of its middle one (the
+    /// line's planes, each a little up or down: beds pinch and swell).
+    pub beds: Vec2,
     /// Whether it stands in the cliff's face (a neighbour on lower ground is gone).
     pub face: bool,
     /// Which of its sides are bare (no block beside them): `+u`, `−u`, `+v`, `−v` of the
@@ -89,6 +92,9 @@ pub struct Recess {
     /// at the joints, and the recess follows it).
     pub faces: Vec<Vec2>,
 }
+
+/// The warp of the blocks: its amplitude and wavelength in joint spacings.
+const WARP: (f32, f32) = (0.25, 2.0);
 
 /// The length of face one piece of a recess follows, metres.
 const PIECE: f32 = 6.0;
@@ -119,6 +125,23 @@ pub struct CliffLine {
     pub recesses: Vec<Recess>,
     /// The talus.
     pub fallen: Vec<Fallen>,
+    /// The windows through the spurs.
+    pub windows: Vec<Window>,
+}
+
+/// A window through a spur: a natural arch whose lintel is the bed's top layer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Window {
+    /// The middle of its floor.
+    pub floor: Vec3,
+    /// Horizontal direction along the spur (across the opening's span), unit.
+    pub along: Vec2,
+    /// The span.
+    pub span: f32,
+    /// The spur's width.
+    pub width: f32,
+    /// The height of its roof: the base of the bed's top layer.
+    pub roof: f32,
 }
 
 impl CliffLine {
@@ -139,7 +162,7 @@ fn block_falloff(spacing: f32) -> f32 {
     (0.06 * spacing).clamp(0.3, 1.5)
 }
 
-/// Joint positions across `[lo, hi]`: a joint before `lo`, then steps of 60% to 140% of
+/// Joint positions across `[lo, hi]`: a joint before `lo`, then steps of 50% to 160% of
 /// `spacing` until past `hi`; each with the width its weathering opened: 1.4 to 2.8 block
 /// falloffs for half of them, none (a tight joint) for the others.
 fn joint_set(rng: &mut Rng, lo: f32, hi: f32, spacing: f32) -> Vec<(f32, f32)> {
@@ -152,7 +175,7 @@ fn joint_set(rng: &mut Rng, lo: f32, hi: f32, spacing: f32) -> Vec<(f32, f32)> {
         if x > hi {
             return out;
         }
-        x += spacing * (0.6 + 0.8 * rng.unit());
+        x += spacing * (0.5 + 1.1 * rng.unit());
     }
 }
 
@@ -216,7 +239,8 @@ impl CaprockSpec {
                 let q1 = Vec2::new(b.0 - 0.5 * b.1, d.0 - 0.5 * d.1);
                 let jitter = 0.25 * (2.0 * rng.unit() - 1.0);
                 let top_jitter = rng.unit();
-                let inset = Vec2::new(0.06 + 0.1 * rng.unit(), 0.03 * rng.unit()) * t;
+                let inset = Vec2::new(0.04 + 0.12 * rng.unit(), 0.05 * rng.unit()) * t;
+                let beds = bedding + 0.05 * t * Vec2::new(rng.unit() - 0.5, rng.unit() - 0.5);
                 let center = to_world(0.5 * (q0 + q1));
                 let half = 0.5 * (q1 - q0);
                 let heights = [
@@ -234,18 +258,22 @@ impl CaprockSpec {
                 let bed = t * super::smoothstep(0.0, fade, side.min_element());
                 // Nothing of the block, its rounding or its roughness, past the sides.
                 let margin = half.length() + block_falloff(s) + 0.12 * s;
-                let stands = heights.iter().all(|h| h.is_finite())
+                // On a spur the bed stands whatever the ground, worn lower toward its end.
+                let spur = self.spurs.iter().find_map(|sp| on_spur(sp, center, half));
+                let inside = heights.iter().all(|h| h.is_finite())
                     && side.min_element() > margin
-                    && bed > 0.5
-                    && heights[0] >= top - bed * (1.0 - jitter)
                     && lowest <= top + 1.0
                     && half.min_element() > 1.0;
+                let stands = inside
+                    && (spur.is_some() || (bed > 0.5 && heights[0] >= top - bed * (1.0 - jitter)));
+                let worn = spur.map_or(0.0, |f| 0.3 * t * f * f);
                 cells.push(stands.then_some(JointBlock {
                     center,
                     half,
-                    top: top + 0.04 * t * (2.0 * top_jitter - 1.0),
+                    top: top - worn + 0.04 * t * (2.0 * top_jitter - 1.0),
                     root: lowest - 2.0,
                     inset,
+                    beds,
                     face: false,
                     bare: [false; 4],
                 }));
@@ -279,8 +307,9 @@ impl CaprockSpec {
             .filter_map(|(b, (face, bare))| {
                 let mut b = b?;
                 (b.face, b.bare) = (face, bare);
-                if face && rng.unit() < 0.2 {
-                    b.top = bedding.y + (b.top - bedding.y) * rng.unit() * 0.5;
+                let on_a_spur = self.spurs.iter().any(|sp| on_spur(sp, b.center, b.half).is_some());
+                if face && rng.unit() < 0.2 && !on_a_spur {
+                    b.top = b.beds.y + (b.top - b.beds.y) * rng.unit() * 0.5;
                 }
                 Some(b)
             })
@@ -292,7 +321,14 @@ impl CaprockSpec {
             blocks,
             recesses: Vec::new(),
             fallen: Vec::new(),
+            windows: Vec::new(),
         };
+        line.windows = self
+            .spurs
+            .iter()
+            .enumerate()
+            .filter_map(|(k, sp)| sp.window.map(|w| window(&line, ground, sp, w.0, k)))
+            .collect::<Result<_, _>>()?;
         line.recesses = self
             .recesses
             .iter()
@@ -309,8 +345,65 @@ impl CaprockSpec {
         ground: &Ground,
     ) -> Result<(Vec<NodeSpec>, Vec<NodeSpec>), LandformError> {
         let line = self.shape(ground)?;
-        Ok((line.rocks(self.joints.0), line.hollows()))
+        let s = self.joints.0;
+        // The blocks warped as one: joints wander, faces bulge and recede, beds pinch and
+        // swell, and no block stays a box.
+        let warped = NodeSpec::Warp(WarpSpec {
+            name: None,
+            turbulence: noise(WARP.0 * s, WARP.1 * s, 3, 7)
+                .expect("a noise of positive wavelength"),
+            region: None,
+            child: Box::new(NodeSpec::Blend(Nary {
+                name: None,
+                children: line.rocks(s),
+            })),
+        });
+        Ok((vec![warped], line.hollows()))
     }
+}
+
+/// Where a block of half extents `half` about `xy` lies along the spur, from 0 at the cliff
+/// to 1 at its end, when it reaches the spur's band (whole blocks stand on a spur).
+fn on_spur(spur: &SpurSpec, xy: Vec2, half: Vec2) -> Option<f32> {
+    let (a, b) = (spur.from.0, spur.to.0);
+    let ab = b - a;
+    let f = ((xy - a).dot(ab) / ab.length_squared().max(1e-6)).clamp(0.0, 1.0);
+    (xy.distance(a + ab * f) <= 0.5 * spur.width.0 + half.min_element()).then_some(f)
+}
+
+/// The window of spur `k`, `span` metres across its middle.
+fn window(
+    line: &CliffLine,
+    ground: &Ground,
+    spur: &SpurSpec,
+    span: f32,
+    k: usize,
+) -> Result<Window, LandformError> {
+    let (a, b) = (spur.from.0, spur.to.0);
+    let length = a.distance(b);
+    let middle = 0.5 * (a + b);
+    let along = (b - a) / length;
+    // Level with the highest ground under the span: on a slope the opening stands on a
+    // sill of the spur's rock at its lower end, and cuts no ground at its upper end.
+    let floor = [-0.5, -0.25, 0.0, 0.25, 0.5]
+        .map(|f| ground.height(middle + along * (f * span)))
+        .into_iter()
+        .fold(f32::NEG_INFINITY, f32::max);
+    let roof = line.bedding.y;
+    if !(span < length && floor.is_finite() && roof > floor + 2.0) {
+        return Err(LandformError::Invalid(format!(
+            "spur {k}'s window of {span} m: give a span under the spur's length ({length:.1} m) \
+             where the ground at its middle ({floor:.1} m) lies 2 m or more under the base of \
+             the bed's top layer ({roof:.1} m)"
+        )));
+    }
+    Ok(Window {
+        floor: middle.extend(floor),
+        along,
+        span,
+        width: spur.width.0,
+        roof,
+    })
 }
 
 /// Where recess `k` opens: the last face met walking downslope through the spec's point
@@ -391,9 +484,10 @@ fn talus(line: &CliffLine, ground: &Ground, rng: &mut Rng, density: f32, t: f32)
         let expected = density * width;
         let n = expected.floor() as usize + usize::from(rng.unit() < expected.fract());
         for _ in 0..n {
+            // Many small blocks, few large (a cubed uniform draw), the larger rolled farther.
             let far = rng.unit();
-            let size = width * (0.15 + 0.35 * rng.unit()) * (0.7 + 0.6 * far);
-            let off = b.half.length() + (0.1 + 1.4 * far) * t;
+            let size = width * (0.08 + 0.45 * rng.unit().powi(3)) * (0.6 + 0.8 * far);
+            let off = b.half.length() + (0.05 + 1.2 * far * far) * t;
             let xy = b.center + down * off + down.perp() * (width * (rng.unit() - 0.5));
             out.extend(lying(line, ground, rng, xy, size));
         }
@@ -439,11 +533,11 @@ fn lying(line: &CliffLine, ground: &Ground, rng: &mut Rng, xy: Vec2, size: f32) 
         * Vec3::new(
             0.8 + 0.5 * rng.unit(),
             0.6 + 0.4 * rng.unit(),
-            0.4 + 0.4 * rng.unit(),
+            0.5 + 0.4 * rng.unit(),
         );
     Some(Fallen {
         // Sunk to below its middle: fallen rock settles into the slope's debris.
-        center: xy.extend(h - 0.3 * half.z),
+        center: xy.extend(h - 0.4 * half.z),
         half: quarter_turn(rng, half),
     })
 }
@@ -468,6 +562,42 @@ fn boxed(center: Vec3, half: Vec3, yaw: f32, falloff: f32, noise: Option<NoiseSp
     )
 }
 
+impl Window {
+    /// The opening: a vault spanning the window at the floor, cut level at the roof, through
+    /// the spur and no farther (the hill beside it keeps its ground).
+    fn hollow(&self) -> NodeSpec {
+        let rise = self.roof - self.floor.z;
+        let vault = solid(
+            SkeletonSpec::Ellipsoid {
+                center: p3(Vec3::new(0.0, 0.0, self.floor.z)),
+                radii: Size3(Vec3::new(0.5 * self.span, 0.7 * self.width, 1.25 * rise).map(round3)),
+            },
+            round3((0.1 * rise).max(0.5)),
+            noise(0.06 * rise, 0.4 * self.span, 3, 90),
+        );
+        let roof = boxed(
+            Vec3::new(0.0, 0.0, self.roof - 0.5 * (rise + 5.0)),
+            Vec3::new(self.span, 3.0 * self.width, 0.5 * (rise + 5.0)),
+            0.0,
+            0.3,
+            noise(0.02 * rise, 0.3 * self.span, 2, 91),
+        );
+        NodeSpec::Transform(TransformSpec {
+            name: None,
+            translate: p3(self.floor.truncate().extend(0.0)),
+            rotate: Some(Rotation {
+                axis: Dir3(Vec3::Z),
+                degrees: Finite(round3(self.along.y.atan2(self.along.x).to_degrees())),
+            }),
+            scale: Default::default(),
+            child: Box::new(NodeSpec::Intersection(Nary {
+                name: None,
+                children: vec![vault, roof],
+            })),
+        })
+    }
+}
+
 impl CliffLine {
     /// The rocks: three beds per joint block, then the fallen blocks, as boxes turned to
     /// the joint frame (the GPU tape encodes boxes turned by quarter turns only: a strike
@@ -480,9 +610,9 @@ impl CliffLine {
             // From the foot up: the lower bed, the middle one, the top one, each over the
             // one below; a block whose top broke away keeps what lies under its top.
             let beds = [
-                (b.root, self.bedding.x, b.inset.x),
-                (self.bedding.x, self.bedding.y, b.inset.y),
-                (self.bedding.y, b.top, 0.0),
+                (b.root, b.beds.x, b.inset.x),
+                (b.beds.x, b.beds.y, b.inset.y),
+                (b.beds.y, b.top, 0.0),
             ];
             for (l, &(lo, hi, inset)) in beds.iter().enumerate() {
                 let hi = hi.min(b.top);
@@ -504,12 +634,7 @@ impl CliffLine {
                         .extend(0.5 * (hi - lo)),
                     yaw,
                     falloff,
-                    noise(
-                        0.12 * joints,
-                        0.8 * joints,
-                        4,
-                        200 + 3 * k as u32 + l as u32,
-                    ),
+                    noise(0.15 * joints, joints, 5, 200 + 3 * k as u32 + l as u32),
                 ));
             }
         }
@@ -520,7 +645,7 @@ impl CliffLine {
                 f.half,
                 yaw,
                 (0.35 * size).max(0.2),
-                noise(0.12 * size, 0.7 * size, 3, 100 + k as u32),
+                noise(0.18 * size, 0.6 * size, 3, 100 + k as u32),
             ));
         }
         out
@@ -528,7 +653,7 @@ impl CliffLine {
 
     /// The recesses: each a level-roofed hollow, turned to face out of the cliff.
     pub fn hollows(&self) -> Vec<NodeSpec> {
-        self.recesses
+        let recesses = self.recesses
             .iter()
             .enumerate()
             .map(|(k, r)| {
@@ -583,6 +708,7 @@ impl CliffLine {
                     })),
                 })
             })
-            .collect()
+            .collect::<Vec<_>>();
+        recesses.into_iter().chain(self.windows.iter().map(Window::hollow)).collect()
     }
 }

@@ -79,9 +79,29 @@ pub struct CaprockSpec {
     /// (narrow and deep), each under a lip of the hard bed.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub recesses: Vec<RecessSpec>,
+    /// Spurs of the bed left standing out from the cliff, each with an optional window
+    /// through it (a natural arch whose lintel is the bed's top layer).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub spurs: Vec<SpurSpec>,
     /// Fallen blocks per metre of cliff face (default 0.15; 0 for none).
     #[serde(default = "caprock_default_talus")]
     pub talus: NonNegative,
+}
+
+/// A spur of a caprock cliff: a narrow run of the bed's blocks standing out from the face.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpurSpec {
+    /// Where it leaves the cliff (tree frame, x and y).
+    pub from: P2,
+    /// Where it ends.
+    pub to: P2,
+    /// Its width, metres.
+    pub width: Positive,
+    /// The span of a window through its middle, metres: the opening's floor is the ground,
+    /// its roof the base of the bed's top layer, which stands over it as the lintel.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub window: Option<Positive>,
 }
 
 /// A recess in the foot of a caprock cliff: a rock shelter or a cave mouth.
