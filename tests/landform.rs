@@ -970,7 +970,11 @@ fn a_caprock_spur_window_is_an_arch_under_the_beds_top_layer() {
     let w = line.windows[0];
     assert_eq!(w.along, Vec2::X);
     // Its floor is the highest ground under the span, its roof the base of the top layer.
-    assert!((w.floor.z - slope_at(27.0 - 7.0)).abs() < 1.0, "floor at {}", w.floor.z);
+    assert!(
+        (w.floor.z - slope_at(27.0 - 7.0)).abs() < 1.0,
+        "floor at {}",
+        w.floor.z
+    );
     assert_eq!(w.roof, line.bedding.y);
     // Across the spur's middle: open from above the floor to below the roof, rock over it
     // (the lintel, up to the spur's worn top), and the same all along the middle third of
@@ -987,5 +991,8 @@ fn a_caprock_spur_window_is_an_arch_under_the_beds_top_layer() {
         let lintel = w.roof + 1.0;
         assert!(tree.value(xy.extend(lintel)) > ISO, "no lintel over {xy}");
     }
-    assert!(open * 10 >= total * 9, "the window is open at {open} of {total} points");
+    assert!(
+        open * 10 >= total * 9,
+        "the window is open at {open} of {total} points"
+    );
 }

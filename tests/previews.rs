@@ -272,3 +272,24 @@ fn run_and_render_draw_the_same_picture() {
         100.0 * far
     );
 }
+
+/// A job view under a name that is no feature is a close-up of its own, written after the
+/// features' (a part of a landform: an arch, a shelter).
+#[test]
+fn a_job_view_of_no_feature_is_written_after_the_features() {
+    let dir = tempfile::tempdir().unwrap();
+    let tree = dir.path().join("t.ron");
+    std::fs::write(
+        &tree,
+        "(version: 1, job: (region: (min: (-40, -30, -6), max: (40, 30, 30)), cell: 2.0, \
+         image: (64, 36), views: {\"overlook\": (eye: (0, -60, 20), target: (0, 0, 10))}), \
+         root: Difference(base: Primitive(name: \"ground\", shape: Box(center: (0, 0, -4), \
+         half_size: (60, 40, 4)), falloff: 3.0), carves: [Primitive(name: \"pit\", \
+         shape: Sphere(center: (0, 0, 0), radius: 6), falloff: 2.0)]))",
+    )
+    .unwrap();
+    let r = job::run(&tree, &quiet_job(&dir.path().join("out"), true)).unwrap();
+    let names: Vec<&str> = r.views.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["pit", "overlook", "sheet"]);
+    assert!(rgb(&r.views[1].1).width() == 32);
+}

@@ -278,17 +278,24 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
                     .unwrap_or((camera.width / 2, camera.height / 2));
                 let fov = job.as_ref().map_or(DEFAULT_FOV, |j| j.fov.0);
                 let mut frames = vec![frame];
-                for name in file.scene.feature_names() {
-                    let Some(id) = feature_node(&tree, name) else {
-                        continue;
-                    };
+                let features = file.scene.feature_names();
+                // The features' views, then the views of the job's other names.
+                let others = job.iter().flat_map(|j| j.views.keys());
+                let others = others.filter(|n| !features.contains(&n.as_str()));
+                let names: Vec<&str> = features
+                    .iter()
+                    .copied()
+                    .chain(others.map(String::as_str))
+                    .collect();
+                for name in names {
                     let fixed = job.as_ref().and_then(|j| j.views.get(name));
-                    let view = match fixed {
-                        Some(c) => Some(Camera::look_at(c.eye.0, c.target.0, fov, w, h)?),
-                        None => {
+                    let view = match (fixed, feature_node(&tree, name)) {
+                        (Some(c), _) => Some(Camera::look_at(c.eye.0, c.target.0, fov, w, h)?),
+                        (None, Some(id)) => {
                             let feature = tree.info(id).support.intersection(region);
                             views::feature_view(&tree, &guides, &feature, &materials, fov, (w, h))?
                         }
+                        (None, None) => continue,
                     };
                     let Some(view) = view else {
                         notices.push(format!(

@@ -119,6 +119,8 @@ pub struct CliffLine {
     pub bedding: Vec2,
     /// The joint frame's first axis (unit, along the strike).
     pub axis: Vec2,
+    /// The mean joint spacing.
+    pub joints: f32,
     /// The blocks.
     pub blocks: Vec<JointBlock>,
     /// The recesses, in the order of the spec.
@@ -256,8 +258,9 @@ impl CaprockSpec {
                 // slope instead of stopping at a wall.
                 let side = (center - r.min.truncate()).min(r.max.truncate() - center);
                 let bed = t * super::smoothstep(0.0, fade, side.min_element());
-                // Nothing of the block, its rounding or its roughness, past the sides.
-                let margin = half.length() + block_falloff(s) + 0.12 * s;
+                // Nothing of the block, its rounding, its roughness or its warp past the
+                // sides.
+                let margin = half.length() + block_falloff(s) + (0.15 + 2.0 * WARP.0) * s;
                 // On a spur the bed stands whatever the ground, worn lower toward its end.
                 let spur = self.spurs.iter().find_map(|sp| on_spur(sp, center, half));
                 let inside = heights.iter().all(|h| h.is_finite())
@@ -307,7 +310,10 @@ impl CaprockSpec {
             .filter_map(|(b, (face, bare))| {
                 let mut b = b?;
                 (b.face, b.bare) = (face, bare);
-                let on_a_spur = self.spurs.iter().any(|sp| on_spur(sp, b.center, b.half).is_some());
+                let on_a_spur = self
+                    .spurs
+                    .iter()
+                    .any(|sp| on_spur(sp, b.center, b.half).is_some());
                 if face && rng.unit() < 0.2 && !on_a_spur {
                     b.top = b.beds.y + (b.top - b.beds.y) * rng.unit() * 0.5;
                 }
@@ -318,6 +324,7 @@ impl CaprockSpec {
             bed: Vec2::new(top, base),
             bedding,
             axis,
+            joints: s,
             blocks,
             recesses: Vec::new(),
             fallen: Vec::new(),
@@ -524,8 +531,13 @@ fn lying(line: &CliffLine, ground: &Ground, rng: &mut Rng, xy: Vec2, size: f32) 
     let side = (xy - r.min.truncate())
         .min(r.max.truncate() - xy)
         .min_element();
-    // Off the cliff, on the region's ground, and wholly inside its sides.
-    if !h.is_finite() || line.in_block(xy) || side < 1.5 * size {
+    // Off the cliff, on the region's ground, and wholly inside its sides; none under two
+    // cells of the analysis grid (a mesh at that cell would leave it as a speck).
+    if size < 2.0 * ground.top.cell().max_element()
+        || !h.is_finite()
+        || line.in_block(xy)
+        || side < 1.5 * size + 2.0 * WARP.0 * line.joints
+    {
         return None;
     }
     let half = 0.5
@@ -653,7 +665,8 @@ impl CliffLine {
 
     /// The recesses: each a level-roofed hollow, turned to face out of the cliff.
     pub fn hollows(&self) -> Vec<NodeSpec> {
-        let recesses = self.recesses
+        let recesses = self
+            .recesses
             .iter()
             .enumerate()
             .map(|(k, r)| {
@@ -709,6 +722,9 @@ impl CliffLine {
                 })
             })
             .collect::<Vec<_>>();
-        recesses.into_iter().chain(self.windows.iter().map(Window::hollow)).collect()
+        recesses
+            .into_iter()
+            .chain(self.windows.iter().map(Window::hollow))
+            .collect()
     }
 }

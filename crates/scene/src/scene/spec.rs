@@ -211,8 +211,10 @@ pub struct JobSpec {
     /// Cell size of the whole-scene mesh made with `--full` (default: 4 × `cell`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub full_cell: Option<Positive>,
-    /// Cameras of feature views, by feature name, where the automatic close-up does not
-    /// suit (`karstic run` writes a view of each named feature).
+    /// Cameras of the close-ups, by name: a feature's name fixes that feature's view where
+    /// the automatic close-up does not suit; any other name adds a view of its own (a part
+    /// of a landform: an arch, a shelter). `karstic run` writes a view of each named feature,
+    /// then of each other name, in the order of the names.
     #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub views: std::collections::BTreeMap<String, CameraSpec>,
     /// Size of the feature views in pixels (default: half the preview's on each side).
