@@ -354,18 +354,30 @@ impl CaprockSpec {
         let line = self.shape(ground)?;
         let s = self.joints.0;
         // The blocks warped as one: joints wander, faces bulge and recede, beds pinch and
-        // swell, and no block stays a box.
-        let warped = NodeSpec::Warp(WarpSpec {
-            name: None,
-            turbulence: noise(WARP.0 * s, WARP.1 * s, 3, 7)
-                .expect("a noise of positive wavelength"),
-            region: None,
-            child: Box::new(NodeSpec::Blend(Nary {
+        // swell, and no block stays a box. The hollows take the same warp, so a recess's
+        // roof follows the bed it is cut under (a roof cut level under a warped bed would
+        // leave it hanging in thin sheets).
+        let warp = |child: NodeSpec| {
+            NodeSpec::Warp(WarpSpec {
                 name: None,
-                children: line.rocks(s),
-            })),
-        });
-        Ok((vec![warped], line.hollows()))
+                turbulence: noise(WARP.0 * s, WARP.1 * s, 3, 7)
+                    .expect("a noise of positive wavelength"),
+                region: None,
+                child: Box::new(child),
+            })
+        };
+        let nary = |children| Nary {
+            name: None,
+            children,
+        };
+        // The rocks blend, so the blocks' BVH prunes them.
+        let rocks = warp(NodeSpec::Blend(nary(line.rocks(s))));
+        let hollows = line.hollows();
+        let hollows = match hollows.is_empty() {
+            true => hollows,
+            false => vec![warp(NodeSpec::Union(nary(hollows)))],
+        };
+        Ok((vec![rocks], hollows))
     }
 }
 
