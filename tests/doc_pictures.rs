@@ -85,7 +85,7 @@ karstic render trees/hoodoo_field.ron -o hoodoo_field.png --size 640 360 --quiet
 karstic render trees/fin_arch.ron -o fin_arch.png --size 640 360 --quiet
 karstic render trees/jacksboro_bluff.ron -o jacksboro_bluff.png --quiet
 karstic render trees/jacksboro_bluff.ron -o jacksboro_bluff_shelter.png --camera 3640 5190 868 3565 5225 866 --size 640 360 --quiet
-karstic render trees/jacksboro_bluff.ron -o jacksboro_bluff_arch.png --camera 3668 5018 868 3622 5085 866 --size 640 360 --quiet
+karstic render trees/jacksboro_bluff.ron -o jacksboro_bluff_arch.png --camera 3640 5005 866 3624 5085 862 --size 640 360 --quiet
 karstic render trees/jacksboro_canyon.ron -o jacksboro_canyon.png --quiet
 karstic geology section trees/jacksboro_canyon.ron --plane 5350 6450 5950 6450 --z 280 560 --width 960 --outline -o canyon_section.png
 karstic sample trees/strata_islands.ron --box 330 455 40 490 455.5 135 --res 480 2 286 -o islands_caves.npy

@@ -275,7 +275,8 @@ impl CaprockSpec {
                     half,
                     top: top - worn + 0.04 * t * (2.0 * top_jitter - 1.0),
                     root: lowest - 2.0,
-                    inset,
+                    // A spur's beds stand flush: its abutments carry the lintel whole.
+                    inset: if spur.is_some() { Vec2::ZERO } else { inset },
                     beds,
                     face: false,
                     bare: [false; 4],
@@ -360,7 +361,7 @@ impl CaprockSpec {
         let warp = |child: NodeSpec| {
             NodeSpec::Warp(WarpSpec {
                 name: None,
-                turbulence: noise(WARP.0 * s, WARP.1 * s, 3, 7)
+                turbulence: noise(WARP.0 * s, WARP.1 * s, 5, 7)
                     .expect("a noise of positive wavelength"),
                 region: None,
                 child: Box::new(child),
@@ -505,7 +506,7 @@ fn talus(line: &CliffLine, ground: &Ground, rng: &mut Rng, density: f32, t: f32)
         for _ in 0..n {
             // Many small blocks, few large (a cubed uniform draw), the larger rolled farther.
             let far = rng.unit();
-            let size = width * (0.08 + 0.45 * rng.unit().powi(3)) * (0.6 + 0.8 * far);
+            let size = width * (0.15 + 0.45 * rng.unit().powi(3)) * (0.6 + 0.8 * far);
             let off = b.half.length() + (0.05 + 1.2 * far * far) * t;
             let xy = b.center + down * off + down.perp() * (width * (rng.unit() - 0.5));
             out.extend(lying(line, ground, rng, xy, size));
