@@ -373,12 +373,13 @@ impl CaprockSpec {
         };
         // The rocks blend, so the blocks' BVH prunes them.
         let rocks = warp(NodeSpec::Blend(nary(line.rocks(s))));
+        let rocks = std::iter::once(rocks).chain(line.fallen_rocks()).collect();
         let hollows = line.hollows();
         let hollows = match hollows.is_empty() {
             true => hollows,
             false => vec![warp(NodeSpec::Union(nary(hollows)))],
         };
-        Ok((vec![rocks], hollows))
+        Ok((rocks, hollows))
     }
 }
 
@@ -624,13 +625,13 @@ impl Window {
 }
 
 impl CliffLine {
-    /// The rocks: three beds per joint block, then the fallen blocks, as boxes turned to
-    /// the joint frame (the GPU tape encodes boxes turned by quarter turns only: a strike
-    /// that is a multiple of 90° keeps a scene on the GPU).
+    /// The rocks: three beds per joint block, as boxes turned to the joint frame (the GPU
+    /// tape encodes boxes turned by quarter turns only: a strike that is a multiple of 90°
+    /// keeps a scene on the GPU).
     pub fn rocks(&self, joints: f32) -> Vec<NodeSpec> {
         let yaw = self.axis.y.atan2(self.axis.x).to_degrees();
         let falloff = block_falloff(joints);
-        let mut out = Vec::with_capacity(3 * self.blocks.len() + self.fallen.len());
+        let mut out = Vec::with_capacity(3 * self.blocks.len());
         for (k, b) in self.blocks.iter().enumerate() {
             // From the foot up: the lower bed, the middle one, the top one, each over the
             // one below; a block whose top broke away keeps what lies under its top.
@@ -663,17 +664,27 @@ impl CliffLine {
                 ));
             }
         }
-        for (k, f) in self.fallen.iter().enumerate() {
-            let size = 2.0 * f.half.max_element();
-            out.push(boxed(
-                f.center,
-                f.half,
-                yaw,
-                (0.35 * size).max(0.2),
-                noise(0.18 * size, 0.6 * size, 3, 100 + k as u32),
-            ));
-        }
         out
+    }
+
+    /// The fallen blocks, turned to the joint frame (outside the blocks' warp, which
+    /// would lift a block of a few metres off the ground it lies on).
+    pub fn fallen_rocks(&self) -> Vec<NodeSpec> {
+        let yaw = self.axis.y.atan2(self.axis.x).to_degrees();
+        self.fallen
+            .iter()
+            .enumerate()
+            .map(|(k, f)| {
+                let size = 2.0 * f.half.max_element();
+                boxed(
+                    f.center,
+                    f.half,
+                    yaw,
+                    (0.35 * size).max(0.2),
+                    noise(0.18 * size, 0.6 * size, 3, 100 + k as u32),
+                )
+            })
+            .collect()
     }
 
     /// The recesses: each a level-roofed hollow, turned to face out of the cliff.
