@@ -996,3 +996,17 @@ fn a_caprock_spur_window_is_an_arch_under_the_beds_top_layer() {
         "the window is open at {open} of {total} points"
     );
 }
+
+#[test]
+fn the_bluffs_tunnel_opens_through_its_cliff_and_runs_clear() {
+    // trees/jacksboro_bluff.ron: the tunnel's mouth is a recess of the cliff, and the
+    // blocks over the tunnel behind it stop above its roof.
+    let tree = tree_scene("jacksboro_bluff.ron").compile().unwrap().tree;
+    for i in 0..=400 {
+        let p = Vec3::new(3800.0, 4950.0, 863.0)
+            .lerp(Vec3::new(3480.0, 4972.0, 867.0), i as f32 / 400.0);
+        assert!(tree.value(p) < ISO, "rock in the tunnel at {p}");
+    }
+    // It runs inside the hill: rock above its inner part.
+    assert!(tree.value(Vec3::new(3480.0, 4972.0, 886.0)) > ISO);
+}

@@ -17,9 +17,10 @@
 //!   bed, rooted below the ground and topped at the bed's top. A block stands where the
 //!   ground at its middle reaches the bed's base (with a jitter of a quarter of the bed, so
 //!   the cliff's plan-form steps from joint to joint into spurs and re-entrants); blocks
-//!   wholly under the ground above the bed are left out (the hill holds them). Toward the
-//!   region's sides the bed thins out (over [`super::fade_width`], at least six joint
-//!   spacings), so the cliff dies into the slope.
+//!   wholly under the ground above the bed are left out (the hill holds them), and roots
+//!   stop above caves of the ground beneath (a block with one too close under it is left
+//!   out). Toward the region's sides the bed thins out (over [`super::fade_width`], at
+//!   least six joint spacings), so the cliff dies into the slope.
 //! * **Bedding.** Each block is three beds, level across the cliff line: the top one
 //!   whole, the middle one and the lower one (the softest, at the cliff's foot) weathered
 //!   back from the joints by their own depths under each block, so bedding ledges run
@@ -320,6 +321,7 @@ impl CaprockSpec {
                 }
                 Some(b)
             })
+            .filter_map(|b| clear_of_cavities(b, ground, axis, s))
             .collect();
         let mut line = CliffLine {
             bed: Vec2::new(top, base),
@@ -381,6 +383,50 @@ impl CaprockSpec {
         };
         Ok((rocks, hollows))
     }
+}
+
+/// `block` rooted above any cavity of the base under it (a cave the block's root, warped
+/// and roughened, would plug), or `None` when the cavity lies too close under the ground
+/// for a root: columns at its middle and corners are probed from 1.5 m under the ground
+/// down to its root, less the reach of its warp, roughness and rounding.
+fn clear_of_cavities(
+    mut block: JointBlock,
+    ground: &Ground,
+    axis: Vec2,
+    s: f32,
+) -> Option<JointBlock> {
+    let reach = (3f32.sqrt() * WARP.0 + 0.15) * s + block_falloff(s);
+    let across = axis.perp();
+    let columns = [
+        (0.0, 0.0),
+        (1.0, 1.0),
+        (1.0, -1.0),
+        (-1.0, 1.0),
+        (-1.0, -1.0),
+    ]
+    .map(|(u, v)| block.center + axis * (u * block.half.x) + across * (v * block.half.y));
+    let mut lowest = f32::INFINITY;
+    let mut cavity = f32::NEG_INFINITY;
+    for xy in columns {
+        let h = ground.height(xy);
+        if !h.is_finite() {
+            continue;
+        }
+        lowest = lowest.min(h);
+        let mut z = h - 1.5;
+        while z > block.root - reach {
+            if !ground.solid(xy.extend(z)) {
+                cavity = cavity.max(z);
+                break;
+            }
+            z -= 0.5;
+        }
+    }
+    if cavity == f32::NEG_INFINITY {
+        return Some(block);
+    }
+    block.root = cavity + reach;
+    (block.root < lowest - 1.0).then_some(block)
 }
 
 /// Where a block of half extents `half` about `xy` lies along the spur, from 0 at the cliff
