@@ -242,7 +242,7 @@ impl CaprockSpec {
                 let q1 = Vec2::new(b.0 - 0.5 * b.1, d.0 - 0.5 * d.1);
                 let jitter = 0.25 * (2.0 * rng.unit() - 1.0);
                 let top_jitter = rng.unit();
-                let inset = Vec2::new(0.04 + 0.12 * rng.unit(), 0.05 * rng.unit()) * t;
+                let inset = Vec2::new(0.04 + 0.12 * rng.unit(), 0.03 + 0.06 * rng.unit()) * t;
                 let beds = bedding + 0.05 * t * Vec2::new(rng.unit() - 0.5, rng.unit() - 0.5);
                 let center = to_world(0.5 * (q0 + q1));
                 let half = 0.5 * (q1 - q0);
