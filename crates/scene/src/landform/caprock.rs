@@ -713,21 +713,22 @@ impl CliffLine {
         out
     }
 
-    /// The fallen blocks, turned to the joint frame (outside the blocks' warp, which
-    /// would lift a block of a few metres off the ground it lies on).
+    /// The fallen blocks: weathered round (ellipsoids of the block's extents along the
+    /// tree's axes, roughened), outside the blocks' warp, which would lift a block of a few
+    /// metres off the ground it lies on.
     pub fn fallen_rocks(&self) -> Vec<NodeSpec> {
-        let yaw = self.axis.y.atan2(self.axis.x).to_degrees();
         self.fallen
             .iter()
             .enumerate()
             .map(|(k, f)| {
                 let size = 2.0 * f.half.max_element();
-                boxed(
-                    f.center,
-                    f.half,
-                    yaw,
-                    (0.35 * size).max(0.2),
-                    noise(0.18 * size, 0.6 * size, 3, 100 + k as u32),
+                solid(
+                    SkeletonSpec::Ellipsoid {
+                        center: p3(f.center),
+                        radii: Size3(f.half.map(round3)),
+                    },
+                    round3((0.3 * size).max(0.2)),
+                    noise(0.15 * size, 0.5 * size, 3, 100 + k as u32),
                 )
             })
             .collect()
