@@ -73,6 +73,8 @@ pub struct JointBlock {
     /// The block's bedding planes: the top of its lower bed and of its middle one (the
     /// line's planes, each a little up or down: beds pinch and swell).
     pub beds: Vec2,
+    /// Whether it stands on a spur.
+    pub spur: bool,
     /// Whether it stands in the cliff's face (a neighbour on lower ground is gone).
     pub face: bool,
     /// Which of its sides are bare (no block beside them): `+u`, `−u`, `+v`, `−v` of the
@@ -97,6 +99,16 @@ pub struct Recess {
 /// The warp of the blocks: its amplitude and wavelength in joint spacings.
 const WARP: (f32, f32) = (0.25, 2.0);
 
+/// The roughness of the blocks' faces: its amplitude in joint spacings.
+const ROUGH: f32 = 0.15;
+
+/// How far a block's surface can stand beyond its box, for joints `spacing` apart: its
+/// warp (on three axes), roughness and rounding. Margins to the region's sides and to
+/// caves below are this.
+fn reach(spacing: f32) -> f32 {
+    (3f32.sqrt() * WARP.0 + ROUGH) * spacing + block_falloff(spacing)
+}
+
 /// The length of face one piece of a recess follows, metres.
 const PIECE: f32 = 6.0;
 
@@ -120,8 +132,6 @@ pub struct CliffLine {
     pub bedding: Vec2,
     /// The joint frame's first axis (unit, along the strike).
     pub axis: Vec2,
-    /// The mean joint spacing.
-    pub joints: f32,
     /// The blocks.
     pub blocks: Vec<JointBlock>,
     /// The recesses, in the order of the spec.
@@ -173,7 +183,8 @@ fn joint_set(rng: &mut Rng, lo: f32, hi: f32, spacing: f32) -> Vec<(f32, f32)> {
     let mut x = lo - spacing * rng.unit();
     loop {
         let open = rng.unit() < 0.5;
-        let gap = block_falloff(spacing) * (1.4 + 1.4 * rng.unit()) * f32::from(u8::from(open));
+        let width = block_falloff(spacing) * (1.4 + 1.4 * rng.unit());
+        let gap = if open { width } else { 0.0 };
         out.push((x, gap));
         if x > hi {
             return out;
@@ -261,7 +272,7 @@ impl CaprockSpec {
                 let bed = t * super::smoothstep(0.0, fade, side.min_element());
                 // Nothing of the block, its rounding, its roughness or its warp past the
                 // sides.
-                let margin = half.length() + block_falloff(s) + (0.15 + 2.0 * WARP.0) * s;
+                let margin = half.length() + reach(s);
                 // On a spur the bed stands whatever the ground, worn lower toward its end.
                 let spur = self.spurs.iter().find_map(|sp| on_spur(sp, center, half));
                 let inside = heights.iter().all(|h| h.is_finite())
@@ -279,6 +290,7 @@ impl CaprockSpec {
                     // A spur's beds stand flush: its abutments carry the lintel whole.
                     inset: if spur.is_some() { Vec2::ZERO } else { inset },
                     beds,
+                    spur: spur.is_some(),
                     face: false,
                     bare: [false; 4],
                 }));
@@ -312,11 +324,7 @@ impl CaprockSpec {
             .filter_map(|(b, (face, bare))| {
                 let mut b = b?;
                 (b.face, b.bare) = (face, bare);
-                let on_a_spur = self
-                    .spurs
-                    .iter()
-                    .any(|sp| on_spur(sp, b.center, b.half).is_some());
-                if face && rng.unit() < 0.2 && !on_a_spur {
+                if face && rng.unit() < 0.2 && !b.spur {
                     b.top = b.beds.y + (b.top - b.beds.y) * rng.unit() * 0.5;
                 }
                 Some(b)
@@ -327,7 +335,6 @@ impl CaprockSpec {
             bed: Vec2::new(top, base),
             bedding,
             axis,
-            joints: s,
             blocks,
             recesses: Vec::new(),
             fallen: Vec::new(),
@@ -395,7 +402,7 @@ fn clear_of_cavities(
     axis: Vec2,
     s: f32,
 ) -> Option<JointBlock> {
-    let reach = (3f32.sqrt() * WARP.0 + 0.15) * s + block_falloff(s);
+    let reach = reach(s);
     let across = axis.perp();
     let columns = [
         (0.0, 0.0),
@@ -596,7 +603,7 @@ fn lying(line: &CliffLine, ground: &Ground, rng: &mut Rng, xy: Vec2, size: f32) 
     if size < 2.0 * ground.top.cell().max_element()
         || !h.is_finite()
         || line.in_block(xy)
-        || side < 1.5 * size + 2.0 * WARP.0 * line.joints
+        || side < 1.5 * size
     {
         return None;
     }
@@ -706,7 +713,7 @@ impl CliffLine {
                         .extend(0.5 * (hi - lo)),
                     yaw,
                     falloff,
-                    noise(0.15 * joints, joints, 5, 200 + 3 * k as u32 + l as u32),
+                    noise(ROUGH * joints, joints, 5, 200 + 3 * k as u32 + l as u32),
                 ));
             }
         }

@@ -362,35 +362,26 @@ pub struct Generated {
     pub hollows: Vec<NodeSpec>,
 }
 
+impl Generated {
+    /// `primitives` joining the base by `joining`, with no hollows.
+    fn plain(primitives: Vec<NodeSpec>, joining: Joining) -> Generated {
+        Generated {
+            primitives,
+            joining,
+            hollows: Vec::new(),
+        }
+    }
+}
+
 impl LandformSpec {
     /// Runs the generator on `ground`.
     pub fn generate(&self, ground: &Ground) -> Result<Generated, LandformError> {
         let mut generated = match &self.generator {
-            GeneratorSpec::Karst(k) => Generated {
-                primitives: k.generate(ground)?,
-                joining: Joining::Carve,
-                hollows: Vec::new(),
-            },
-            GeneratorSpec::SeaErosion(s) => Generated {
-                primitives: s.generate(ground)?,
-                joining: Joining::Carve,
-                hollows: Vec::new(),
-            },
-            GeneratorSpec::Canyon(c) => Generated {
-                primitives: c.generate(ground)?,
-                joining: Joining::Carve,
-                hollows: Vec::new(),
-            },
-            GeneratorSpec::Hoodoos(h) => Generated {
-                primitives: h.generate(ground)?,
-                joining: Joining::Accrete,
-                hollows: Vec::new(),
-            },
-            GeneratorSpec::Arch(a) => Generated {
-                primitives: a.generate(ground)?,
-                joining: Joining::Accrete,
-                hollows: Vec::new(),
-            },
+            GeneratorSpec::Karst(k) => Generated::plain(k.generate(ground)?, Joining::Carve),
+            GeneratorSpec::SeaErosion(s) => Generated::plain(s.generate(ground)?, Joining::Carve),
+            GeneratorSpec::Canyon(c) => Generated::plain(c.generate(ground)?, Joining::Carve),
+            GeneratorSpec::Hoodoos(h) => Generated::plain(h.generate(ground)?, Joining::Accrete),
+            GeneratorSpec::Arch(a) => Generated::plain(a.generate(ground)?, Joining::Accrete),
             GeneratorSpec::Caprock(c) => {
                 let (primitives, hollows) = c.generate(ground)?;
                 Generated {
