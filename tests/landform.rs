@@ -809,7 +809,13 @@ const CAPROCK_SCENE: &str = "(version: 1, seed: 2, \
             recesses: [(at: (14, 0), length: 20, depth: 8, height: 7)])))";
 
 fn caprock() -> (karstic::landform::CliffLine, Tree, Tree) {
-    let file = scene_file(CAPROCK_SCENE);
+    caprock_of(CAPROCK_SCENE)
+}
+
+/// The cliff line of a caprock scene over a region 200 × 160 × 120 m about the origin,
+/// its tree and its base's.
+fn caprock_of(scene: &str) -> (karstic::landform::CliffLine, Tree, Tree) {
+    let file = scene_file(scene);
     let NodeSpec::Landform(l) = &file.scene.root else {
         panic!("a landform")
     };
@@ -904,6 +910,81 @@ fn a_caprock_stands_as_a_cliff_where_its_bed_crops_out() {
         middle > 8.0 && side < 0.25 * middle,
         "rises {middle} m mid-line, {side} m at the side"
     );
+}
+
+/// A gentle slope (1 in 5 falling east) under a sandstone bed 12 m thick that crops out
+/// across it, with a talus apron banked against its foot.
+const APRON_SCENE: &str = "(version: 1, seed: 2, \
+    root: Landform(name: \"cliff\", seed: 5, cell: 2, region: (min: (-100, -80, -60), max: (100, 80, 60)), \
+        base: Transform(name: \"ground\", rotate: (axis: (0, 1, 0), degrees: 11.30993), \
+            child: Primitive(shape: Box(center: (0, 0, -100), half_size: (400, 400, 100)), falloff: 1.0)), \
+        generator: Caprock(top: 10, thickness: 12, joints: 8, strike: 0, talus: 0, apron: 0.4)))";
+
+#[test]
+fn a_caprock_talus_apron_lies_at_its_angle_of_repose_against_the_foot() {
+    let (line, tree, base) = caprock_of(APRON_SCENE);
+    assert!(
+        line.aprons.len() >= 5,
+        "{} cones of scree along the cliff",
+        line.aprons.len()
+    );
+    let slope = |x: f32| -0.2 * x + 0.5 * 1.04f32.sqrt();
+    let limit = (karstic::landform::REPOSE + 4.0).to_radians().tan();
+    let (mut banked, mut steep, mut raised) = (0, 0, 0);
+    for a in &line.aprons {
+        // Before each cone's apex, out from the face: the ground stands raised by scree.
+        let lift = [Vec2::X, -Vec2::X, Vec2::Y, -Vec2::Y]
+            .map(|d| a.apex.truncate() + 2.0 * d)
+            .into_iter()
+            .filter(|&xy| !line.in_block(xy))
+            .map(|xy| {
+                top_at(&tree, xy, -60.0, 60.0).unwrap() - top_at(&base, xy, -60.0, 60.0).unwrap()
+            })
+            .fold(0.0f32, f32::max);
+        if lift > 0.25 * (a.apex.z - slope(a.apex.x)) {
+            raised += 1;
+        }
+        // Across the cone, clear of the blocks: where scree covers the ground, its surface
+        // falls no steeper than the angle of repose (and a few degrees of roughness).
+        for i in 0..12 {
+            for j in -4..=4 {
+                let xy = a.apex.truncate() + Vec2::new(3.0 + 2.0 * i as f32, 2.0 * j as f32);
+                if line.in_block(xy) || line.in_block(xy - Vec2::X * 2.0) {
+                    continue;
+                }
+                let top = |xy: Vec2| top_at(&tree, xy, -60.0, 60.0).unwrap();
+                let lifted = top(xy) - top_at(&base, xy, -60.0, 60.0).unwrap();
+                if lifted < 0.5 {
+                    continue;
+                }
+                let g = Vec2::new(
+                    top(xy + Vec2::X * 0.5) - top(xy - Vec2::X * 0.5),
+                    top(xy + Vec2::Y * 0.5) - top(xy - Vec2::Y * 0.5),
+                )
+                .length();
+                banked += 1;
+                steep += usize::from(g > limit);
+            }
+        }
+    }
+    assert!(
+        2 * raised >= line.aprons.len(),
+        "scree stands before {raised} of {} cones' apices",
+        line.aprons.len()
+    );
+    assert!(banked > 50, "{banked} columns of scree checked");
+    assert!(
+        steep * 10 <= banked,
+        "{steep} of {banked} columns of scree steeper than the angle of repose"
+    );
+    // Far downslope the ground is the slope's.
+    for y in [-40.0, 0.0, 40.0] {
+        let p = Vec3::new(90.0, y, slope(90.0));
+        assert!(
+            (tree.value(p) - base.value(p)).abs() < 1e-6,
+            "changed at {p}"
+        );
+    }
 }
 
 #[test]

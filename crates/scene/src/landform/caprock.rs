@@ -32,7 +32,9 @@
 //!   of the bed, walls curving back into the hill; a few breakdown blocks lie on the floor
 //!   and before the mouth.
 //! * **Talus.** Blocks fallen from the face lie downslope of it, half sunk, turned at
-//!   random, the larger ones rolled farther (fall sorting).
+//!   random, the larger ones rolled farther (fall sorting); an apron of scree cones at
+//!   the angle of repose banked against the face's foot, where the slope below is gentler
+//!   than it.
 //!
 //! The node expands to `Difference(Union([base, Union(rocks)]), [hollows])`: the blocks
 //! stand on the terrain and the recesses cut both.
@@ -46,7 +48,7 @@ use crate::rng::Rng;
 use crate::scene::NodeSpec;
 use crate::scene::landform::{CaprockSpec, RecessSpec, SpurSpec};
 use crate::scene::spec::{Nary, Rotation, TransformSpec, WarpSpec};
-use crate::value::{Dir3, Finite};
+use crate::value::{Dir3, Finite, Positive};
 
 /// Joint spacings the generator accepts, metres.
 const JOINTS: (f32, f32) = (2.0, 200.0);
@@ -123,6 +125,27 @@ pub struct Fallen {
     pub half: Vec3,
 }
 
+/// The angle of repose of the talus apron, degrees: scree of blocky sandstone rests at
+/// 32–36° (Carson 1977); the apron is built at the gentle end, so its roughness keeps it
+/// under the steep one.
+pub const REPOSE: f32 = 32.0;
+
+/// A cone of scree banked against the cliff's foot, at the angle of repose.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Apron {
+    /// Its apex, against the face.
+    pub apex: Vec3,
+    /// The radius of its base disc, buried under the slope all round.
+    pub radius: f32,
+}
+
+impl Apron {
+    /// The height of its base disc.
+    pub fn base(&self) -> f32 {
+        self.apex.z - self.radius * REPOSE.to_radians().tan()
+    }
+}
+
 /// The cliff line the generator settled on.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CliffLine {
@@ -136,8 +159,10 @@ pub struct CliffLine {
     pub blocks: Vec<JointBlock>,
     /// The recesses, in the order of the spec.
     pub recesses: Vec<Recess>,
-    /// The talus.
+    /// The talus: blocks fallen from the face.
     pub fallen: Vec<Fallen>,
+    /// The talus apron: cones of scree against the face's foot.
+    pub aprons: Vec<Apron>,
     /// The windows through the spurs.
     pub windows: Vec<Window>,
 }
@@ -338,6 +363,7 @@ impl CaprockSpec {
             blocks,
             recesses: Vec::new(),
             fallen: Vec::new(),
+            aprons: Vec::new(),
             windows: Vec::new(),
         };
         line.windows = self
@@ -353,6 +379,7 @@ impl CaprockSpec {
             .map(|(k, r)| recess(&line, ground, r, k))
             .collect::<Result<_, _>>()?;
         line.fallen = talus(&line, ground, &mut rng, self.talus.0, t);
+        line.aprons = aprons(&line, ground, &mut rng, self.apron.0 * t);
         Ok(line)
     }
 
@@ -382,7 +409,10 @@ impl CaprockSpec {
         };
         // The rocks blend, so the blocks' BVH prunes them.
         let rocks = warp(NodeSpec::Blend(nary(line.rocks(s))));
-        let rocks = std::iter::once(rocks).chain(line.fallen_rocks()).collect();
+        let rocks = std::iter::once(rocks)
+            .chain(line.fallen_rocks())
+            .chain(line.apron_cones())
+            .collect();
         let hollows = line.hollows();
         let hollows = match hollows.is_empty() {
             true => hollows,
@@ -591,6 +621,96 @@ fn talus(line: &CliffLine, ground: &Ground, rng: &mut Rng, density: f32, t: f32)
     out
 }
 
+/// The talus apron: along each bare downslope side of a face block, three cones of scree
+/// at the angle of repose, their apices against the face's foot `height` metres (±25%) up,
+/// their base discs as wide as it takes to lie under the slope all round. The cones merge
+/// into an apron, scalloped as scree under a cliff is. None on spurs (their windows keep
+/// their floors), before a recess's mouth (it stays open), where the slope is already near
+/// the angle of repose (the scree runs on down it: no apron stands there), over a cave of
+/// the ground (the cone's buried part would plug it), or past the region's sides.
+fn aprons(line: &CliffLine, ground: &Ground, rng: &mut Rng, height: f32) -> Vec<Apron> {
+    let mut out = Vec::new();
+    if height <= 0.0 {
+        return out;
+    }
+    let sides = [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)];
+    for b in line.blocks.iter().filter(|b| b.face && !b.spur) {
+        for (side, &(du, dv)) in sides.iter().enumerate() {
+            let out_dir = line.axis * du + line.axis.perp() * dv;
+            let (half, along) = match du != 0.0 {
+                true => (b.half.x, b.half.y),
+                false => (b.half.y, b.half.x),
+            };
+            let middle = b.center + out_dir * half;
+            let foot = ground.height(middle + out_dir * 1.5);
+            if !b.bare[side] || !foot.is_finite() || foot >= ground.height(b.center) {
+                continue;
+            }
+            for t in [-0.5, 0.0, 0.5] {
+                let edge = middle + out_dir.perp() * (t * along);
+                let h = height * (0.75 + 0.5 * rng.unit());
+                out.extend(apron_at(line, ground, edge, out_dir, h));
+            }
+        }
+    }
+    out
+}
+
+/// A cone of scree `h` metres up the face at `edge` (on the face, `out` pointing out of
+/// it), if one can stand there (see [`aprons`]).
+fn apron_at(line: &CliffLine, ground: &Ground, edge: Vec2, out: Vec2, h: f32) -> Option<Apron> {
+    let tan = REPOSE.to_radians().tan();
+    let reach = h / tan;
+    let near_recess = line.recesses.iter().any(|rc| {
+        let d = edge - rc.mouth.truncate();
+        d.dot(rc.out.perp()).abs() < 0.5 * rc.size.x + reach
+            && d.dot(rc.out).abs() < rc.size.y + reach
+    });
+    let near_window = line
+        .windows
+        .iter()
+        .any(|w| edge.distance(w.floor.truncate()) < 0.5 * w.span + w.width + reach);
+    let foot = ground.height(edge + out * 1.5);
+    if near_recess || near_window || !foot.is_finite() {
+        return None;
+    }
+    let apex = edge.extend(foot + h);
+    // Widen the base until its rim lies under the ground all round; a slope that needs
+    // more than five times the least radius is itself near the angle of repose.
+    let rim_buried = |radius: f32| {
+        let base = apex.z - radius * tan;
+        (0..12).all(|k| {
+            let d = Vec2::from_angle(k as f32 * std::f32::consts::TAU / 12.0);
+            ground.height(edge + d * radius) > base + 0.5
+        })
+    };
+    let radius = (0..8)
+        .map(|k| reach * 1.25f32.powi(k))
+        .find(|&radius| radius < 5.0 * reach && rim_buried(radius))?;
+    let cone = Apron { apex, radius };
+    let r = ground.region;
+    let side_room = (edge - r.min.truncate())
+        .min(r.max.truncate() - edge)
+        .min_element();
+    // The cone's axis and its middle ring probed for a cave, from under the ground down to
+    // its base.
+    let probes = std::iter::once(Vec2::ZERO).chain(
+        (0..6).map(|k| Vec2::from_angle(k as f32 * std::f32::consts::FRAC_PI_3) * 0.5 * radius),
+    );
+    let over_cave = probes.into_iter().any(|d| {
+        let xy = edge + d;
+        let mut z = ground.height(xy).min(apex.z) - 1.5;
+        while z > cone.base() {
+            if !ground.solid(xy.extend(z)) {
+                return true;
+            }
+            z -= 1.0;
+        }
+        false
+    });
+    (side_room > radius + 2.0 && !over_cave).then_some(cone)
+}
+
 /// A block of `size` lying half sunk at `xy`, none off the ground or on the cliff.
 fn lying(line: &CliffLine, ground: &Ground, rng: &mut Rng, xy: Vec2, size: f32) -> Option<Fallen> {
     let h = ground.height(xy);
@@ -736,6 +856,27 @@ impl CliffLine {
                     },
                     round3((0.3 * size).max(0.2)),
                     noise(0.15 * size, 0.5 * size, 3, 100 + k as u32),
+                )
+            })
+            .collect()
+    }
+
+    /// The talus apron's cones, roughened at the scale of the blocks in the scree (outside
+    /// the blocks' warp, which would lift them off the slope).
+    pub fn apron_cones(&self) -> Vec<NodeSpec> {
+        self.aprons
+            .iter()
+            .enumerate()
+            .map(|(k, a)| {
+                let h = a.apex.z - a.base();
+                solid(
+                    SkeletonSpec::Cone {
+                        base: p3(a.apex.truncate().extend(a.base())),
+                        apex: p3(a.apex),
+                        radius: Positive(round3(a.radius)),
+                    },
+                    round3((0.04 * h).clamp(0.3, 1.5)),
+                    noise(0.25, 3.0, 2, 300 + k as u32),
                 )
             })
             .collect()

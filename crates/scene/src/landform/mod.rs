@@ -25,7 +25,7 @@ use glam::{IVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 pub use arch::ArchShape;
-pub use caprock::{CliffLine, Fallen, JointBlock, Recess};
+pub use caprock::{Apron, CliffLine, Fallen, JointBlock, REPOSE, Recess};
 pub use hoodoo::{Hoodoo, Terminal};
 
 use crate::dem::{Heightfield, Interpolation};

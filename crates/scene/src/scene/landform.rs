@@ -58,6 +58,10 @@ fn caprock_default_talus() -> NonNegative {
     NonNegative(0.15)
 }
 
+fn caprock_default_apron() -> NonNegative {
+    NonNegative(0.3)
+}
+
 /// Parameters of a caprock cliff line: a hard bed cropping out across the slopes as a
 /// cliff of joint blocks, with recesses in its foot and fallen blocks below it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -86,6 +90,11 @@ pub struct CaprockSpec {
     /// Fallen blocks per metre of cliff face (default 0.15; 0 for none).
     #[serde(default = "caprock_default_talus")]
     pub talus: NonNegative,
+    /// Height of the talus apron banked against the cliff's foot, as a fraction of the
+    /// bed's thickness (default 0.3; 0 for none): cones of scree at the angle of repose
+    /// under each stretch of face, merging into an apron.
+    #[serde(default = "caprock_default_apron")]
+    pub apron: NonNegative,
 }
 
 /// A spur of a caprock cliff: a narrow run of the bed's blocks standing out from the face.
