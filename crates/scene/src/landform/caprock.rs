@@ -82,6 +82,8 @@ pub struct JointBlock {
     /// Which of its sides are bare (no block beside them): `+u`, `−u`, `+v`, `−v` of the
     /// joint frame. The lower beds are weathered back on those only.
     pub bare: [bool; 4],
+    /// The widths of the joints on its sides, in the same order: 0 where a joint is tight.
+    pub joints: [f32; 4],
 }
 
 /// A recess placed on the face: where its mouth opens and which way it looks.
@@ -201,14 +203,17 @@ fn block_falloff(spacing: f32) -> f32 {
 }
 
 /// Joint positions across `[lo, hi]`: a joint before `lo`, then steps of 50% to 160% of
-/// `spacing` until past `hi`; each with the width its weathering opened: 1.4 to 2.8 block
-/// falloffs for half of them, none (a tight joint) for the others.
-fn joint_set(rng: &mut Rng, lo: f32, hi: f32, spacing: f32) -> Vec<(f32, f32)> {
+/// `spacing` until past `hi`; each with the width its weathering opened: for a third of
+/// them 1.4 to 2.8 block falloffs and at least one `cell` of air between the blocks'
+/// surfaces (a narrower crack falls between the samples of a mesh at that cell and leaves
+/// specks of air sealed in the rock), none (a tight joint) for the others.
+fn joint_set(rng: &mut Rng, lo: f32, hi: f32, spacing: f32, cell: f32) -> Vec<(f32, f32)> {
+    let falloff = block_falloff(spacing);
     let mut out = Vec::new();
     let mut x = lo - spacing * rng.unit();
     loop {
-        let open = rng.unit() < 0.5;
-        let width = block_falloff(spacing) * (1.4 + 1.4 * rng.unit());
+        let open = rng.unit() < 1.0 / 3.0;
+        let width = (falloff * (1.4 + 1.4 * rng.unit())).max(cell + falloff);
         let gap = if open { width } else { 0.0 };
         out.push((x, gap));
         if x > hi {
@@ -251,8 +256,8 @@ impl CaprockSpec {
         let hi = corners.iter().fold(Vec2::NEG_INFINITY, |a, &c| a.max(c));
         let mut rng = Rng::new(ground.seed ^ 0xca9_70c4);
         let (ju, jv) = (
-            joint_set(&mut rng, lo.x, hi.x, s),
-            joint_set(&mut rng, lo.y, hi.y, s),
+            joint_set(&mut rng, lo.x, hi.x, s, ground.top.cell().max_element()),
+            joint_set(&mut rng, lo.y, hi.y, s, ground.top.cell().max_element()),
         );
         let (nu, nv) = (ju.len() - 1, jv.len() - 1);
         if nu * nv > MAX_BLOCKS {
@@ -318,6 +323,7 @@ impl CaprockSpec {
                     spur: spur.is_some(),
                     face: false,
                     bare: [false; 4],
+                    joints: [b.1, a.1, d.1, c.1],
                 }));
             }
         }
@@ -378,6 +384,7 @@ impl CaprockSpec {
             .enumerate()
             .map(|(k, r)| recess(&line, ground, r, k))
             .collect::<Result<_, _>>()?;
+        bond_lips(&mut line);
         line.fallen = talus(&line, ground, &mut rng, self.talus.0, t);
         line.aprons = aprons(&line, ground, &mut rng, self.apron.0 * t);
         Ok(line)
@@ -464,6 +471,37 @@ fn clear_of_cavities(
     }
     block.root = cavity + reach;
     (block.root < lowest - 1.0).then_some(block)
+}
+
+/// Blocks over a recess bonded into one lintel: the recess cuts their roots away and
+/// leaves them a lip, which open joints would cut loose, blocks hanging in the air. Each
+/// closes the joints on all its sides but the one facing out of the cliff, so the lip
+/// spans the mouth held by the face's blocks beside it and behind it.
+fn bond_lips(line: &mut CliffLine) {
+    let (axis, across) = (line.axis, line.axis.perp());
+    let sides = [axis, -axis, across, -across];
+    for b in &mut line.blocks {
+        for r in &line.recesses {
+            let d = b.center - r.mouth.truncate();
+            let reach = b.half.max_element();
+            let over = d.dot(r.out.perp()).abs() < 0.5 * r.size.x + reach
+                && (-reach..r.size.y + reach).contains(&-d.dot(r.out));
+            if !over {
+                continue;
+            }
+            let outward = (0..4)
+                .max_by(|&i, &j| sides[i].dot(r.out).total_cmp(&sides[j].dot(r.out)))
+                .unwrap_or(0);
+            for side in (0..4).filter(|&k| k != outward) {
+                let w = std::mem::take(&mut b.joints[side]);
+                b.center += 0.5 * w * sides[side];
+                match side < 2 {
+                    true => b.half.x += 0.5 * w,
+                    false => b.half.y += 0.5 * w,
+                }
+            }
+        }
+    }
 }
 
 /// Where a block of half extents `half` about `xy` lies along the spur, from 0 at the cliff
