@@ -338,6 +338,29 @@ fn job_view(path: &Path, width: u32, height: u32) -> (Compiled, Camera, RenderSe
     (compiled, cam, settings)
 }
 
+#[test]
+fn a_job_sun_lights_every_picture_from_where_it_stands() {
+    // trees/jacksboro_bluff.ron sets its sun at bearing 160° (south-south-east), 20° up:
+    // the pictures' sun points there (east is +x, north +y), and its low light reaches the
+    // cliff's east face; a tree without one keeps the default sun, in the south-west.
+    let trees = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
+    let (_, _, bluff) = job_view(&trees.join("jacksboro_bluff.ron"), 64, 36);
+    let (az, el) = (160f32.to_radians(), 20f32.to_radians());
+    let want = Vec3::new(az.sin() * el.cos(), az.cos() * el.cos(), el.sin());
+    assert!(
+        bluff.shading.sun.distance(want) < 1e-5,
+        "{} for {want}",
+        bluff.shading.sun
+    );
+    assert!(bluff.shading.sun.dot(Vec3::X) > 0.3, "the east face is lit");
+    let (_, _, caves) = job_view(&trees.join("jacksboro_caves.ron"), 64, 36);
+    assert!(
+        caves.shading.sun.x < 0.0 && caves.shading.sun.y < 0.0,
+        "the default sun stands in the south-west: {}",
+        caves.shading.sun
+    );
+}
+
 /// The length along `ray` of the solid (`f > T`) that a crossing at `t` enters, sampled
 /// every `tol / 64` and followed up to `2·tol`; 0 when no sample within `tol / 8` of `t` is
 /// solid.

@@ -255,6 +255,14 @@ fn empty_operators_and_bad_jobs_are_refused_at_load() {
         &job("region: (min: (0, 0, 0), max: (1e8, 1e8, 1e8))"),
         "job.cell: bad grid",
     );
+    check(
+        &job("sun: (azimuth: 90, elevation: -5)"),
+        "job.sun: elevation -5° is not above the horizon",
+    );
+    check(
+        &job("sun: (azimuth: 90, elevation: 30, height: 2)"),
+        "height",
+    );
 }
 
 #[test]

@@ -29,8 +29,8 @@
 //!   crest steps down there.
 //! * **Recesses.** Rock shelters and cave mouths are hollows in the cliff's foot: a level
 //!   floor on the ground before the face, a flat roof (the base of a hard bed) under a lip
-//!   of the bed, walls curving back into the hill; a few breakdown blocks lie on the floor
-//!   and before the mouth.
+//!   of the bed, walls curving back into the hill; a few breakdown blocks lie before the
+//!   mouth.
 //! * **Talus.** Blocks fallen from the face lie downslope of it, half sunk, turned at
 //!   random, the larger ones rolled farther (fall sorting); an apron of scree cones at
 //!   the angle of repose banked against the face's foot, where the slope below is gentler
@@ -296,6 +296,21 @@ impl CaprockSpec {
                 ]
                 .map(|p| ground.height(p));
                 let lowest = heights.iter().copied().fold(f32::INFINITY, f32::min);
+                // The root reaches under the ground wherever the warp can move the block's
+                // foot: the lowest ground of its footprint grown by that reach (on a steep
+                // slope a foot moved downhill would hang over lower ground).
+                let grown = Vec2::splat(reach(s));
+                let under = [
+                    q0 - grown,
+                    q1 + grown,
+                    Vec2::new(q0.x - grown.x, q1.y + grown.y),
+                    Vec2::new(q1.x + grown.x, q0.y - grown.y),
+                ]
+                .map(|q| ground.height(to_world(q)))
+                .iter()
+                .copied()
+                .filter(|h| h.is_finite())
+                .fold(lowest, f32::min);
                 // The bed thins out toward the region's sides: the cliff dies into the
                 // slope instead of stopping at a wall.
                 let side = (center - r.min.truncate()).min(r.max.truncate() - center);
@@ -316,7 +331,7 @@ impl CaprockSpec {
                     center,
                     half,
                     top: top - worn + 0.04 * t * (2.0 * top_jitter - 1.0),
-                    root: lowest - 2.0,
+                    root: under - 2.0,
                     // A spur's beds stand flush: its abutments carry the lintel whole.
                     inset: if spur.is_some() { Vec2::ZERO } else { inset },
                     beds,
@@ -611,7 +626,8 @@ fn recess(
 
 /// Blocks fallen from the face, about `density` per metre of face: from a sixth to a half
 /// of the joint spacing across, lying from a tenth to one and a half of the bed's
-/// thickness off the face, the larger ones farther; a few breakdown blocks at each recess.
+/// thickness off the face, the larger ones farther; a few breakdown blocks before each
+/// recess.
 fn talus(line: &CliffLine, ground: &Ground, rng: &mut Rng, density: f32, t: f32) -> Vec<Fallen> {
     let mut out = Vec::new();
     for b in line.blocks.iter().filter(|b| b.face) {
@@ -634,26 +650,17 @@ fn talus(line: &CliffLine, ground: &Ground, rng: &mut Rng, density: f32, t: f32)
             out.extend(lying(line, ground, rng, xy, size));
         }
     }
-    // Breakdown at the recesses too, unless the scene wants no fallen blocks at all.
+    // Breakdown before the recesses too, unless the scene wants no fallen blocks at all:
+    // beyond the front of the recess's vaults (a quarter of its depth out of the face),
+    // which would slice a block lying under them flat at the floor's level.
     for r in line.recesses.iter().filter(|_| density > 0.0) {
         let along = r.out.perp();
-        for k in 0..5 {
-            let inside = k < 2;
-            let off = match inside {
-                true => -(0.2 + 0.4 * rng.unit()) * r.size.y,
-                false => (0.3 + 1.2 * rng.unit()) * r.size.z,
-            };
+        for _ in 0..4 {
+            let size = r.size.z * (0.2 + 0.3 * rng.unit());
+            let off = 0.25 * r.size.y + 0.5 * size + (0.2 + 1.0 * rng.unit()) * r.size.z;
             let xy =
                 r.mouth.truncate() + r.out * off + along * (r.size.x * 0.8 * (rng.unit() - 0.5));
-            let size = r.size.z * (0.2 + 0.3 * rng.unit());
-            match inside {
-                // On the recess's level floor, not on the hill it was cut from.
-                true => out.push(Fallen {
-                    center: xy.extend(r.mouth.z),
-                    half: quarter_turn(rng, 0.5 * size * Vec3::new(1.0, 0.7, 0.5)),
-                }),
-                false => out.extend(lying(line, ground, rng, xy, size)),
-            }
+            out.extend(lying(line, ground, rng, xy, size));
         }
     }
     out

@@ -6,7 +6,7 @@
 //!
 //! The renderer ([`crate::render`]) draws a field through a camera with given settings and
 //! knows no tree file; this module reads the file's scene (its job's region, camera, field
-//! of view, water level and snow line, its geology) and makes those settings.
+//! of view, water level, snow line and sun, its geology) and makes those settings.
 
 pub mod guides;
 
@@ -84,6 +84,9 @@ pub fn settings_with(
         .as_ref()
         .and_then(|j| j.water_level)
         .map(|z| Water::at(z.0));
+    if let Some(sun) = scene.job.as_ref().and_then(|j| j.sun) {
+        s.shading.sun = sun.direction();
+    }
     s
 }
 

@@ -1,5 +1,6 @@
 //! The serde types of a tree file: the scene and its node kinds.
 
+use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::landform::{ArchSpec, CanyonSpec, CaprockSpec, HoodooSpec, KarstSpec, SeaSpec};
@@ -227,6 +228,29 @@ pub struct JobSpec {
     /// shallows showing their floor (default: no water; meshes are not affected).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub water_level: Option<Finite>,
+    /// Where the sun stands in the pictures (default: in the south-west, 38° up). Light a
+    /// cliff from the side it faces, low, as a photographer waits for, and its ledges,
+    /// joints and recesses read.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sun: Option<SunSpec>,
+}
+
+/// The sun of a scene's pictures.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SunSpec {
+    /// Compass bearing, degrees clockwise from north (+y): 90 is east, 180 south.
+    pub azimuth: Finite,
+    /// Height above the horizon, degrees, above 0 and at most 90.
+    pub elevation: Finite,
+}
+
+impl SunSpec {
+    /// The unit vector towards the sun.
+    pub fn direction(&self) -> Vec3 {
+        let (az, el) = (self.azimuth.0.to_radians(), self.elevation.0.to_radians());
+        Vec3::new(az.sin() * el.cos(), az.cos() * el.cos(), el.sin())
+    }
 }
 
 fn default_image() -> (u32, u32) {

@@ -368,5 +368,16 @@ fn check_job(job: &JobSpec) -> Result<(), (&'static str, String)> {
         GridSpec::with_cell(&Aabb::new(min, max), job.cell.0)
             .map_err(|e| ("cell", e.to_string()))?;
     }
+    if let Some(sun) = job.sun
+        && !(sun.elevation.0 > 0.0 && sun.elevation.0 <= 90.0)
+    {
+        return Err((
+            "sun",
+            format!(
+                "elevation {}° is not above the horizon and at most 90°",
+                sun.elevation.0
+            ),
+        ));
+    }
     Ok(())
 }
