@@ -419,7 +419,7 @@ impl CaprockSpec {
         let warp = |child: NodeSpec| {
             NodeSpec::Warp(WarpSpec {
                 name: None,
-                turbulence: noise(WARP.0 * s, WARP.1 * s, 5, 7)
+                turbulence: noise(WARP.0 * s, WARP.1 * s, 4, 7)
                     .expect("a noise of positive wavelength"),
                 region: None,
                 child: Box::new(child),
@@ -878,7 +878,7 @@ impl CliffLine {
                         .extend(0.5 * (hi - lo)),
                     yaw,
                     falloff,
-                    noise(ROUGH * joints, joints, 5, 200 + 3 * k as u32 + l as u32),
+                    noise(ROUGH * joints, joints, 4, 200 + 3 * k as u32 + l as u32),
                 ));
             }
         }
