@@ -364,6 +364,63 @@ fn hoodoos_stand_on_their_axioms_within_the_grammar_depth() {
             h.symbols.len()
         );
     }
+    // The beds shape the columns: in each body, above the ground, the column is wider at
+    // the height of its hardest rock than at its softest (ρ swings by ±0.4 every 9 m
+    // here).
+    let radius = |h: &karstic::landform::Hoodoo, z: f32| {
+        let mut r = 0.0;
+        while r < 10.0 && tree.value(h.axiom.truncate().extend(z) + Vec3::X * r) > ISO {
+            r += 0.02;
+        }
+        r
+    };
+    let (mut bodies, mut bulging) = (0, 0);
+    for h in &hoodoos {
+        for &(t, p, size, _, _) in &h.symbols {
+            if t != Terminal::Body || size < 3.0 {
+                continue;
+            }
+            // Above the ground around the column (under it, the terrain is solid too).
+            let floor = ground.height(h.axiom.truncate()) + 1.0;
+            let zs: Vec<f32> = (1..20)
+                .map(|k| p.z + size * k as f32 / 20.0)
+                .filter(|&z| z > floor)
+                .collect();
+            let rho_at = |z: f32| rho(h.axiom.truncate().extend(z));
+            let hard = zs
+                .iter()
+                .copied()
+                .max_by(|a, b| rho_at(*a).total_cmp(&rho_at(*b)));
+            let soft = zs
+                .iter()
+                .copied()
+                .min_by(|a, b| rho_at(*a).total_cmp(&rho_at(*b)));
+            let (Some(hard), Some(soft)) = (hard, soft) else {
+                continue;
+            };
+            if rho_at(hard) - rho_at(soft) < 0.3 {
+                continue;
+            }
+            bodies += 1;
+            bulging += usize::from(radius(h, hard) > radius(h, soft));
+        }
+    }
+    assert!(bodies >= 10, "{bodies} bodies spanning hard and soft rock");
+    assert!(
+        bulging * 20 >= bodies * 19,
+        "{bulging} of {bodies} bodies wider in their hard rock than in their soft"
+    );
+    // No two hoodoos share a profile: their radii at a fifth, two fifths … of their
+    // heights, to 5 cm.
+    let profiles: std::collections::BTreeSet<Vec<i32>> = hoodoos
+        .iter()
+        .map(|h| {
+            (1..5)
+                .map(|k| (radius(h, h.axiom.z + h.height() * k as f32 / 5.0) / 0.05) as i32)
+                .collect()
+        })
+        .collect();
+    assert_eq!(profiles.len(), hoodoos.len(), "hoodoos sharing a profile");
 }
 
 /// A scene of `trees/`, loaded.

@@ -12,21 +12,22 @@
 //!         → d(p, s)                    1 − p_C(ρ)
 //! ```
 //!
-//! with terminals `b` a body (an upright ellipsoid: stacked bodies overlap into a column
-//! with the waists and bulges of a totem), `c` a cone (a spire) and `d` a caprock (a
+//! with terminals `b` a body (a column of slices as wide as the rock at their height: hard
+//! beds bulge, soft ones pinch), `c` a spire (a body narrowing to a blunt tip) and `d` a caprock (a
 //! flattened ellipsoid wider than the column it crowns), stacked up the vertical through
 //! the axiom. The rock's resistance ρ at each symbol drives the probabilities (harder
 //! rock: taller stacks, more caps) and the sizes (softer rock: slimmer bodies); each
 //! symbol's cross-section is an ellipse of random elongation. At `max_depth` symbols the
-//! grammar ends on a terminal. The primitives carry a noise displacement of a tenth of
-//! the first symbol's height, so the columns read as weathered rock, not turned solids.
+//! grammar ends on a terminal. The primitives carry a weathering noise, so the columns
+//! read as weathered rock, not turned solids; the axioms are thinned by a noise so the
+//! hoodoos stand in groups.
 
 use glam::{Vec2, Vec3};
 
 use super::{Ground, LandformError, Poisson, smoothstep, solid};
 use crate::analysis::flow::{drainage_area, fill_depressions};
 use crate::analysis::relief::slope;
-use crate::field::noise::Octaves;
+use crate::field::noise::{Octaves, simplex};
 use crate::field::skeleton::Size3;
 use crate::field::{NoiseSpec, SkeletonSpec};
 use crate::rng::Rng;
@@ -36,6 +37,15 @@ use crate::value::{NonNegative, P2, P3, Positive};
 
 /// A caprock's thickness, as a fraction of its symbol's height: caps are flat slabs.
 pub const CAP: f32 = 0.4;
+
+/// Seed of the noise that groups the hoodoos.
+const CLUMPS: u32 = 0x6_0b11;
+
+/// The thickness of a body's slices, metres: about a bed's.
+const SLICE: f32 = 1.0;
+
+/// At most this many slices in a body.
+const SLICES: usize = 12;
 
 /// A terminal symbol of the grammar.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -120,7 +130,11 @@ impl HoodooSpec {
         let cell = ground.top.cell();
         for (k, &pk) in prob.iter().enumerate() {
             let (u, jx, jy) = (rng.unit(), rng.unit() - 0.5, rng.unit() - 0.5);
-            if pk <= 0.0 || u >= pk {
+            // Hoodoos stand in groups along the fins the gullies left, with bare slope
+            // between the groups: a noise of four spacings thins them out.
+            let q = ground.sample_point(k).truncate() / (4.0 * self.spacing.0);
+            let clump = smoothstep(-0.3, 0.3, simplex(CLUMPS, q.extend(0.0)));
+            if pk * clump <= 0.0 || u >= pk * clump {
                 continue;
             }
             let xy = ground.sample_point(k).truncate() + Vec2::new(jx, jy) * cell;
@@ -190,51 +204,77 @@ impl HoodooSpec {
         Hoodoo { axiom, symbols }
     }
 
-    /// The primitives of the hoodoos: ellipsoids and cones, solid to their faces; bodies and
-    /// caps carry a weathering noise of a fifth of their radius (too little to cut a
-    /// column through), spires none (it would shave their tips).
+    /// The primitives of the hoodoos. A body is a column of slices about a metre thick
+    /// (at most [`SLICES`] per symbol), each as wide as the rock's resistance at its height
+    /// makes it: hard beds stand out as bulges and ledges, soft ones are pinched into
+    /// waists, at the same heights in every column, as in a field of hoodoos cut from one
+    /// sequence of beds; each column tapers upward, and is its own width. A cap
+    /// is a flat slab of the hard rock that stopped the column's wearing down, a little
+    /// wider than the column. A spire (a column that lost its cap) is sliced as a body is,
+    /// narrowing to a third of its width at a blunt tip. Every slice carries a weathering
+    /// noise of a fifth of its radius (too little to cut a column through).
     pub fn generate(&self, ground: &Ground) -> Result<Vec<NodeSpec>, LandformError> {
         let falloff = 0.1 * self.size.0;
-        let weathering = |width: f32| NoiseSpec {
-            amplitude: NonNegative(0.2 * width),
-            wavelength: Positive(0.5 * self.size.0),
-            octaves: Octaves::new(2).unwrap_or_default(),
-            seed_offset: 0,
+        let weathering = |width: f32, seed: u32| NoiseSpec {
+            amplitude: NonNegative(0.12 * width),
+            wavelength: Positive(0.35 * self.size.0),
+            octaves: Octaves::new(3).unwrap_or_default(),
+            seed_offset: seed,
         };
-        Ok(self
-            .hoodoos(ground)?
-            .iter()
-            .flat_map(|h| h.symbols.iter())
-            .map(|&(t, p, s, elongation, rho)| {
-                let width = s * (0.22 + 0.16 * rho);
-                let (rx, ry) = (width * elongation.sqrt(), width / elongation.sqrt());
-                let (shape, noise) = match t {
-                    // Taller than the symbol, so a body overlaps the next one by a fifth.
-                    Terminal::Body => (
-                        SkeletonSpec::Ellipsoid {
-                            center: P3(p + 0.5 * s * Vec3::Z),
-                            radii: Size3(Vec3::new(rx, ry, 0.6 * s)),
-                        },
-                        Some(weathering(width)),
-                    ),
-                    Terminal::Cap => (
-                        SkeletonSpec::Ellipsoid {
-                            center: P3(p + 0.5 * CAP * s * Vec3::Z),
-                            radii: Size3(Vec3::new(2.0 * rx, 2.0 * ry, 0.6 * CAP * s)),
-                        },
-                        Some(weathering(width)),
-                    ),
-                    Terminal::Cone => (
-                        SkeletonSpec::Cone {
-                            base: P3(p - 0.1 * s * Vec3::Z),
-                            apex: P3(p + s * Vec3::Z),
-                            radius: Positive(1.1 * width),
-                        },
-                        None,
-                    ),
-                };
-                solid(shape, falloff, noise)
-            })
-            .collect())
+        let mut rng = Rng::new(ground.seed ^ 0x4_00d0);
+        let mut out = Vec::new();
+        for (k, h) in self.hoodoos(ground)?.iter().enumerate() {
+            let height = h.height().max(1e-3);
+            // Each column is its own width.
+            let girth = 0.8 + 0.4 * rng.unit();
+            let seed = 1 + (k % 64) as u32;
+            for &(t, p, s, elongation, rho) in &h.symbols {
+                let up = |z: f32| (z - h.axiom.z) / height;
+                let at = |z: f32| h.axiom.truncate().extend(z);
+                let width = girth * s * (0.22 + 0.16 * rho);
+                let (ex, ey) = (elongation.sqrt(), 1.0 / elongation.sqrt());
+                match t {
+                    // A body keeps its width; a spire (a column that lost its cap) narrows
+                    // to a third of it, to a blunt tip.
+                    Terminal::Body | Terminal::Cone => {
+                        let narrows = if t == Terminal::Cone { 0.65 } else { 0.0 };
+                        let n = (s / SLICE).ceil().clamp(1.0, SLICES as f32) as usize;
+                        let dz = s / n as f32;
+                        for i in 0..n {
+                            let f = (i as f32 + 0.5) / n as f32;
+                            let z = p.z + f * s;
+                            let bed = (ground.resistance)(at(z));
+                            // Hard beds bulge, soft ones pinch; the column tapers upward.
+                            let r = width
+                                * (0.45 + 1.1 * bed)
+                                * (1.0 - 0.3 * up(z))
+                                * (1.0 - narrows * f);
+                            out.push(solid(
+                                SkeletonSpec::Ellipsoid {
+                                    center: P3(at(z)),
+                                    radii: Size3(Vec3::new(r * ex, r * ey, 0.8 * dz)),
+                                },
+                                falloff,
+                                Some(weathering(r, seed)),
+                            ));
+                        }
+                    }
+                    // A slab of the hard bed, a little wider than the column, its edges
+                    // broken by the weathering.
+                    Terminal::Cap => {
+                        let r = width * (1.2 + 0.4 * rng.unit());
+                        out.push(solid(
+                            SkeletonSpec::Ellipsoid {
+                                center: P3(at(p.z + 0.5 * CAP * s)),
+                                radii: Size3(Vec3::new(r * ex, r * ey, 0.6 * CAP * s)),
+                            },
+                            falloff,
+                            Some(weathering(0.8 * r, seed)),
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(out)
     }
 }
