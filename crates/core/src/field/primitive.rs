@@ -499,8 +499,8 @@ impl Field for Primitive {
         }
     }
 
-    /// Fills blocks outside the support, or where the interval is a single value, at
-    /// once; evaluates point by point otherwise.
+    /// Fills blocks outside the support, or where the interval is a single saturated
+    /// value (0 or the energy), at once; evaluates point by point otherwise.
     fn eval_block(&self, origin: Vec3, step: Vec3, dims: [usize; 3], out: &mut [f32]) {
         let [nx, ny, nz] = dims;
         let n = nx * ny * nz;
@@ -509,7 +509,10 @@ impl Field for Primitive {
         }
         let far = origin + step * Vec3::new((nx - 1) as f32, (ny - 1) as f32, (nz - 1) as f32);
         let iv = self.interval(&Aabb::new(origin, far));
-        if iv.lo == iv.hi {
+        // Only a saturated interval (all air beyond the reach, or all inside the skeleton)
+        // is the points' value to the bit: elsewhere a box too thin to widen it still has
+        // its one value computed along the interval's path, not the point's.
+        if iv.lo == iv.hi && (iv.lo == 0.0 || iv.lo == self.energy) {
             out[..n].fill(iv.lo);
             return;
         }
