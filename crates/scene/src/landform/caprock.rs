@@ -772,16 +772,19 @@ fn lying(line: &CliffLine, ground: &Ground, rng: &mut Rng, xy: Vec2, size: f32) 
     {
         return None;
     }
+    // Slabs and blocks: a bed's joints part it into pieces from flat to near cubic.
     let half = 0.5
         * size
         * Vec3::new(
-            0.8 + 0.5 * rng.unit(),
-            0.6 + 0.4 * rng.unit(),
-            0.5 + 0.4 * rng.unit(),
+            0.7 + 0.6 * rng.unit(),
+            0.45 + 0.55 * rng.unit(),
+            0.3 + 0.6 * rng.unit(),
         );
+    // Sunk by a third to two thirds of its height: fallen rock settles into the slope's
+    // debris, some deeper than others.
+    let sunk = 0.3 + 0.7 * rng.unit();
     Some(Fallen {
-        // Sunk to below its middle: fallen rock settles into the slope's debris.
-        center: xy.extend(h - 0.4 * half.z),
+        center: xy.extend(h - sunk * half.z),
         half: quarter_turn(rng, half),
     })
 }
@@ -886,8 +889,9 @@ impl CliffLine {
     }
 
     /// The fallen blocks: weathered round (ellipsoids of the block's extents along the
-    /// tree's axes, roughened), outside the blocks' warp, which would lift a block of a few
-    /// metres off the ground it lies on.
+    /// tree's axes, roughened: boxes lying within a few metres of the ground take its
+    /// grass on their flat tops), outside the blocks' warp, which would lift a block of a
+    /// few metres off the ground it lies on.
     pub fn fallen_rocks(&self) -> Vec<NodeSpec> {
         self.fallen
             .iter()
@@ -899,7 +903,7 @@ impl CliffLine {
                         center: p3(f.center),
                         radii: Size3(f.half.map(round3)),
                     },
-                    round3((0.3 * size).max(0.2)),
+                    round3((0.2 * size).max(0.2)),
                     noise(0.15 * size, 0.5 * size, 3, 100 + k as u32),
                 )
             })
