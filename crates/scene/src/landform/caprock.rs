@@ -287,41 +287,32 @@ impl CaprockSpec {
                 let beds = bedding + 0.05 * t * Vec2::new(rng.unit() - 0.5, rng.unit() - 0.5);
                 let center = to_world(0.5 * (q0 + q1));
                 let half = 0.5 * (q1 - q0);
-                let heights = [
-                    center,
-                    to_world(q0),
-                    to_world(q1),
-                    to_world(Vec2::new(q0.x, q1.y)),
-                    to_world(Vec2::new(q1.x, q0.y)),
-                ]
-                .map(|p| ground.height(p));
+                // The footprint's corners from `lo` to `hi`, in the tree frame.
+                let corners = |lo: Vec2, hi: Vec2| {
+                    [lo, hi, Vec2::new(lo.x, hi.y), Vec2::new(hi.x, lo.y)].map(to_world)
+                };
+                let [c0, c1, c2, c3] = corners(q0, q1);
+                let heights = [center, c0, c1, c2, c3].map(|p| ground.height(p));
                 let lowest = heights.iter().copied().fold(f32::INFINITY, f32::min);
                 // The root reaches under the ground wherever the warp can move the block's
                 // foot: the lowest ground of its footprint grown by that reach (on a steep
                 // slope a foot moved downhill would hang over lower ground).
                 let grown = Vec2::splat(reach(s));
-                let under = [
-                    q0 - grown,
-                    q1 + grown,
-                    Vec2::new(q0.x - grown.x, q1.y + grown.y),
-                    Vec2::new(q1.x + grown.x, q0.y - grown.y),
-                ]
-                .map(|q| ground.height(to_world(q)))
-                .iter()
-                .copied()
-                .filter(|h| h.is_finite())
-                .fold(lowest, f32::min);
+                let under = corners(q0 - grown, q1 + grown)
+                    .map(|p| ground.height(p))
+                    .into_iter()
+                    .fold(lowest, f32::min);
                 // The bed thins out toward the region's sides: the cliff dies into the
                 // slope instead of stopping at a wall.
-                let side = (center - r.min.truncate()).min(r.max.truncate() - center);
-                let bed = t * super::smoothstep(0.0, fade, side.min_element());
+                let side = ground.side_room(center);
+                let bed = t * super::smoothstep(0.0, fade, side);
                 // Nothing of the block, its rounding, its roughness or its warp past the
                 // sides.
                 let margin = half.length() + reach(s);
                 // On a spur the bed stands whatever the ground, worn lower toward its end.
                 let spur = self.spurs.iter().find_map(|sp| on_spur(sp, center, half));
                 let inside = heights.iter().all(|h| h.is_finite())
-                    && side.min_element() > margin
+                    && side > margin
                     && lowest <= top + 1.0
                     && half.min_element() > 1.0;
                 let stands = inside
@@ -472,13 +463,8 @@ fn clear_of_cavities(
             continue;
         }
         lowest = lowest.min(h);
-        let mut z = h - 1.5;
-        while z > block.root - reach {
-            if !ground.solid(xy.extend(z)) {
-                cavity = cavity.max(z);
-                break;
-            }
-            z -= 0.5;
+        if let Some(z) = ground.cavity_under(xy, h - 1.5, block.root - reach) {
+            cavity = cavity.max(z);
         }
     }
     if cavity == f32::NEG_INFINITY {
@@ -733,10 +719,6 @@ fn apron_at(line: &CliffLine, ground: &Ground, edge: Vec2, out: Vec2, h: f32) ->
         .map(|k| reach * 1.25f32.powi(k))
         .find(|&radius| radius < 5.0 * reach && rim_buried(radius))?;
     let cone = Apron { apex, radius };
-    let r = ground.region;
-    let side_room = (edge - r.min.truncate())
-        .min(r.max.truncate() - edge)
-        .min_element();
     // The cone's axis and its middle ring probed for a cave, from under the ground down to
     // its base.
     let probes = std::iter::once(Vec2::ZERO).chain(
@@ -744,25 +726,16 @@ fn apron_at(line: &CliffLine, ground: &Ground, edge: Vec2, out: Vec2, h: f32) ->
     );
     let over_cave = probes.into_iter().any(|d| {
         let xy = edge + d;
-        let mut z = ground.height(xy).min(apex.z) - 1.5;
-        while z > cone.base() {
-            if !ground.solid(xy.extend(z)) {
-                return true;
-            }
-            z -= 1.0;
-        }
-        false
+        let from = ground.height(xy).min(apex.z) - 1.5;
+        ground.cavity_under(xy, from, cone.base()).is_some()
     });
-    (side_room > radius + 2.0 && !over_cave).then_some(cone)
+    (ground.side_room(edge) > radius + 2.0 && !over_cave).then_some(cone)
 }
 
 /// A block of `size` lying half sunk at `xy`, none off the ground or on the cliff.
 fn lying(line: &CliffLine, ground: &Ground, rng: &mut Rng, xy: Vec2, size: f32) -> Option<Fallen> {
     let h = ground.height(xy);
-    let r = ground.region;
-    let side = (xy - r.min.truncate())
-        .min(r.max.truncate() - xy)
-        .min_element();
+    let side = ground.side_room(xy);
     // Off the cliff, on the region's ground, and wholly inside its sides; none under two
     // cells of the analysis grid (a mesh at that cell would leave it as a speck).
     if size < 2.0 * ground.top.cell().max_element()

@@ -229,8 +229,8 @@ impl HoodooSpec {
             let girth = 0.8 + 0.4 * rng.unit();
             let seed = 1 + (k % 64) as u32;
             for &(t, p, s, elongation, rho) in &h.symbols {
+                // Symbols stack up the vertical through the axiom.
                 let up = |z: f32| (z - h.axiom.z) / height;
-                let at = |z: f32| h.axiom.truncate().extend(z);
                 let width = girth * s * (0.22 + 0.16 * rho);
                 let (ex, ey) = (elongation.sqrt(), 1.0 / elongation.sqrt());
                 match t {
@@ -243,7 +243,7 @@ impl HoodooSpec {
                         for i in 0..n {
                             let f = (i as f32 + 0.5) / n as f32;
                             let z = p.z + f * s;
-                            let bed = (ground.resistance)(at(z));
+                            let bed = (ground.resistance)(p.with_z(z));
                             // Hard beds bulge, soft ones pinch; the column tapers upward.
                             let r = width
                                 * (0.45 + 1.1 * bed)
@@ -251,7 +251,7 @@ impl HoodooSpec {
                                 * (1.0 - narrows * f);
                             out.push(solid(
                                 SkeletonSpec::Ellipsoid {
-                                    center: P3(at(z)),
+                                    center: P3(p.with_z(z)),
                                     radii: Size3(Vec3::new(r * ex, r * ey, 0.8 * dz)),
                                 },
                                 falloff,
@@ -265,7 +265,7 @@ impl HoodooSpec {
                         let r = width * (1.2 + 0.4 * rng.unit());
                         out.push(solid(
                             SkeletonSpec::Ellipsoid {
-                                center: P3(at(p.z + 0.5 * CAP * s)),
+                                center: P3(p + 0.5 * CAP * s * Vec3::Z),
                                 radii: Size3(Vec3::new(r * ex, r * ey, 0.6 * CAP * s)),
                             },
                             falloff,

@@ -143,6 +143,27 @@ impl<'a> Ground<'a> {
         self.tree.value(p) > ISO
     }
 
+    /// The highest air in the column over `xy` from `from` down to `to`, probed every
+    /// half metre: a cave of the base under the ground, `None` when the column is solid.
+    pub fn cavity_under(&self, xy: Vec2, from: f32, to: f32) -> Option<f32> {
+        let mut z = from;
+        while z > to {
+            if !self.solid(xy.extend(z)) {
+                return Some(z);
+            }
+            z -= 0.5;
+        }
+        None
+    }
+
+    /// How far `xy` lies inside the region's nearest side, in plan (negative outside).
+    pub fn side_room(&self, xy: Vec2) -> f32 {
+        let r = &self.region;
+        (xy - r.min.truncate())
+            .min(r.max.truncate() - xy)
+            .min_element()
+    }
+
     /// The tree-frame position of sample `k` of [`Ground::top`], at its height.
     pub fn sample_point(&self, k: usize) -> Vec3 {
         let nx = self.top.nx();
