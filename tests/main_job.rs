@@ -144,14 +144,10 @@ fn main_job_mesh_is_watertight_valid_caved_and_on_the_dem() {
         .unwrap_or_else(|e| panic!("the job's mesh is not watertight: {e}"));
     assert!(topo.faces > 100_000, "{topo:?}");
     // No debris: every piece of the mesh is a real surface (issue 13 found an 8-face
-    // fragment floating near the tunnel's mouth), but for at most three specks of one
-    // sample each (8 faces): flakes of the cliff's rough faces thinner than a cell, which
-    // a sample catches alone. A block loosed from the cliff, or a pocket of air sealed in
-    // a crack, is a piece of tens of faces or more.
+    // fragment floating near the tunnel's mouth).
     let pieces = r.mesh.component_sizes();
-    let specks = pieces.iter().filter(|&&n| n <= 8).count();
     assert!(
-        pieces.iter().all(|&n| n >= 200 || n <= 8) && specks <= 3,
+        pieces.iter().all(|&n| n >= 200),
         "pieces of the job's mesh, by faces: {pieces:?}"
     );
     gltf_validator::assert_valid(&r.mesh_path);

@@ -82,12 +82,20 @@ fn mesh_with_bar(
         budget,
         ..MeshOptions::default()
     };
-    let out = polygonize(tree, grid, &opts)?;
+    let (mut mesh, stats) = polygonize(tree, grid, &opts)?;
     if let Some(b) = &opts.progress {
         b.finish_and_clear();
     }
-    Ok(out)
+    // A closed piece of a single sample is solid or air smaller than a cell: a speck, not
+    // a surface the job's users can use (flakes of a cliff's rough faces, a crack a hair
+    // narrower than a cell).
+    mesh.drop_specks(SPECK);
+    Ok((mesh, stats))
 }
+
+/// The most faces of a piece the job's meshes drop as a speck: the closed surface around
+/// one sample.
+pub const SPECK: usize = 8;
 
 /// The stem of the job's output files: the tree file's, not the scene's `name` (two
 /// trees sharing a name must not overwrite each other's results), `_full` for a full job.

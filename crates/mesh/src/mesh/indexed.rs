@@ -113,6 +113,66 @@ impl Mesh {
         sizes
     }
 
+    /// Removes the connected components of at most `max_faces` triangles, and the
+    /// vertices only they used; returns how many components went. A closed piece of 8
+    /// faces is one sample of the field on the other side of `T` from all its neighbours:
+    /// solid (or air) smaller than a cell, which the mesh can only draw as a speck.
+    pub fn drop_specks(&mut self, max_faces: usize) -> usize {
+        let (labels, count) = self.components();
+        let mut sizes = vec![0usize; count];
+        for &l in &labels {
+            sizes[l as usize] += 1;
+        }
+        let dropped = sizes.iter().filter(|&&n| n <= max_faces).count();
+        if dropped == 0 {
+            return 0;
+        }
+        let mut kept = Vec::with_capacity(self.triangles.len());
+        for (t, &l) in self.triangles.iter().zip(&labels) {
+            if sizes[l as usize] > max_faces {
+                kept.push(*t);
+            }
+        }
+        // Renumber the vertices the kept triangles use, in their old order.
+        let mut used = vec![false; self.positions.len()];
+        for t in &kept {
+            for &v in t {
+                used[v as usize] = true;
+            }
+        }
+        let mut index = vec![u32::MAX; used.len()];
+        let mut next = 0u32;
+        for (i, &u) in used.iter().enumerate() {
+            if u {
+                index[i] = next;
+                next += 1;
+            }
+        }
+        let keep = |v: &Vec<[f32; 3]>| -> Vec<[f32; 3]> {
+            v.iter()
+                .zip(&used)
+                .filter(|(_, u)| **u)
+                .map(|(p, _)| *p)
+                .collect()
+        };
+        self.positions = keep(&self.positions);
+        self.normals = keep(&self.normals);
+        for a in &mut self.attributes {
+            a.values = a
+                .values
+                .iter()
+                .zip(&used)
+                .filter(|(_, u)| **u)
+                .map(|(x, _)| *x)
+                .collect();
+        }
+        self.triangles = kept
+            .into_iter()
+            .map(|t| t.map(|v| index[v as usize]))
+            .collect();
+        dropped
+    }
+
     /// Number of vertices.
     pub fn vertex_count(&self) -> usize {
         self.positions.len()
@@ -269,6 +329,60 @@ mod tests {
             triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
             attributes: vec![],
         }
+    }
+
+    /// A tetrahedron of 4 faces beside one of 12 (three tetrahedra sharing a vertex), each
+    /// vertex tagged with its old index: the small piece goes, the other stays whole.
+    #[test]
+    fn specks_are_dropped_and_the_rest_renumbered() {
+        let shifted = |m: &Mesh, d: f32, base: u32| -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
+            (
+                m.positions.iter().map(|p| [p[0] + d, p[1], p[2]]).collect(),
+                m.triangles.iter().map(|t| t.map(|v| v + base)).collect(),
+            )
+        };
+        let t = tetra();
+        let mut mesh = Mesh::default();
+        for (k, d) in [0.0, 5.0, 5.0, 5.0].into_iter().enumerate() {
+            let base = mesh.positions.len() as u32;
+            let (p, tr) = shifted(&t, d + k as f32 * 0.01, base);
+            mesh.positions.extend(p);
+            mesh.triangles.extend(tr);
+        }
+        // Tie the three tetrahedra at x ≈ 5 into one piece through shared vertices.
+        for tr in &mut mesh.triangles[8..] {
+            for v in tr.iter_mut() {
+                if *v % 4 == 0 {
+                    *v = 4;
+                }
+            }
+        }
+        mesh.normals = vec![[0.0, 0.0, 1.0]; mesh.positions.len()];
+        mesh.attributes = vec![Attribute {
+            name: "OLD".into(),
+            values: (0..mesh.positions.len()).map(|i| i as f32).collect(),
+        }];
+        assert_eq!(mesh.component_sizes(), vec![12, 4]);
+        assert_eq!(mesh.drop_specks(8), 1);
+        assert_eq!(mesh.component_sizes(), vec![12]);
+        // Vertices 0–3 (the speck) and the three merged away (8 and 12) are gone; the
+        // others keep their order, positions and attributes.
+        let old: Vec<usize> = mesh.attributes[0]
+            .values
+            .iter()
+            .map(|&v| v as usize)
+            .collect();
+        assert_eq!(old, vec![4, 5, 6, 7, 9, 10, 11, 13, 14, 15]);
+        for (i, &o) in old.iter().enumerate() {
+            assert!(mesh.positions[i][0] >= 5.0, "vertex {o} moved to {i}");
+        }
+        assert!(
+            mesh.triangles
+                .iter()
+                .flatten()
+                .all(|&v| (v as usize) < old.len())
+        );
+        assert_eq!(mesh.drop_specks(8), 0, "nothing more to drop");
     }
 
     #[test]
