@@ -84,19 +84,19 @@ fn tree_bounds_hold_on_random_points_and_pairs() {
         for _ in 0..3000 {
             let r = random_rect(&mut rng);
             let b = t.bounds(&r, &lod);
-            local_below += (b.lf < 0.5 * global.lf) as usize;
+            local_below += (b.f.lipschitz < 0.5 * global.f.lipschitz) as usize;
             for _ in 0..10 {
                 let (p, q) = (in_rect(&mut rng, &r), in_rect(&mut rng, &r));
                 let (sp, sq) = (t.eval(p, &lod), t.eval(q, &lod));
                 for s in [sp, sq] {
                     assert!(
-                        b.f.lo - 1e-3 <= s.f && s.f <= b.f.hi + 1e-3,
+                        b.f.range.lo - 1e-3 <= s.f && s.f <= b.f.range.hi + 1e-3,
                         "f = {} not in {:?} over {r:?}",
                         s.f,
                         b.f
                     );
                     assert!(
-                        b.a.lo - 1e-5 <= s.a && s.a <= b.a.hi + 1e-5,
+                        b.a.range.lo - 1e-5 <= s.a && s.a <= b.a.range.hi + 1e-5,
                         "α {} not in {:?}",
                         s.a,
                         b.a
@@ -108,23 +108,23 @@ fn tree_bounds_hold_on_random_points_and_pairs() {
                 }
                 let slope = (sp.f - sq.f).abs() / d;
                 assert!(
-                    slope <= b.lf * 1.001 + 1e-4,
+                    slope <= b.f.lipschitz * 1.001 + 1e-4,
                     "slope {slope} > λ_f {} over {r:?} ({p} {q})",
-                    b.lf
+                    b.f.lipschitz
                 );
                 let slope_a = (sp.a - sq.a).abs() / d;
                 assert!(
-                    slope_a <= b.la * 1.001 + 1e-5,
+                    slope_a <= b.a.lipschitz * 1.001 + 1e-5,
                     "α slope {slope_a} > {}",
-                    b.la
+                    b.a.lipschitz
                 );
-                worst = worst.max(slope / global.lf);
+                worst = worst.max(slope / global.f.lipschitz);
             }
         }
         assert!(
             worst > 0.02,
             "the global bound {} is never approached ({worst})",
-            global.lf
+            global.f.lipschitz
         );
         assert!(
             local_below > 500,
@@ -143,7 +143,8 @@ fn replace_is_continuous_across_the_weight_boundary() {
             &Rect::new(Vec2::ZERO, Vec2::new(1200.0, 1000.0)),
             &Lod::FULL,
         )
-        .lf;
+        .f
+        .lipschitz;
     for (a, b) in [
         (Vec2::new(400.0, 560.0), Vec2::new(400.0, 620.0)),
         (Vec2::new(600.0, 230.0), Vec2::new(600.0, 330.0)),
@@ -184,8 +185,8 @@ fn lod_at_level_infinity_is_the_full_evaluation() {
     assert!(differs > 10_000, "coarse LoD changes nothing ({differs})");
     let whole = Rect::new(Vec2::ZERO, Vec2::new(1200.0, 1000.0));
     let (lf_full, lf_coarse) = (
-        t.bounds(&whole, &Lod::FULL).lf,
-        t.bounds(&whole, &coarse).lf,
+        t.bounds(&whole, &Lod::FULL).f.lipschitz,
+        t.bounds(&whole, &coarse).f.lipschitz,
     );
     assert!(
         lf_coarse < 0.5 * lf_full,
@@ -431,7 +432,7 @@ fn a_curve_alone_reaches_its_bound() {
     };
     let t = spec.build_tree(&cx).unwrap();
     let r = Rect::new(Vec2::ZERO, Vec2::splat(100.0));
-    let lf = t.bounds(&r, &Lod::FULL).lf;
+    let lf = t.bounds(&r, &Lod::FULL).f.lipschitz;
     assert!((lf - 1.1).abs() < 1e-3, "{lf}");
     let (p, q) = (Vec2::new(50.0, 55.0), Vec2::new(50.0, 65.0));
     let slope = (t.height(p, &Lod::FULL) - t.height(q, &Lod::FULL)).abs() / p.distance(q);

@@ -7,7 +7,7 @@ use std::process::Command;
 
 use glam::{Vec2, Vec3};
 use karstic::field::Resistance;
-use karstic::field::{Aabb, Field};
+use karstic::field::{Aabb, Bound, Field};
 use karstic::geology::section::{AIR, HARD, OUTLINE, SOFT, Section};
 use karstic::geology::{Geology, GeologySpec};
 use karstic::value::ron_options;
@@ -75,7 +75,10 @@ fn check_geology_bounds(g: &Geology, region: &Aabb, seed: u64) {
             rng.range(0.1, 8.0),
         );
         let b = Aabb::new(c - half, c + half);
-        let (iv, l) = (g.interval(&b), g.lipschitz_box(&b));
+        let Bound {
+            range: iv,
+            lipschitz: l,
+        } = g.bound(&b);
         let ps: Vec<Vec3> = (0..40).map(|_| rng.in_box(&b)).collect();
         for w in ps.windows(2) {
             let (p, q) = (w[0], w[1]);
@@ -135,7 +138,7 @@ fn faults_jump_only_on_their_domain_boundary() {
                 jumps += 1;
             }
             assert_eq!(
-                g.lipschitz_box(&Aabb::new(a, b)),
+                g.bound(&Aabb::new(a, b)).lipschitz,
                 f32::INFINITY,
                 "a box across the fault has no finite Lipschitz bound"
             );
@@ -148,7 +151,7 @@ fn faults_jump_only_on_their_domain_boundary() {
                 rng.range(-1.0, 1.0),
             ) * 0.2;
             if n.dot(q).signum() == n.dot(p).signum() {
-                let l = g.lipschitz_box(&Aabb::new(p, q));
+                let l = g.bound(&Aabb::new(p, q)).lipschitz;
                 assert!(l.is_finite(), "finite away from the fault at {p}");
                 assert!((g.value(p) - g.value(q)).abs() <= l * p.distance(q) + 1e-5);
             }

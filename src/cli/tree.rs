@@ -160,9 +160,9 @@ fn show(file: &PathBuf) -> anyhow::Result<()> {
             spec.kind(),
             spec.name().map(|n| format!("{n:?}")).unwrap_or_default(),
             fmt_box(&info.support),
-            info.lipschitz,
-            info.range.lo,
-            info.range.hi,
+            info.bound.lipschitz,
+            info.bound.range.lo,
+            info.bound.range.hi,
             indent = 2 * depth
         );
     }

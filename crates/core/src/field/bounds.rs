@@ -3,7 +3,7 @@
 use glam::{Vec2, Vec3};
 
 /// An axis-aligned box in metres. An *empty* box has `min > max` on some axis.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Aabb {
     /// Lower corner.
     pub min: Vec3,
@@ -151,7 +151,7 @@ impl Aabb {
 }
 
 /// A closed interval of reals `[lo, hi]`, used for sound range bounds.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Interval {
     /// Lower bound.
     pub lo: f32,

@@ -2,12 +2,13 @@
 
 use glam::{Affine3A, Vec3};
 
+use super::bound::{gap, mix_lipschitz};
 use super::bounds::{Aabb, Interval};
 use super::contract::Field;
 use super::falloff::ISO;
 use super::line::{Anywhere, Candidates};
 use super::node::{Node, NodeId};
-use super::replace::{Transition, gap};
+use super::replace::Transition;
 use super::tree::Tree;
 
 /// The box of `b`'s corners mapped by `m`: contains the image of `b`.
@@ -128,7 +129,7 @@ impl Tree {
                     return lb;
                 }
                 let gap = gap(self.interval_at(*base, b), self.interval_at(*by, b));
-                mix.mix_lipschitz(w, lb, self.lipschitz_box_at(*by, b), gap)
+                mix_lipschitz(w, lb, self.lipschitz_box_at(*by, b), gap, mix.lipschitz())
             }
             Node::Affine {
                 child,
@@ -193,7 +194,13 @@ impl Tree {
                     return lb;
                 }
                 let gap = gap(self.interval_at(*base, &bx), self.interval_at(*by, &bx));
-                mix.mix_lipschitz(w, lb, self.lipschitz_segment_with(*by, a, b, at), gap)
+                mix_lipschitz(
+                    w,
+                    lb,
+                    self.lipschitz_segment_with(*by, a, b, at),
+                    gap,
+                    mix.lipschitz(),
+                )
             }
             Node::Affine {
                 child,

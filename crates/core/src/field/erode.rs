@@ -20,6 +20,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
+use super::bound::Bound;
 use super::bounds::{Aabb, Interval};
 use super::replace::Transition;
 
@@ -33,11 +34,9 @@ pub trait Resistance: Send + Sync + Debug {
     /// `(ρ(p), ∇ρ(p))`.
     fn resistance_grad(&self, p: Vec3) -> (f32, Vec3);
 
-    /// A range in `[0, 1]` holding `ρ(p)` for every `p` in `b`.
-    fn resistance_interval(&self, b: &Aabb) -> Interval;
-
-    /// A Lipschitz bound of `ρ` for pairs of points in `b` (`+∞` across a jump).
-    fn resistance_lipschitz(&self, b: &Aabb) -> f32;
+    /// A range in `[0, 1]` holding `ρ(p)` for every `p` in `b`, and a Lipschitz bound of
+    /// `ρ` for pairs of points in `b` (`+∞` across a jump).
+    fn resistance_bound(&self, b: &Aabb) -> Bound;
 }
 
 /// The erosion a node subtracts from its child: `e(p) = a·w(p)·(1 − ρ(p))`.
@@ -90,36 +89,32 @@ impl Erosion {
         (a * w * (1.0 - rho), a * ((1.0 - rho) * gw - w * grho))
     }
 
-    /// A range holding `e(p)` for every `p` in `b`.
-    pub fn interval(&self, b: &Aabb) -> Interval {
-        let w = self.mix.interval(b);
-        if w.hi <= 0.0 {
-            return Interval::ZERO;
-        }
-        let rho = self
-            .rock
-            .resistance_interval(&b.intersection(*self.region()));
-        let a = self.strength;
-        Interval::new(
-            a * w.lo.max(0.0) * (1.0 - rho.hi),
-            a * w.hi * (1.0 - rho.lo),
-        )
-    }
-
-    /// A Lipschitz bound of `e` for pairs of points in `b` (`+∞` across a fault in `D`).
-    pub fn lipschitz_box(&self, b: &Aabb) -> f32 {
+    /// A range holding `e(p)` for every `p` in `b`, and a Lipschitz bound of `e` for pairs
+    /// of points in `b` (`+∞` across a fault in `D`): `a · w · (1 − ρ)` by the product
+    /// rule.
+    pub fn bound(&self, b: &Aabb) -> Bound {
         let w = self.mix.interval(b);
         if w.hi <= 0.0 || self.strength == 0.0 {
-            return 0.0;
+            return Bound::ZERO;
         }
-        let inside = b.intersection(*self.region());
-        let rho = self.rock.resistance_interval(&inside);
         let lw = if w.lo >= 1.0 {
             0.0
         } else {
             self.mix.lipschitz()
         };
-        self.strength * ((1.0 - rho.lo) * lw + w.hi * self.rock.resistance_lipschitz(&inside))
+        let rho = self.rock.resistance_bound(&b.intersection(*self.region()));
+        let w = Bound::new(Interval::new(w.lo.max(0.0), w.hi), lw);
+        w.product(rho.scale(-1.0).shift(1.0)).scale(self.strength)
+    }
+
+    /// A range holding `e(p)` for every `p` in `b`.
+    pub fn interval(&self, b: &Aabb) -> Interval {
+        self.bound(b).range
+    }
+
+    /// A Lipschitz bound of `e` for pairs of points in `b` (`+∞` across a fault in `D`).
+    pub fn lipschitz_box(&self, b: &Aabb) -> f32 {
+        self.bound(b).lipschitz
     }
 
     /// [`Erosion::lipschitz_box`] over the whole region: the global bound.

@@ -6,6 +6,7 @@
 
 mod batch;
 mod block;
+pub mod bound;
 pub mod bounds;
 mod box_bounds;
 pub mod bvh;
@@ -30,6 +31,7 @@ pub mod warp;
 mod zband;
 
 pub use block::BRICK;
+pub use bound::Bound;
 pub use bounds::{Aabb, Interval, Rect, ZBands};
 pub use box_bounds::map_box;
 pub use contract::{Elevation, ElevationSource, Field};

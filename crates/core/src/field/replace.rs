@@ -129,26 +129,7 @@ impl Transition {
         };
         at(w.lo).hull(at(w.hi))
     }
-
-    /// The Lipschitz bound of the mix over a region where the weight ranges over `w`,
-    /// the children's bounds are `l_base` and `l_by`, and `|f_by − f_base| ≤ gap`.
-    pub fn mix_lipschitz(&self, w: Interval, l_base: f32, l_by: f32, gap: f32) -> f32 {
-        if w.hi <= 0.0 {
-            l_base
-        } else if w.lo >= 1.0 {
-            l_by
-        } else {
-            l_base.max(l_by) + gap * self.lipschitz()
-        }
-    }
 }
-
-/// `max |b − a|` for `a ∈ base`, `b ∈ by`.
-pub fn gap(base: Interval, by: Interval) -> f32 {
-    (by.hi - base.lo).max(base.hi - by.lo).max(0.0)
-}
-
-impl Transition {}
 
 #[cfg(test)]
 mod tests {

@@ -4,6 +4,7 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Vec2, Vec3};
 
+use super::bound::Bound;
 use super::bounds::{Aabb, Interval, Rect, ZBands};
 use super::bvh::{BVH_MIN_CHILDREN, ChildBvh};
 use super::contract::{Elevation, Field};
@@ -11,7 +12,7 @@ use super::erode::Erosion;
 use super::falloff::ISO;
 use super::node::{Node, NodeId, spectral_norm};
 use super::primitive::{Primitive, Round};
-use super::replace::{Transition, gap};
+use super::replace::Transition;
 use super::slope_grid::blend_lipschitz;
 use super::warp::Warp;
 
@@ -20,10 +21,8 @@ use super::warp::Warp;
 pub struct NodeInfo {
     /// Where the node can be non-zero.
     pub support: Aabb,
-    /// A range containing every value of the node.
-    pub range: Interval,
-    /// Global Lipschitz bound.
-    pub lipschitz: f32,
+    /// A range containing every value of the node, and its global Lipschitz bound.
+    pub bound: Bound,
     /// The user's name for the node, if any.
     pub name: Option<String>,
 }
@@ -223,89 +222,70 @@ impl TreeBuilder {
     fn compute_info(&self, node: &Node, name: Option<String>) -> NodeInfo {
         let info = |c: &NodeId| &self.info[*c as usize];
         let everywhere = Aabb::new(Vec3::splat(-f32::MAX), Vec3::splat(f32::MAX));
-        let (support, range, lipschitz) = match node {
+        let hull = |cs: &[NodeId]| cs.iter().fold(Aabb::EMPTY, |b, c| b.union(info(c).support));
+        let (support, bound) = match node {
             Node::Constant(v) => (
                 if *v == 0.0 { Aabb::EMPTY } else { everywhere },
-                Interval::point(*v),
-                0.0,
+                Bound::constant(*v),
             ),
             Node::Primitive(_) | Node::Leaf(_) => {
                 let f = node.leaf().expect("a leaf");
                 let s = f.support();
-                (s, f.interval(&s).hull(Interval::ZERO), f.lipschitz())
+                (s, Bound::new(f.interval(&s), f.lipschitz()).hull_zero())
             }
             Node::Blend { children, .. } => {
-                let support = children
-                    .iter()
-                    .fold(Aabb::EMPTY, |b, c| b.union(info(c).support));
                 let range = children
                     .iter()
-                    .fold(Interval::ZERO, |r, c| r + info(c).range);
-                // ∇ of a sum is the sum of the gradients of the children non-zero at a point.
+                    .fold(Interval::ZERO, |r, c| r + info(c).bound.range);
+                // ∇ of a sum is the sum of the gradients of the children non-zero at a
+                // point: a sharper slope than the sum rule's where supports are apart.
                 let slopes: Vec<(Aabb, f32)> = children
                     .iter()
-                    .map(|c| (info(c).support, info(c).lipschitz))
+                    .map(|c| (info(c).support, info(c).bound.lipschitz))
                     .collect();
-                let lipschitz = blend_lipschitz(&slopes);
-                (support, range, lipschitz)
+                (hull(children), Bound::new(range, blend_lipschitz(&slopes)))
             }
             Node::Union(children) | Node::Intersection(children) => {
                 let is_union = matches!(node, Node::Union(_));
-                let ranges = children.iter().map(|c| info(c).range);
-                let range = if is_union {
-                    ranges.reduce(Interval::max)
+                let bounds = children.iter().map(|c| info(c).bound);
+                let bound = if is_union {
+                    bounds.reduce(Bound::max)
                 } else {
-                    ranges.reduce(Interval::min)
+                    bounds.reduce(Bound::min)
                 }
-                .unwrap_or(Interval::ZERO);
-                let any_negative = children.iter().any(|c| info(c).range.lo < 0.0);
-                let hull = children
-                    .iter()
-                    .fold(Aabb::EMPTY, |b, c| b.union(info(c).support));
+                .unwrap_or(Bound::ZERO);
+                let any_negative = children.iter().any(|c| info(c).bound.range.lo < 0.0);
                 let support = if is_union || any_negative {
-                    hull
+                    hull(children)
                 } else {
                     children
                         .iter()
-                        .fold(hull, |b, c| b.intersection(info(c).support))
+                        .fold(hull(children), |b, c| b.intersection(info(c).support))
                 };
-                let lipschitz = children
-                    .iter()
-                    .map(|c| info(c).lipschitz)
-                    .fold(0.0, f32::max);
-                (support, range.hull(Interval::ZERO), lipschitz)
+                (support, bound.hull_zero())
             }
             Node::Difference { base, carves } => {
                 // `min(f_base, 2T − max f_c)`: the carves' maximum, which is negative
                 // where every carve is (negative energies), not clamped at 0.
-                let carve_range = carves.iter().map(|c| info(c).range).reduce(Interval::max);
-                let range = match carve_range {
-                    Some(cr) => info(base)
-                        .range
-                        .min(Interval::new(2.0 * ISO - cr.hi, 2.0 * ISO - cr.lo)),
-                    None => info(base).range,
+                let carve = carves.iter().map(|c| info(c).bound).reduce(Bound::max);
+                let bound = match carve {
+                    Some(c) => info(base).bound.min(c.scale(-1.0).shift(2.0 * ISO)),
+                    None => info(base).bound,
                 };
-                let carve_range = carve_range.unwrap_or(Interval::ZERO);
-                let support = if carve_range.hi > 2.0 * ISO {
+                let support = if carve.is_some_and(|c| c.range.hi > 2.0 * ISO) {
                     carves
                         .iter()
                         .fold(info(base).support, |b, c| b.union(info(c).support))
                 } else {
                     info(base).support
                 };
-                let lipschitz = carves
-                    .iter()
-                    .map(|c| info(c).lipschitz)
-                    .fold(info(base).lipschitz, f32::max);
-                (support, range.hull(Interval::ZERO), lipschitz)
+                (support, bound.hull_zero())
             }
             Node::Replace { base, by, mix } => {
                 let (b, v) = (info(base), info(by));
                 let support = b.support.union(v.support.intersection(*mix.region()));
-                let everywhere = Interval::new(0.0, 1.0);
-                let lipschitz =
-                    mix.mix_lipschitz(everywhere, b.lipschitz, v.lipschitz, gap(b.range, v.range));
-                (support, b.range.hull(v.range), lipschitz)
+                let w = Interval::new(0.0, 1.0);
+                (support, b.bound.mix(v.bound, w, mix.lipschitz()))
             }
             Node::Affine {
                 child,
@@ -319,7 +299,7 @@ impl TreeBuilder {
                 } else {
                     Aabb::from_points(s.corners().map(|c| to_parent.transform_point3(c)))
                 };
-                (support, info(child).range, info(child).lipschitz * stretch)
+                (support, info(child).bound.warped(*stretch))
             }
             Node::Warp { child, warp } => {
                 let s = info(child).support;
@@ -328,11 +308,7 @@ impl TreeBuilder {
                 } else {
                     s.dilate(warp.reach())
                 };
-                (
-                    support,
-                    info(child).range,
-                    info(child).lipschitz * warp.lipschitz(),
-                )
+                (support, info(child).bound.warped(warp.lipschitz()))
             }
             Node::Erode { child, erosion } => {
                 let c = info(child);
@@ -342,18 +318,13 @@ impl TreeBuilder {
                 } else {
                     c.support
                 };
-                let range = Interval::new(c.range.lo - erosion.strength(), c.range.hi);
-                (
-                    support,
-                    range.hull(Interval::ZERO),
-                    c.lipschitz + erosion.lipschitz(),
-                )
+                let e = Bound::new(Interval::new(0.0, erosion.strength()), erosion.lipschitz());
+                (support, (c.bound + e.scale(-1.0)).hull_zero())
             }
         };
         NodeInfo {
             support,
-            range,
-            lipschitz,
+            bound,
             name,
         }
     }
@@ -442,7 +413,7 @@ impl Field for SubTree<'_> {
         self.tree.interval_at(self.id, b)
     }
     fn lipschitz(&self) -> f32 {
-        self.tree.info(self.id).lipschitz
+        self.tree.info(self.id).bound.lipschitz
     }
     fn lipschitz_box(&self, b: &Aabb) -> f32 {
         self.tree.lipschitz_box_at(self.id, b)
@@ -484,7 +455,7 @@ impl Field for Tree {
         self.interval_at(self.root, b)
     }
     fn lipschitz(&self) -> f32 {
-        self.info(self.root).lipschitz
+        self.info(self.root).bound.lipschitz
     }
     fn lipschitz_box(&self, b: &Aabb) -> f32 {
         self.lipschitz_box_at(self.root, b)

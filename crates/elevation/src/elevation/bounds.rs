@@ -16,20 +16,19 @@
 
 use super::lod::Lod;
 use super::node::{BLEND_FLOOR, Kind, Node};
-use crate::field::{Interval, Rect};
+use crate::field::{Bound, Interval, Rect};
 
 /// Bounds of a node over a rectangle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bounds {
-    /// Range of `f`.
-    pub f: Interval,
-    /// Range of `α`.
-    pub a: Interval,
-    /// Lipschitz bound of `f`.
-    pub lf: f32,
-    /// Lipschitz bound of `α`.
-    pub la: f32,
+    /// Range and Lipschitz bound of `f`.
+    pub f: Bound,
+    /// Range and Lipschitz bound of `α`.
+    pub a: Bound,
 }
+
+/// The rounding margin on the composed slopes.
+const MARGIN: f32 = 1.000_1;
 
 impl Node {
     /// Bounds over `r` at level of detail `lod`.
@@ -39,27 +38,24 @@ impl Node {
                 let (f, a) = p.ranges_over(r, lod);
                 let on = a.hi > 0.0;
                 Bounds {
-                    f,
-                    a,
-                    lf: p.lipschitz_f(lod),
-                    la: if on { p.lipschitz_a() } else { 0.0 },
+                    f: Bound::new(f, p.lipschitz_f(lod)),
+                    a: Bound::new(a, if on { p.lipschitz_a() } else { 0.0 }),
                 }
             }
             Kind::Blend(b) => {
-                let (mut f, mut s, mut lf, mut la) =
-                    (Interval::EMPTY, Interval::ZERO, 0.0f32, 0.0f32);
+                // The weighted mean of the children: its own rule (module docs).
+                let (mut f, mut lf, mut s) = (Interval::EMPTY, 0.0f32, Bound::ZERO);
                 let mut visit = |c: &Node| {
                     if !c.support.overlaps(r) {
                         return;
                     }
                     let x = c.bounds(r, lod);
-                    if x.a.hi <= 0.0 {
+                    if x.a.range.hi <= 0.0 {
                         return;
                     }
-                    f = f.hull(x.f);
-                    s = Interval::new(s.lo + x.a.lo, s.hi + x.a.hi);
-                    lf = lf.max(x.lf);
-                    la += x.la;
+                    f = f.hull(x.f.range);
+                    lf = lf.max(x.f.lipschitz);
+                    s = s + x.a;
                 };
                 match &b.index {
                     Some(ix) => ix
@@ -68,14 +64,13 @@ impl Node {
                         .for_each(|i| visit(&b.children[i as usize])),
                     None => b.children.iter().for_each(&mut visit),
                 }
-                if s.lo < BLEND_FLOOR {
+                if s.range.lo < BLEND_FLOOR {
                     f = f.hull(Interval::point(b.base));
                 }
+                let lf = (lf + f.width() * s.lipschitz / BLEND_FLOOR) * MARGIN;
                 Bounds {
-                    f,
+                    f: Bound::new(f, lf),
                     a: s,
-                    lf: (lf + f.width() * la / BLEND_FLOOR) * 1.000_1,
-                    la,
                 }
             }
             Kind::Add { a, b, size } => {
@@ -85,17 +80,14 @@ impl Node {
                     return x;
                 }
                 let y = b.bounds(r, lod);
-                if y.a.hi <= 0.0 {
+                if y.a.range.hi <= 0.0 {
                     return x;
                 }
-                let (w0, w1) = (y.a.lo.min(1.0), y.a.hi.min(1.0));
-                let prods = [w0 * y.f.lo, w0 * y.f.hi, w1 * y.f.lo, w1 * y.f.hi];
-                let lo = prods.iter().copied().fold(f32::INFINITY, f32::min) * beta;
-                let hi = prods.iter().copied().fold(f32::NEG_INFINITY, f32::max) * beta;
-                let fb = y.f.lo.abs().max(y.f.hi.abs());
+                // f_A + β min(α_B, 1) f_B.
+                let w = y.a.clamp(f32::NEG_INFINITY, 1.0);
+                let f = x.f + w.product(y.f).scale(beta);
                 Bounds {
-                    f: Interval::new(x.f.lo + lo, x.f.hi + hi),
-                    lf: (x.lf + beta * (w1 * y.lf + fb * y.la)) * 1.000_1,
+                    f: Bound::new(f.range, f.lipschitz * MARGIN),
                     ..x
                 }
             }
@@ -105,14 +97,14 @@ impl Node {
                     return x;
                 }
                 let y = b.bounds(r, lod);
-                if y.a.hi <= 0.0 {
+                if y.a.range.hi <= 0.0 {
                     return x;
                 }
-                let f = if y.a.lo >= 1.0 { y.f } else { x.f.hull(y.f) };
-                let d = (y.f.hi - x.f.lo).max(x.f.hi - y.f.lo).max(0.0);
+                // (1 − w) f_A + w f_B with w = min(α_B, 1).
+                let w = y.a.clamp(f32::NEG_INFINITY, 1.0);
+                let f = x.f.mix(y.f, w.range, w.lipschitz);
                 Bounds {
-                    f,
-                    lf: (x.lf.max(y.lf) + d * y.la) * 1.000_1,
+                    f: Bound::new(f.range, f.lipschitz * MARGIN),
                     ..x
                 }
             }
@@ -120,9 +112,8 @@ impl Node {
                 let x = child.bounds(&r.dilate(warp.reach()), lod);
                 let l = warp.lipschitz();
                 Bounds {
-                    lf: x.lf * l,
-                    la: x.la * l,
-                    ..x
+                    f: x.f.warped(l),
+                    a: x.a.warped(l),
                 }
             }
         }

@@ -75,14 +75,14 @@ impl ElevationField {
             ));
         }
         let b = tree.bounds(&ext, &params.lod);
-        if !(b.f.lo.is_finite() && b.f.hi.is_finite() && b.lf.is_finite()) {
+        if !(b.f.range.lo.is_finite() && b.f.range.hi.is_finite() && b.f.lipschitz.is_finite()) {
             return bad("the tree's elevations are not bounded over `extent`".into());
         }
-        let dz = Interval::new(b.f.lo - params.base_depth, b.f.hi + r);
+        let dz = Interval::new(b.f.range.lo - params.base_depth, b.f.range.hi + r);
         Ok(ElevationField {
             support: ext.extrude(Interval::new(dz.lo - r, dz.hi)),
             prism: Prism { r, dz },
-            lip_h: b.lf,
+            lip_h: b.f.lipschitz,
             tree,
             params,
         })
@@ -136,11 +136,11 @@ impl ElevationField {
         let b = self.tree.bounds(&fp, &self.params.lod);
         let (c, hd) = rect_centre(&fp);
         let hc = self.height(c);
-        let reach = b.lf * hd * (1.0 + 1e-5) + self.prism.eps(hc.abs());
+        let reach = b.f.lipschitz * hd * (1.0 + 1e-5) + self.prism.eps(hc.abs());
         let near = Interval::new(hc - reach, hc + reach);
-        let h = Interval::new(b.f.lo.max(near.lo), b.f.hi.min(near.hi));
+        let h = Interval::new(b.f.range.lo.max(near.lo), b.f.range.hi.min(near.hi));
         let eps = self.prism.eps(h.lo.abs().max(h.hi.abs()));
-        (h.dilate(eps), b.lf)
+        (h.dilate(eps), b.f.lipschitz)
     }
 }
 

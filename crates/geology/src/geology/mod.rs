@@ -21,7 +21,7 @@ pub use spec::{
     TurbulenceSpec,
 };
 
-use crate::field::{Aabb, Interval, Resistance};
+use crate::field::{Aabb, Bound, Interval, Resistance};
 use rock::Rock;
 
 /// The resistance a scene without a geology has everywhere.
@@ -65,19 +65,14 @@ impl Geology {
         }
     }
 
-    /// A range in `[0, 1]` holding `ρ(p)` for every `p` in `b`.
-    pub fn interval(&self, b: &Aabb) -> Interval {
-        let r = self.root.interval(b);
-        Interval::new(r.lo.clamp(0.0, 1.0), r.hi.clamp(0.0, 1.0))
-    }
-
-    /// A Lipschitz bound of `ρ` for pairs of points in `b`; `+∞` when `b` crosses a
-    /// fault (the resistance jumps there, Paris et al. 2019 §4.4).
-    pub fn lipschitz_box(&self, b: &Aabb) -> f32 {
+    /// A range in `[0, 1]` holding `ρ(p)` for every `p` in `b`, and a Lipschitz bound of
+    /// `ρ` for pairs of points in `b`: `+∞` when `b` crosses a fault (the resistance
+    /// jumps there, Paris et al. 2019 §4.4).
+    pub fn bound(&self, b: &Aabb) -> Bound {
         if b.is_empty() {
-            return 0.0;
+            return Bound::new(Interval::new(0.0, 1.0), 0.0);
         }
-        self.root.lipschitz_box(b)
+        self.root.bound(b).clamp(0.0, 1.0)
     }
 }
 
@@ -98,11 +93,7 @@ impl Resistance for Geology {
         self.value_grad(p)
     }
 
-    fn resistance_interval(&self, b: &Aabb) -> Interval {
-        self.interval(b)
-    }
-
-    fn resistance_lipschitz(&self, b: &Aabb) -> f32 {
-        self.lipschitz_box(b)
+    fn resistance_bound(&self, b: &Aabb) -> Bound {
+        self.bound(b)
     }
 }

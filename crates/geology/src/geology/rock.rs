@@ -10,7 +10,7 @@ use glam::Vec3;
 
 use super::spec::{FaultSpec, ProfileSpec, RockSpec, StrataSpec, TaperSpec};
 use crate::field::falloff::{wyvill_d, wyvill_interval, wyvill_slope};
-use crate::field::{Aabb, Fbm, Field, Interval, NoiseSpec, Primitive, Warp};
+use crate::field::{Aabb, Bound, Fbm, Field, Interval, NoiseSpec, Primitive, Warp};
 
 /// Added turbulence `A·t(p)`.
 #[derive(Clone, Debug)]
@@ -33,11 +33,8 @@ impl Turb {
         let (v, g) = self.fbm.value_grad(p);
         (self.amplitude * v, self.amplitude * g)
     }
-    fn interval(&self, b: &Aabb) -> Interval {
-        self.fbm.interval(b).scale(self.amplitude)
-    }
-    fn lipschitz(&self) -> f32 {
-        self.amplitude * self.fbm.lipschitz()
+    fn bound(&self, b: &Aabb) -> Bound {
+        Bound::new(self.fbm.interval(b), self.fbm.lipschitz()).scale(self.amplitude)
     }
 }
 
@@ -145,8 +142,8 @@ impl Profile {
         }
     }
 
-    /// The range of `g` over `d ∈ ds`.
-    fn interval(&self, ds: Interval) -> Interval {
+    /// The range of `g` and `max |g'|` over `d ∈ ds`.
+    fn bound(&self, ds: Interval) -> Bound {
         match self {
             Profile::Band { inv_r, value } => {
                 let abs = if ds.lo <= 0.0 && ds.hi >= 0.0 {
@@ -154,10 +151,11 @@ impl Profile {
                 } else {
                     Interval::new(ds.lo.abs(), ds.hi.abs())
                 };
-                wyvill_interval(abs.scale(*inv_r)).scale(*value)
+                let x = abs.scale(*inv_r);
+                Bound::new(wyvill_interval(x), wyvill_slope(x) * inv_r).scale(*value)
             }
             Profile::Noise { base, turb } => turb
-                .interval(&Aabb::new(
+                .bound(&Aabb::new(
                     Vec3::new(0.0, 0.0, ds.lo),
                     Vec3::new(0.0, 0.0, ds.hi),
                 ))
@@ -167,13 +165,13 @@ impl Profile {
                 values,
                 period,
                 w,
-                ..
+                slope,
             } => {
                 let all = values
                     .iter()
                     .fold(Interval::EMPTY, |r, &v| r.hull(Interval::point(v)));
                 if !(ds.width() < *period) {
-                    return all;
+                    return Bound::new(all, *slope);
                 }
                 // Monotone between plateaus: the extremes are at the ends or on a
                 // plateau the range meets.
@@ -191,34 +189,8 @@ impl Profile {
                         }
                     }
                 }
-                r
+                Bound::new(r, *slope)
             }
-        }
-    }
-
-    /// `max |g'|`.
-    fn lipschitz(&self) -> f32 {
-        match self {
-            Profile::Band { inv_r, value } => {
-                value.abs() * crate::field::falloff::WYVILL_MAX_SLOPE * inv_r
-            }
-            Profile::Noise { turb, .. } => turb.lipschitz(),
-            Profile::Layers { slope, .. } => *slope,
-        }
-    }
-
-    /// `max |g'|` over `d ∈ ds`.
-    fn lipschitz_in(&self, ds: Interval) -> f32 {
-        match self {
-            Profile::Band { inv_r, value } => {
-                let abs = if ds.lo <= 0.0 && ds.hi >= 0.0 {
-                    Interval::new(0.0, ds.lo.abs().max(ds.hi.abs()))
-                } else {
-                    Interval::new(ds.lo.abs(), ds.hi.abs())
-                };
-                value.abs() * wyvill_slope(abs.scale(*inv_r)) * inv_r
-            }
-            _ => self.lipschitz(),
         }
     }
 }
@@ -481,74 +453,32 @@ impl Rock {
         }
     }
 
-    /// A range holding `ρ(p)` for every `p` in `b`.
-    pub(super) fn interval(&self, b: &Aabb) -> Interval {
+    /// A range holding `ρ(p)` for every `p` in `b`, and a Lipschitz bound of `ρ` for
+    /// pairs of points in `b`: `+∞` when `b` crosses a fault's boundary (`ρ` jumps there).
+    pub(super) fn bound(&self, b: &Aabb) -> Bound {
         match self {
-            Rock::Constant(v) => Interval::point(*v),
+            Rock::Constant(v) => Bound::constant(*v),
             Rock::Strata {
                 normal,
                 offset,
                 profile,
                 turb,
             } => {
-                let g = profile.interval(plane_distances(*normal, *offset, b));
+                let g = profile.bound(plane_distances(*normal, *offset, b));
                 match turb {
-                    Some(t) => g + t.interval(b),
+                    Some(t) => g + t.bound(b),
                     None => g,
                 }
             }
-            Rock::Turbulence { base, turb } => turb.interval(b).shift(*base),
-            Rock::Local(prim) => prim.interval(b),
-            Rock::Blend(cs) => {
-                let s = cs.iter().fold(Interval::ZERO, |r, c| r + c.interval(b));
-                Interval::new(s.lo.clamp(0.0, 1.0), s.hi.clamp(0.0, 1.0))
-            }
-            Rock::Fold { warp, child } => child.interval(&b.dilate(warp.reach())),
-            Rock::Taper {
-                axis,
-                from,
-                to,
-                factor,
-                z0,
-                child,
-            } => child.interval(&taper_box(*axis, *from, *to, *factor, *z0, b)),
-            Rock::Fault {
-                normal,
-                offset,
-                region,
-                slip,
-                child,
-            } => {
-                let moved = || child.interval(&Aabb::new(b.min - *slip, b.max - *slip));
-                match Rock::fault_side(*normal, *offset, region, b) {
-                    Side::Inside => moved(),
-                    Side::Outside => child.interval(b),
-                    Side::Across => moved().hull(child.interval(b)),
-                }
-            }
-        }
-    }
-
-    /// A Lipschitz bound of `ρ` for pairs of points in `b`: `+∞` when `b` crosses a
-    /// fault's boundary (`ρ` jumps there).
-    pub(super) fn lipschitz_box(&self, b: &Aabb) -> f32 {
-        match self {
-            Rock::Constant(_) => 0.0,
-            Rock::Strata {
-                normal,
-                offset,
-                profile,
-                turb,
-            } => {
-                profile.lipschitz_in(plane_distances(*normal, *offset, b))
-                    + turb.as_ref().map_or(0.0, Turb::lipschitz)
-            }
-            Rock::Turbulence { turb, .. } => turb.lipschitz(),
-            Rock::Local(prim) => prim.lipschitz_box(b),
-            Rock::Blend(cs) => cs.iter().map(|c| c.lipschitz_box(b)).sum(),
-            Rock::Fold { warp, child } => {
-                child.lipschitz_box(&b.dilate(warp.reach())) * warp.lipschitz()
-            }
+            Rock::Turbulence { base, turb } => turb.bound(b).shift(*base),
+            Rock::Local(prim) => Bound::new(prim.interval(b), prim.lipschitz_box(b)),
+            Rock::Blend(cs) => cs
+                .iter()
+                .fold(Bound::ZERO, |r, c| r + c.bound(b))
+                .clamp(0.0, 1.0),
+            Rock::Fold { warp, child } => child
+                .bound(&b.dilate(warp.reach()))
+                .warped(warp.lipschitz()),
             Rock::Taper {
                 axis,
                 from,
@@ -562,7 +492,9 @@ impl Rock {
                 let slope = (factor.1 - factor.0).abs() / (to - from).abs();
                 let dz = (b.min.z - z0).abs().max((b.max.z - z0).abs());
                 let norm = (2.0 + s_max * s_max + (dz * slope).powi(2)).sqrt() * 1.000_01;
-                child.lipschitz_box(&taper_box(*axis, *from, *to, *factor, *z0, b)) * norm
+                child
+                    .bound(&taper_box(*axis, *from, *to, *factor, *z0, b))
+                    .warped(norm)
             }
             Rock::Fault {
                 normal,
@@ -570,11 +502,17 @@ impl Rock {
                 region,
                 slip,
                 child,
-            } => match Rock::fault_side(*normal, *offset, region, b) {
-                Side::Inside => child.lipschitz_box(&Aabb::new(b.min - *slip, b.max - *slip)),
-                Side::Outside => child.lipschitz_box(b),
-                Side::Across => f32::INFINITY,
-            },
+            } => {
+                let moved = || child.bound(&Aabb::new(b.min - *slip, b.max - *slip));
+                match Rock::fault_side(*normal, *offset, region, b) {
+                    Side::Inside => moved(),
+                    Side::Outside => child.bound(b),
+                    // Either side's values; a jump between them.
+                    Side::Across => {
+                        Bound::new(moved().range.hull(child.bound(b).range), f32::INFINITY)
+                    }
+                }
+            }
         }
     }
 }

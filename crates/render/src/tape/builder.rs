@@ -14,7 +14,7 @@ use super::height::{self, HeightGrid};
 use super::noise::{nprim_head, twarp_params};
 use super::shape::{Profile, Shape};
 use super::{Tape, TapeError, sfield};
-use crate::field::replace::gap;
+use crate::field::bound::gap;
 use crate::field::{Aabb, Fbm, Field, ISO, Interval, Noise, Transition, Warp};
 use crate::voxel::SField;
 

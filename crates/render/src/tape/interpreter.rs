@@ -9,6 +9,7 @@ use glam::Vec3;
 use super::format::{Instr, constant, get3, guard, limit, op, replace, twarp, unwarp, warp};
 use super::noise::{noisy_primitive, twarp_apply};
 use super::{height, sfield, shape};
+use crate::field::bound::mix_lipschitz;
 use crate::field::{Aabb, Fbm, Field, ISO, Interval, Transition};
 use crate::voxel::SField;
 
@@ -163,7 +164,7 @@ fn replace(q: &[f32], a: (f32, f32), b: (f32, f32), (p, c, r): (Vec3, Vec3, f32)
     let w = Interval::new(mix.ramp(dc - r), mix.ramp(dc + r));
     // |b − a| over the ball: from the values at p and the slopes, or the ranges.
     let gap = ((b.0 - a.0).abs() + (a.1 + b.1) * (p.distance(c) + r)).min(q[replace::GAP]);
-    (value, mix.mix_lipschitz(w, a.1, b.1, gap))
+    (value, mix_lipschitz(w, a.1, b.1, gap, mix.lipschitz()))
 }
 
 /// `M⁻¹p` for the `WARP` parameters `q` ([`warp::MATRIX`]: 3 rows of 4).
