@@ -8,7 +8,7 @@
 use glam::Vec3;
 
 /// A clamped uniform B-spline of degree `min(3, m)` through `m + 1 ≥ 2` control vertices.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct BSpline {
     ctrl: Vec<Vec3>,
     knots: Vec<f32>,

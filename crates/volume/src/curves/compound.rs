@@ -22,7 +22,7 @@ use super::ribbon::{ProxyMesh, curve_ribbon};
 
 /// A piecewise-linear profile over the path parameter `t ∈ [0, 1]`: `(t, value)` keys
 /// sorted by `t`, held constant beyond the first and last key.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Profile(pub Vec<(f32, f32)>);
 
 impl Profile {
@@ -61,7 +61,7 @@ impl Profile {
 const CURVES_AROUND: usize = 8;
 
 /// Feature Curves around `path` on an elliptic section `width × height`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Tube {
     /// The axis.
     pub path: BSpline,
@@ -244,7 +244,7 @@ pub fn tube_proxy(
 /// A natural arch: a rock slab along an arc from `from` to `to` (its feet) whose top
 /// rises `height` above the feet. At the crown the slab is `thickness` thick and `width`
 /// wide; both grow towards the feet (the abutments), the thickness to `abutment`.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Arch {
     /// One foot (the centre of the slab's end).
     pub from: Vec3,

@@ -20,7 +20,7 @@ use super::bspline::BSpline;
 
 /// A Constraint Point (definition 3.1.2): bitangents to both sides, noise amplitude and
 /// roughness, and its position `t` on the curve.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct ConstraintPoint {
     /// Curve parameter in `[0, 1]`.
     pub t: f32,
@@ -35,7 +35,7 @@ pub struct ConstraintPoint {
 }
 
 /// The attributes of a Feature Curve at one parameter value.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct CurveSample {
     /// `B(t)`.
     pub pos: Vec3,
@@ -62,7 +62,7 @@ impl CurveSample {
 }
 
 /// A Feature Curve (definition 3.1.3): spline, Constraint Points, seed flag.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct FeatureCurve {
     /// The shape.
     pub spline: BSpline,

@@ -72,7 +72,7 @@ impl CurveError {
 
 /// Resolved modelling primitives: what a [`FeatureSet`] file describes, in world
 /// coordinates, ready to become proxy meshes.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct Features {
     /// Feature Curves.
     pub curves: Vec<FeatureCurve>,

@@ -12,7 +12,7 @@ use glam::{Vec2, Vec3};
 use super::constraint::FeatureCurve;
 
 /// Which ribbon a triangle belongs to.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 pub enum Side {
     /// The left-hand ribbon of a curve.
     Left,
@@ -23,7 +23,7 @@ pub enum Side {
 }
 
 /// A vertex of a proxy mesh.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct ProxyVertex {
     /// Position (metres).
     pub pos: Vec3,
@@ -36,7 +36,7 @@ pub struct ProxyVertex {
 }
 
 /// A triangle of a proxy mesh.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct ProxyTriangle {
     /// Vertex indices.
     pub v: [u32; 3],
@@ -47,7 +47,7 @@ pub struct ProxyTriangle {
 }
 
 /// A triangle mesh with the attributes the pipeline gathers.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct ProxyMesh {
     /// Vertices.
     pub vertices: Vec<ProxyVertex>,

@@ -8,7 +8,7 @@ use super::ribbon::{ProxyMesh, ProxyTriangle, ProxyVertex, Side};
 
 /// A planar quad; its normal follows the corners' order (counter-clockwise seen from the
 /// air side).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Quad {
     /// The corners, in order around the quad.
     pub corners: [Vec3; 4],
@@ -19,7 +19,7 @@ pub struct Quad {
 }
 
 /// A flat disc.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Disc {
     /// Centre.
     pub center: Vec3,

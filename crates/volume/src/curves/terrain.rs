@@ -19,7 +19,7 @@ use crate::field::{Aabb, Interval};
 
 /// The terrain's heights on a grid over a volume's footprint, and the seed triangles made
 /// of them (those left after the features took their room).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct TerrainSurface {
     /// Position of sample `(0, 0)`.
     origin: Vec2,

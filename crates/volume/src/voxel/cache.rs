@@ -279,12 +279,12 @@ pub fn files_hash(files: &[std::path::PathBuf]) -> u64 {
     content_hash(&parts.iter().map(|p| p.as_slice()).collect::<Vec<_>>())
 }
 
-/// The content hash of a run: the primitives and the parameters.
+/// The content hash of a run: the canonical text of the primitives and the parameters
+/// (RON, every number written so that it reads back to the same bits, infinities and NaN
+/// by name).
 fn run_key(features: &Features, p: &Params) -> u64 {
-    content_hash(&[
-        format!("{features:?}").as_bytes(),
-        format!("{p:?}").as_bytes(),
-    ])
+    let text = ron::to_string(&(features, p)).expect("resolved primitives serialize");
+    content_hash(&[text.as_bytes()])
 }
 
 type Cache = Mutex<Vec<(u64, Arc<Volume>)>>;

@@ -28,7 +28,7 @@ use crate::field::Aabb;
 use crate::io::check_budget;
 
 /// Settings of one pipeline run.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Params {
     /// The domain.
     pub domain: Aabb,
