@@ -7,10 +7,11 @@
 //! `|∇n_k| ≤ λ_η 2^k / λ`, `λ_η` = [`SIMPLEX_LIPSCHITZ`]) weighted `a_k = ½^k`:
 //!
 //! * **fBm**: `c_k = a_k n_k`;
-//! * **ridged**: `s_k = (1 − |n_k|)²`, `w_0 = 1`, `w_k = clamp(s̃_{k−1}, 0, 1)`,
+//! * **ridged**: `s_k = (1 − |n_k|)²`, `w_0 = 1`, `w_k = clamp(g s̃_{k−1}, 0, 1)`,
 //!   `s̃_k = w_k s_k`, `c_k = a_k s̃_k` (the previous octave's ridge gates the next, so
-//!   detail gathers on the crests; Musgrave's gate gain is 2, which makes the bound grow
-//!   as `k 2^k` instead of `2^k`);
+//!   detail gathers on the crests). Elevation trees take the gate gain `g = 1`;
+//!   Musgrave's `g = 2` ([`Multifractal::musgrave`], the procedural generators) makes the
+//!   bound grow as `k 2^k` instead of `2^k`;
 //! * **hybrid**: `s_k = a_k (n_k + 0.7)`, `c_0 = s_0`, `w_1 = clamp(s_0, 0, 1)`,
 //!   `c_k = w_k s_k`, `w_{k+1} = clamp(w_k s_k, 0, 1)` (smooth valleys, rough peaks).
 //!
@@ -59,6 +60,8 @@ pub enum ElevationFn {
 pub struct Multifractal {
     kind: Kind,
     noise: Fbm,
+    /// The ridged gate's gain `g`: `w_k = clamp(g s̃_{k−1}, 0, 1)`.
+    gate: f32,
     base: f32,
     /// `amplitude / Σ(u_k − l_k)`.
     scale: f32,
@@ -78,7 +81,8 @@ struct Octave {
 
 impl Multifractal {
     /// A `kind` multifractal from `base` to `base + amplitude` (metres), first-octave
-    /// wavelength `wavelength` (> 0), `octaves` in `1..=12` (clamped), noise `seed`.
+    /// wavelength `wavelength` (> 0), `octaves` in `1..=12` (clamped), noise `seed`: the
+    /// elevation trees' octave sums (amplitudes `½^k`, ridged gate gain 1).
     pub fn new(
         kind: Kind,
         base: f32,
@@ -86,6 +90,50 @@ impl Multifractal {
         wavelength: f32,
         octaves: u32,
         seed: u32,
+    ) -> Multifractal {
+        Multifractal::with(
+            kind,
+            (base, amplitude),
+            wavelength,
+            octaves,
+            seed,
+            (1.0, GAIN),
+        )
+    }
+
+    /// Musgrave's own parameters (Musgrave 2003, ch. 16), on `[0, 1]`: the ridged gate's
+    /// gain 2 (detail gathers on the crests more sharply) and the hybrid's `H = 0.25`
+    /// (octave amplitudes `2^{−k/4}`: rougher heights). The procedural generators use
+    /// these; an elevation tree keeps [`Multifractal::new`]'s tighter bounds.
+    pub fn musgrave(kind: Kind, wavelength: f32, octaves: u32, seed: u32) -> Multifractal {
+        let persistence = match kind {
+            Kind::Hybrid => LACUNARITY.powf(-0.25),
+            Kind::Fbm | Kind::Ridged => GAIN,
+        };
+        let gate = match kind {
+            Kind::Ridged => 2.0,
+            Kind::Fbm | Kind::Hybrid => 1.0,
+        };
+        Multifractal::with(
+            kind,
+            (0.0, 1.0),
+            wavelength,
+            octaves,
+            seed,
+            (gate, persistence),
+        )
+    }
+
+    /// The octave table for `(base, amplitude)`, `(gate, persistence)`: each octave's
+    /// range and slope by the product and chain rules (module docs; a gate of gain `g`
+    /// multiplies the chained slope by `g`).
+    fn with(
+        kind: Kind,
+        (base, amplitude): (f32, f32),
+        wavelength: f32,
+        octaves: u32,
+        seed: u32,
+        (gate, persistence): (f32, f32),
     ) -> Multifractal {
         let noise = Fbm::with(seed, wavelength, octaves.clamp(1, MAX_OCTAVES));
         let mut table = Vec::new();
@@ -97,7 +145,7 @@ impl Multifractal {
             let (range, lip) = match kind {
                 Kind::Fbm => (Interval::new(-a, a), a * ln),
                 Kind::Ridged => {
-                    let l = 2.0 * ln + chain;
+                    let l = 2.0 * ln + gate * chain;
                     chain = l;
                     (Interval::new(0.0, a), a * l)
                 }
@@ -120,13 +168,14 @@ impl Multifractal {
                 lipschitz: lip * 1.000_1,
                 wavelength: 1.0 / freq,
             });
-            a *= GAIN;
+            a *= persistence;
             freq *= LACUNARITY;
         }
         let width: f32 = table.iter().map(|o| o.range.width()).sum();
         Multifractal {
             kind,
             noise,
+            gate,
             base,
             scale: amplitude / width,
             lo: table.iter().map(|o| o.range.lo).sum(),
@@ -173,7 +222,7 @@ impl Multifractal {
                 Kind::Fbm => a * n,
                 Kind::Ridged => {
                     let s = (1.0 - n.abs()).powi(2) * w;
-                    w = s.clamp(0.0, 1.0);
+                    w = (self.gate * s).clamp(0.0, 1.0);
                     a * s
                 }
                 Kind::Hybrid => {
@@ -233,7 +282,7 @@ impl Multifractal {
                 Kind::Ridged => {
                     let r = L::ONE - n.abs();
                     let s = r * r * w;
-                    w = clamp01(s);
+                    w = clamp01(L::splat(self.gate) * s);
                     a * s
                 }
                 Kind::Hybrid => {

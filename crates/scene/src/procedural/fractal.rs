@@ -1,13 +1,15 @@
-//! Spectral synthesis over simplex noise: fBm (the sum of octaves of
-//! [`crate::field::noise::Fbm`]) and Musgrave's ridged and hybrid multifractals (Musgrave
-//! 2003, ch. 16 "Procedural Fractal Terrains": `RidgedMultifractal` and
-//! `HybridMultifractal`), whose roughness grows with altitude.
+//! Spectral synthesis over simplex noise: fBm and Musgrave's ridged and hybrid
+//! multifractals (Musgrave 2003, ch. 16 "Procedural Fractal Terrains"), whose roughness
+//! grows with altitude. They are the elevation trees' multifractals
+//! ([`crate::elevation::multifractal`]) sampled on a grid: one family of fractal noises.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::field::noise::{Fbm, LACUNARITY, OCTAVE_SHIFT, Octaves, simplex};
+use crate::elevation::Lod;
+use crate::elevation::multifractal::{Kind, Multifractal};
+use crate::field::noise::{Fbm, Octaves};
 use crate::value::Positive;
 
 fn default_octaves() -> Octaves {
@@ -36,62 +38,51 @@ fn sample(nx: usize, ny: usize, cell: f32, f: impl Fn(f32, f32) -> f32 + Sync) -
     z
 }
 
-/// The noise of octave `k` at `(x, y)` in first-octave lattice units.
-fn octave(seed: u32, k: u32, x: f32, y: f32) -> f32 {
-    let s = LACUNARITY.powi(k as i32);
-    simplex(
-        seed.wrapping_add(k.wrapping_mul(0x9e37_79b9)),
-        Vec3::new(x * s, y * s, 0.0) + k as f32 * OCTAVE_SHIFT,
-    )
+/// A multifractal of `kind` with Musgrave's parameters sampled over the grid: the
+/// elevation trees' octave sums ([`Multifractal::musgrave`]), so one family of fractal
+/// noises serves both.
+fn multifractal(
+    kind: Kind,
+    s: &FractalSpec,
+    nx: usize,
+    ny: usize,
+    cell: f32,
+    seed: u32,
+) -> Vec<f32> {
+    let m = Multifractal::musgrave(kind, s.wavelength.get(), s.octaves.get(), seed);
+    sample(nx, ny, cell, |x, y| m.value(Vec2::new(x, y), &Lod::FULL))
 }
 
 /// fBm: `Σ ½^k n(2^k p / λ)` (the project's turbulence at `z = 0`).
 pub fn fbm(s: &FractalSpec, nx: usize, ny: usize, cell: f32, seed: u32) -> Vec<f32> {
-    let f = Fbm::with(seed, s.wavelength.get(), s.octaves.get());
-    sample(nx, ny, cell, |x, y| f.value(Vec3::new(x, y, 0.0)))
+    multifractal(Kind::Fbm, s, nx, ny, cell, seed)
 }
 
 /// Ridged multifractal (Musgrave 2003, `RidgedMultifractal` with `H = 1`, offset 1,
 /// gain 2): each octave is `(1 − |n|)²`, weighted by the previous octave's signal, so
-/// sharp ridges carry the detail and valleys stay smooth.
+/// sharp ridges carry the detail and valleys stay smooth. Sampled through
+/// [`RIDGE_WARP`].
 pub fn ridged(s: &FractalSpec, nx: usize, ny: usize, cell: f32, seed: u32) -> Vec<f32> {
-    const OFFSET: f32 = 1.0;
-    const GAIN: f32 = 2.0;
-    let inv = 1.0 / s.wavelength.get();
-    let octaves = s.octaves.get();
+    let m = Multifractal::musgrave(Kind::Ridged, s.wavelength.get(), s.octaves.get(), seed);
+    let l = s.wavelength.get();
+    let warp = [1u32, 2].map(|k| Fbm::with(seed ^ k.wrapping_mul(0x5bd1_e995), 2.0 * l, 2));
     sample(nx, ny, cell, |x, y| {
-        let (x, y) = (x * inv, y * inv);
-        let mut signal = OFFSET - octave(seed, 0, x, y).abs();
-        signal *= signal;
-        let mut result = signal;
-        for k in 1..octaves {
-            let weight = (signal * GAIN).clamp(0.0, 1.0);
-            signal = OFFSET - octave(seed, k, x, y).abs();
-            signal = signal * signal * weight;
-            result += signal * LACUNARITY.powi(-(k as i32));
-        }
-        result
+        let p = Vec3::new(x, y, 0.0);
+        let q = Vec2::new(x, y) + RIDGE_WARP * l * Vec2::new(warp[0].value(p), warp[1].value(p));
+        m.value(q, &Lod::FULL)
     })
 }
+
+/// How far the ridged generator moves its samples, in first-octave wavelengths: two
+/// octaves of fBm twice the first octave's wavelength. Simplex noise is a little weaker
+/// on the faces of its lattice's simplices, and a ridged sum (`1 − |n|`) gathers its
+/// crests where the noise is weak: unwarped, crests run as straight creases along the
+/// lattice's planes across a whole grid. Warped, they meander as ridge lines do.
+pub const RIDGE_WARP: f32 = 0.2;
 
 /// Hybrid multifractal (Musgrave 2003, `HybridMultifractal` with `H = 0.25`, offset 0.7):
 /// each octave is weighted by the running product of the previous ones, so low ground is
 /// smooth and high ground rough.
 pub fn hybrid(s: &FractalSpec, nx: usize, ny: usize, cell: f32, seed: u32) -> Vec<f32> {
-    const OFFSET: f32 = 0.7;
-    const H: f32 = 0.25;
-    let inv = 1.0 / s.wavelength.get();
-    let octaves = s.octaves.get();
-    sample(nx, ny, cell, |x, y| {
-        let (x, y) = (x * inv, y * inv);
-        let mut result = octave(seed, 0, x, y) + OFFSET;
-        let mut weight = result;
-        for k in 1..octaves {
-            weight = weight.min(1.0);
-            let signal = (octave(seed, k, x, y) + OFFSET) * LACUNARITY.powf(-H * k as f32);
-            result += weight * signal;
-            weight *= signal;
-        }
-        result
-    })
+    multifractal(Kind::Hybrid, s, nx, ny, cell, seed)
 }
