@@ -385,3 +385,40 @@ impl ElevationFn {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Both parameter sets keep their values in their range and their slopes under their
+    /// bound, sampled along lines across many wavelengths.
+    #[test]
+    fn elevation_and_musgrave_sums_stay_within_their_bounds() {
+        let kinds = [Kind::Fbm, Kind::Ridged, Kind::Hybrid];
+        let sums = kinds.iter().flat_map(|&k| {
+            [
+                Multifractal::new(k, 10.0, 90.0, 300.0, 6, 3),
+                Multifractal::musgrave(k, 300.0, 6, 3),
+            ]
+        });
+        for m in sums {
+            let (range, lip) = (m.range(), m.lipschitz(&Lod::FULL));
+            let mut steepest = 0.0f32;
+            for line in 0..40 {
+                let (o, d) = (Vec2::new(line as f32 * 37.0, 11.0), Vec2::new(0.6, 0.8));
+                let mut prev = m.value(o, &Lod::FULL);
+                for i in 1..4000 {
+                    let v = m.value(o + d * (i as f32 * 0.5), &Lod::FULL);
+                    assert!(
+                        range.dilate(1e-3).contains(v),
+                        "{:?}: {v} ∉ {range:?}",
+                        m.kind
+                    );
+                    steepest = steepest.max((v - prev).abs() / 0.5);
+                    prev = v;
+                }
+            }
+            assert!(steepest <= lip, "{:?}: slope {steepest} > {lip}", m.kind);
+        }
+    }
+}
