@@ -1148,3 +1148,88 @@ fn the_bluffs_tunnel_opens_through_its_cliff_and_runs_clear() {
     // It runs inside the hill: rock above its inner part.
     assert!(tree.value(Vec3::new(3480.0, 4972.0, 886.0)) > ISO);
 }
+
+/// A generator's parameters out of scale with its region are errors naming them, given at
+/// once (issue 40: `talus: 4294967296` in a caprock, `banks` in a canyon, `band` in sea
+/// erosion made even `tree validate` run for hours).
+#[test]
+fn parameters_out_of_scale_with_the_region_are_refused_at_once() {
+    let cases = [
+        ("radius: 3", "radius: 4294967296", "`Karst.radius`"),
+        ("spacing: 4", "spacing: 0.001", "`Karst.spacing`"),
+        (
+            "max_spheres: 400",
+            "max_spheres: 4000000000",
+            "`Karst.max_spheres`",
+        ),
+    ];
+    for (from, to, named) in cases {
+        let text = KARST_SCENE.replace(from, to);
+        assert_ne!(text, KARST_SCENE);
+        let t = std::time::Instant::now();
+        let e = scene_file(&text).compile().err().expect("refused");
+        let mut chain = e.to_string();
+        let mut source = std::error::Error::source(&e);
+        while let Some(s) = source {
+            chain += &format!(": {s}");
+            source = s.source();
+        }
+        assert!(chain.contains(named), "{to}: {chain}");
+        assert!(t.elapsed().as_secs_f32() < 5.0, "{to}: {:?}", t.elapsed());
+    }
+    // The same checks reach the caprock, canyon, sea and hoodoo generators: the scenes of
+    // trees/ with one parameter blown up.
+    let scenes = [
+        (
+            "jacksboro_bluff.ron",
+            "talus: 0.25",
+            "talus: 4294967296",
+            "`Caprock.talus`",
+        ),
+        (
+            "jacksboro_canyon.ron",
+            "banks: 80",
+            "banks: 4294967296",
+            "`Canyon.banks`",
+        ),
+        (
+            "sea_cliffs.ron",
+            "band: 8",
+            "band: 4294967296",
+            "`SeaErosion.band`",
+        ),
+        (
+            "hoodoo_field.ron",
+            "size: 7",
+            "size: 4294967296",
+            "`Hoodoos.size`",
+        ),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    for (scene, from, to, named) in scenes {
+        let trees = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
+        let text = std::fs::read_to_string(trees.join(scene)).unwrap();
+        let blown = text.replacen(from, to, 1);
+        assert_ne!(blown, text, "{scene}: no `{from}`");
+        // Its DEM where the scene's own is.
+        let data = format!("\"{}/data/", trees.display());
+        let path = dir.path().join(scene);
+        std::fs::write(&path, blown.replace("\"data/", &data)).unwrap();
+        let t = std::time::Instant::now();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_karstic"))
+            .args(["tree", "validate"])
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(
+            t.elapsed().as_secs_f32() < 30.0,
+            "{scene}: {:?}",
+            t.elapsed()
+        );
+        let err = String::from_utf8_lossy(&out.stdout) + String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(named),
+            "{scene}: {err}"
+        );
+    }
+}

@@ -17,6 +17,7 @@ mod canyon;
 mod caprock;
 mod hoodoo;
 mod karst;
+mod scale;
 mod sea;
 
 use std::collections::HashMap;
@@ -397,6 +398,7 @@ impl Generated {
 impl LandformSpec {
     /// Runs the generator on `ground`.
     pub fn generate(&self, ground: &Ground) -> Result<Generated, LandformError> {
+        scale::check(&self.generator, &ground.region)?;
         let mut generated = match &self.generator {
             GeneratorSpec::Karst(k) => Generated::plain(k.generate(ground)?, Joining::Carve),
             GeneratorSpec::SeaErosion(s) => Generated::plain(s.generate(ground)?, Joining::Carve),
