@@ -365,6 +365,29 @@ fn data_file_errors_do_not_echo_content() {
         assert!(!err.contains("s3cr3t") && !err.contains("root:"), "{err}");
         assert!(err.contains("d."), "names the file: {err}");
     }
+    // The secret as a tree, and as a tree's curves file: the parse error at its first
+    // word says what the file is not, quoting nothing (RON said "found `root`").
+    let tree = dir.path().join("t.ron");
+    std::fs::write(&tree, format!("{secret}\n")).unwrap();
+    let with_curves = dir.path().join("v.ron");
+    std::fs::write(
+        &with_curves,
+        format!(
+            "(version: 1, root: FeatureVolume(name: \"v\", curves: Path(\"{}\"), \
+             domain: ((0, 0, 0), (10, 10, 10)), voxel: 1))",
+            tree.display()
+        ),
+    )
+    .unwrap();
+    for t in [&tree, &with_curves] {
+        let (ok, err) = karstic(&["tree", "validate", s(t)]);
+        assert!(!ok, "{err}");
+        assert!(!err.contains("s3cr3t") && !err.contains("root"), "{err}");
+        assert!(
+            err.contains("t.ron:1:1") && err.contains("not a karstic"),
+            "{err}"
+        );
+    }
 }
 
 /// Requests past the machine are refused at once, never an abort: a tile plan of two

@@ -240,21 +240,73 @@ pub fn ron_options() -> ron::Options {
         .with_recursion_limit(MAX_NESTING)
 }
 
-/// A RON parse error in words for the user: as RON says it, but a file nested past
-/// [`MAX_NESTING`] is said so (RON's own words name its API).
-pub fn ron_message(e: &ron::Error) -> String {
-    match e {
-        ron::Error::ExceededRecursionLimit => format!(
+/// A RON parse error of `text`, a file that should hold `what` (e.g. "a tree"), in words
+/// for the user: as RON says it, but
+/// * a file nested past [`MAX_NESTING`] is said so (RON's own words name its API);
+/// * an error at the file's first token says the file is not `what`, quoting nothing of
+///   it: a path that names some other file (a key, a password file) must not have its
+///   first word echoed.
+pub fn ron_message(e: &ron::error::SpannedError, text: &str, what: &str) -> String {
+    if e.code == ron::Error::ExceededRecursionLimit {
+        return format!(
             "brackets nest deeper than {MAX_NESTING} levels here: karstic reads files nested \
              up to that depth (about 160 nodes inside one another)"
-        ),
-        e => e.to_string(),
+        );
+    }
+    let first = first_token(text);
+    if (e.span.start.line, e.span.start.col) <= first {
+        return format!("this is not {what}: it should start with `(`");
+    }
+    e.code.to_string()
+}
+
+/// Line and column (from 1) of the first character of `text` that is neither blank nor
+/// in a comment, nor the `#![enable(..)]` header (where RON's first error can stand).
+fn first_token(text: &str) -> (usize, usize) {
+    let (mut line, mut col) = (1, 1);
+    let mut rest = text;
+    loop {
+        let trimmed = rest.trim_start();
+        for c in rest[..rest.len() - trimmed.len()].chars() {
+            (line, col) = if c == '\n' {
+                (line + 1, 1)
+            } else {
+                (line, col + 1)
+            };
+        }
+        rest = trimmed;
+        let skip = if rest.starts_with("//") {
+            rest.find('\n').unwrap_or(rest.len())
+        } else if rest.starts_with("/*") {
+            rest.find("*/").map_or(rest.len(), |i| i + 2)
+        } else {
+            return (line, col);
+        };
+        for c in rest[..skip].chars() {
+            (line, col) = if c == '\n' {
+                (line + 1, 1)
+            } else {
+                (line, col + 1)
+            };
+        }
+        rest = &rest[skip..];
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_error_at_the_first_token_quotes_nothing_of_the_file() {
+        let text = "// a comment\n  root:$6$secret:19000:0:99999:7:::\n";
+        let e = ron::from_str::<P3>(text).unwrap_err();
+        let m = ron_message(&e, text, "a tree");
+        assert!(!m.contains("root") && m.contains("not a tree"), "{m}");
+        let text = "(1, 2, x)";
+        let e = ron::from_str::<P3>(text).unwrap_err();
+        assert!(!ron_message(&e, text, "a point").contains("not a point"));
+    }
 
     #[test]
     fn rejects_bad_numbers_with_position() {

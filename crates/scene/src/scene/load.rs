@@ -157,7 +157,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
             path: path.to_path_buf(),
             line: e.span.start.line,
             col: e.span.start.col,
-            message: crate::value::ron_message(&e.code),
+            message: crate::value::ron_message(&e, text, "a karstic tree"),
         })?;
     if scene.version != FORMAT_VERSION {
         return Err(SceneError::at(

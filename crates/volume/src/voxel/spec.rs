@@ -360,7 +360,7 @@ pub fn parse_ron<T: serde::de::DeserializeOwned>(text: &str, path: &Path) -> Res
             path: path.to_path_buf(),
             line: e.span.start.line,
             col: e.span.start.col,
-            msg: crate::value::ron_message(&e.code),
+            msg: crate::value::ron_message(&e, text, "a karstic RON file"),
         })
 }
 
