@@ -393,7 +393,8 @@ fn data_file_errors_do_not_echo_content() {
 /// Requests past the machine are refused at once, never an abort: a tile plan of two
 /// billion tiles allocated 12 GB first (SIGABRT), the editor's screenshot at the largest
 /// picture side reached 24 GB (OOM-killed) where `render` refused it, and a DEM whose
-/// header claims 2·10¹⁰ values aborted on the allocation once `--max-memory` was raised.
+/// header claims 2·10¹⁰ values aborted on the allocation once `--max-memory` was raised,
+/// as did a TIFF claiming 10¹⁰, a sample and a generated grid of 30 and 150 GiB.
 #[test]
 fn requests_past_the_machine_are_errors_not_aborts() {
     let (dir, tree) = with_arch();
@@ -435,7 +436,73 @@ fn requests_past_the_machine_are_errors_not_aborts() {
     )
     .unwrap();
     let (ok, err) = karstic(&["dem", "info", s(&asc), "--max-memory", "1T"]);
-    assert!(!ok && err.contains("values, but the file"), "{err}");
+    let refused = err.contains("values, but the file") || err.contains("the system refused it");
+    assert!(!ok && refused, "{err}");
+
+    // A 150-byte TIFF whose header claims 5000 × 5000 float samples in one strip.
+    let tif = dir.path().join("huge_claim.tif");
+    let (w, h) = (5000u32, 5000u32);
+    let entries: [(u16, u16, u32); 10] = [
+        (256, 4, w),
+        (257, 4, h),
+        (258, 3, 32),
+        (259, 3, 1),
+        (262, 3, 1),
+        (273, 4, 8),
+        (277, 3, 1),
+        (278, 4, h),
+        (279, 4, w * h * 4 % u32::MAX),
+        (339, 3, 3),
+    ];
+    let mut b = b"II*\0".to_vec();
+    b.extend_from_slice(&24u32.to_le_bytes());
+    b.extend_from_slice(&[0; 16]);
+    b.extend_from_slice(&(entries.len() as u16).to_le_bytes());
+    for (tag, kind, value) in entries {
+        b.extend_from_slice(&tag.to_le_bytes());
+        b.extend_from_slice(&kind.to_le_bytes());
+        b.extend_from_slice(&1u32.to_le_bytes());
+        b.extend_from_slice(&value.to_le_bytes());
+    }
+    b.extend_from_slice(&0u32.to_le_bytes());
+    std::fs::write(&tif, b).unwrap();
+    let (ok, err) = karstic(&["dem", "info", s(&tif), "--max-memory", "1T"]);
+    assert!(
+        !ok && err.contains("more than a file of 150 bytes"),
+        "{err}"
+    );
+
+    // Grids the system cannot give, with the budget raised past it: errors, not aborts
+    // (rc 134 before). Where the kernel promises any amount (overcommit 1), a refusal
+    // cannot be seen before the pages are touched: the check is the default policy's.
+    let overcommit = std::fs::read_to_string("/proc/sys/vm/overcommit_memory");
+    if overcommit.is_ok_and(|o| o.trim() != "1") {
+        let (ok, err) = karstic(&[
+            "generate",
+            "fbm",
+            "--size",
+            "1000000",
+            "1000000",
+            "-o",
+            s(&dir.path().join("g.asc")),
+            "--max-memory",
+            "100T",
+        ]);
+        assert!(!ok && err.contains("the system refused it"), "{err}");
+        let (ok, err) = karstic(&[
+            "sample",
+            s(&tree),
+            "-o",
+            s(&dir.path().join("x.npy")),
+            "--res",
+            "20000",
+            "20000",
+            "20000",
+            "--max-memory",
+            "100T",
+        ]);
+        assert!(!ok && err.contains("the system refused it"), "{err}");
+    }
 }
 
 /// Counts past what a generator takes are refused with the limit, not quietly cut down

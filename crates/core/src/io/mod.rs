@@ -198,7 +198,14 @@ pub(crate) fn file_kind(t: &std::fs::FileType) -> &'static str {
     }
 }
 
-/// Refuses a request of `need` bytes over `budget`, before anything is allocated.
+/// Requests from this size on are asked of the system too ([`check_budget`]).
+const ASK_FROM: u64 = 256 << 20;
+
+/// Refuses a request of `need` bytes over `budget`, or one the system refuses, before
+/// anything is allocated. A budget raised past the machine (`--max-memory 1T`) let an
+/// allocation the system cannot make abort the process; a large request is now asked of
+/// the system first (reserved, never touched, and given back at once: no page is used),
+/// and a refusal is an error here.
 pub fn check_budget(what: impl Into<String>, need: u64, budget: u64) -> Result<(), IoError> {
     if need > budget {
         return Err(IoError::OverBudget {
@@ -206,6 +213,10 @@ pub fn check_budget(what: impl Into<String>, need: u64, budget: u64) -> Result<(
             need,
             budget,
         });
+    }
+    if need >= ASK_FROM {
+        let len = usize::try_from(need).unwrap_or(usize::MAX);
+        try_with_capacity::<u8>(len, &what.into())?;
     }
     Ok(())
 }

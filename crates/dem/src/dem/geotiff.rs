@@ -70,6 +70,10 @@ pub(crate) fn read_text(path: &Path, budget: u64) -> Result<String, DemError> {
     })
 }
 
+/// The most bytes of samples one byte of a compressed TIFF can stand for (LZW's longest
+/// code, 4096 bytes, in 12 bits; Deflate's 1032; PackBits' 64).
+const MAX_PACKING: u64 = 4096;
+
 /// Reads a GeoTIFF DEM held in memory; `path` names it in errors.
 pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Dem, DemError> {
     let tiff_err = |source| DemError::Tiff {
@@ -108,13 +112,19 @@ pub fn read_bytes(path: &Path, bytes: &[u8], opts: &ReadOptions) -> Result<Dem, 
             ),
         });
     }
-    check_grid_size(
-        path,
-        w.into(),
-        h.into(),
-        (u64::from(bits) / 8).max(1),
-        opts.memory_budget,
-    )?;
+    let per_sample = (u64::from(bits) / 8).max(1);
+    // A header that claims more samples than its file can hold: LZW, the densest of the
+    // methods read, packs at most about 4096 bytes into one.
+    let ratio = if compression == 1 { 1 } else { MAX_PACKING };
+    let claimed = u64::from(w) * u64::from(h) * per_sample;
+    if claimed > (bytes.len() as u64).saturating_mul(ratio) {
+        return Err(malformed(format!(
+            "the header claims {w}×{h} samples ({claimed} bytes), more than a file of {} \
+             bytes can hold",
+            bytes.len()
+        )));
+    }
+    check_grid_size(path, w.into(), h.into(), per_sample, opts.memory_budget)?;
 
     let f64_tag = |dec: &mut Decoder<Cursor<&[u8]>>, tag| -> Result<Option<Vec<f64>>, DemError> {
         dec.find_tag(tag)
