@@ -257,6 +257,38 @@ fn eval_tells_headers_from_bad_numbers() {
     );
 }
 
+/// `eval` reads its points as the DEM readers read their files: a regular file only
+/// (`--points /dev/zero` grew to 4 GB before an abort, a FIFO blocked for ever), lines of
+/// at most 4 KB (`/dev/zero` on stdin), and a bad number quoted short (a 50 MB line was
+/// quoted whole).
+#[test]
+fn eval_reads_points_from_regular_files_in_bounded_lines() {
+    let arch = trees().join("arch.ron");
+    let limit = Duration::from_secs(60);
+    let (ok, err, took) = karstic_with(&["eval", s(&arch), "--points", "/dev/zero"], "", limit);
+    assert!(!ok && err.contains("not a regular file"), "{err}");
+    assert!(took < Duration::from_secs(10), "{took:?}");
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("points.fifo");
+    if Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .is_ok_and(|s| s.success())
+    {
+        let (ok, err, _) = karstic_with(&["eval", s(&arch), "--points", s(&fifo)], "", limit);
+        assert!(!ok && err.contains("not a regular file"), "{err}");
+    }
+    let endless = "0".repeat(20_000);
+    let (ok, err, _) = karstic_with(&["eval", s(&arch)], &endless, limit);
+    assert!(
+        !ok && err.contains("<stdin>:1: a line longer than 4096 bytes"),
+        "{err}"
+    );
+    let long = format!("1,2,{}\n", "9".repeat(3000) + "x");
+    let (ok, err, _) = karstic_with(&["eval", s(&arch)], &format!("0,0,0\n{long}"), limit);
+    assert!(!ok && err.contains("<stdin>:2") && err.len() < 300, "{err}");
+}
+
 #[test]
 fn tree_set_takes_tree_file_values() {
     let (_dir, tree) = with_arch();

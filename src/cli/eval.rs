@@ -1,6 +1,6 @@
 //! `karstic eval TREE`: field values and gradients at points read from CSV or stdin.
 
-use std::io::{BufRead, Write};
+use std::io::{BufRead, Read, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
@@ -23,6 +23,9 @@ pub(super) struct EvalArgs {
     #[command(flatten)]
     budget: Budget,
 }
+
+/// The longest line of points read, in bytes: far above any `x,y,z`.
+const MAX_LINE: usize = 4096;
 
 /// The fields of a line: separated by commas or white space.
 fn fields(line: &str) -> Vec<&str> {
@@ -54,7 +57,13 @@ fn parse_point(line: &str) -> Option<Result<Vec3, String>> {
     for (slot, s) in v.iter_mut().zip(&parts) {
         match s.parse::<f32>() {
             Ok(x) if x.is_finite() => *slot = x,
-            _ => return Some(Err(format!("expected a finite number, found {s:?}"))),
+            _ => {
+                let shown: String = s.chars().take(24).collect();
+                let more = if shown.len() < s.len() { "…" } else { "" };
+                return Some(Err(format!(
+                    "expected a finite number, found {shown:?}{more}"
+                )));
+            }
         }
     }
     Some(Ok(Vec3::from_array(v)))
@@ -63,11 +72,12 @@ fn parse_point(line: &str) -> Option<Result<Vec3, String>> {
 /// Runs `karstic eval`.
 pub(super) fn run(args: EvalArgs) -> anyhow::Result<()> {
     let tree = &super::load_tree(&args.tree, args.budget.max_memory, &[] as &[&Path], false)?;
-    let (source, reader): (String, Box<dyn BufRead>) = match &args.points {
+    let (source, mut reader): (String, Box<dyn BufRead>) = match &args.points {
+        // A regular file only (a FIFO would block, `/dev/zero` never ends), streamed.
         Some(p) => (
             p.display().to_string(),
             Box::new(std::io::BufReader::new(
-                std::fs::File::open(p).with_context(|| format!("cannot open {}", p.display()))?,
+                karstic::io::open_regular(p, u64::MAX)?.0,
             )),
         ),
         None => ("<stdin>".into(), Box::new(std::io::stdin().lock())),
@@ -75,13 +85,28 @@ pub(super) fn run(args: EvalArgs) -> anyhow::Result<()> {
     let stdout = std::io::stdout();
     let mut out = std::io::BufWriter::new(stdout.lock());
     writeln!(out, "x,y,z,value,gx,gy,gz")?;
-    for (n, line) in reader.lines().enumerate() {
-        let line = line.with_context(|| format!("{source}: reading line {}", n + 1))?;
+    let mut bytes = Vec::new();
+    for n in 0.. {
+        bytes.clear();
+        // One line, at most MAX_LINE bytes: a stream without line breaks (`/dev/zero` on
+        // stdin) is an error at once, not a line that grows through the memory.
+        let read = (&mut reader)
+            .take(MAX_LINE as u64 + 1)
+            .read_until(b'\n', &mut bytes)
+            .with_context(|| format!("{source}: reading line {}", n + 1))?;
+        if read == 0 {
+            break;
+        }
+        if bytes.len() > MAX_LINE {
+            anyhow::bail!("{source}:{}: a line longer than {MAX_LINE} bytes", n + 1);
+        }
+        let line = std::str::from_utf8(&bytes)
+            .map_err(|_| anyhow::anyhow!("{source}:{}: not UTF-8 text", n + 1))?;
         // A UTF-8 byte-order mark may open the file.
         let line = if n == 0 {
             line.trim_start_matches('\u{feff}')
         } else {
-            &line
+            line
         };
         let p = match parse_point(line) {
             None => continue,
