@@ -361,6 +361,19 @@ fn outputs_never_replace_inputs_special_files_or_modes() {
             let mode = std::fs::metadata(&p).unwrap().permissions().mode() & 0o777;
             assert_eq!(mode, 0o600, "{}", p.display());
         }
+        // Through a symbolic link, the tree it names is edited and the link stays one
+        // (it was replaced by a regular file).
+        let link = dir.path().join("link.ron");
+        std::os::unix::fs::symlink(&tree, &link).unwrap();
+        let (ok, err) = karstic(&["tree", "set", s(&link), "span.falloff", "7.5"]);
+        assert!(ok, "{err}");
+        assert!(
+            std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink()
+        );
+        assert!(std::fs::read_to_string(&tree).unwrap().contains("7.5"));
     }
 }
 

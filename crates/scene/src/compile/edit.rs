@@ -36,8 +36,12 @@ fn edit_file(
     write_keeping_backup(path, scene.to_ron().as_bytes())
 }
 
-/// Copies the file at `path` to `FILE.bak`, then replaces it with `bytes` atomically.
+/// Copies the file at `path` to `FILE.bak`, then replaces it with `bytes` atomically. A
+/// symbolic link is followed: the tree it names is edited (and backed up beside itself),
+/// and the link stays a link.
 fn write_keeping_backup(path: &Path, bytes: &[u8]) -> Result<(), SceneError> {
+    let target = std::fs::canonicalize(path);
+    let path = target.as_deref().unwrap_or(path);
     let original =
         read_regular(path, crate::scene::load::MAX_TREE_FILE).map_err(SceneError::Read)?;
     let mut bak = path.as_os_str().to_owned();
