@@ -32,7 +32,7 @@ fn write_ball(path: &Path) {
             }
         }
     }
-    let side = Sidecar::new(&spec);
+    let side = Sidecar::new(&spec, &values);
     write_atomic(path, |w| npy::write_f32(w, &side.shape, &values)).unwrap();
     std::fs::write(
         Sidecar::path_for(path),
@@ -75,6 +75,18 @@ fn builds_a_sampled_grid_with_stats() {
         assert!(ok && stderr.is_empty(), "{stderr}");
         assert!(o.exists());
     }
+    // A grid beside a sidecar of other values, same shape (a sample killed between its
+    // two renames): refused, not meshed in the wrong place.
+    let side = Sidecar::path_for(&grid);
+    let text = std::fs::read_to_string(&side).unwrap();
+    let mut other: Sidecar = serde_json::from_str(&text).unwrap();
+    other.values = Some(Sidecar::hash(&[0.0; 3]));
+    std::fs::write(&side, serde_json::to_string(&other).unwrap()).unwrap();
+    let (ok, _, stderr) = karstic(&["build", grid.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(
+        !ok && stderr.contains("written for other values"),
+        "{stderr}"
+    );
 }
 
 #[test]

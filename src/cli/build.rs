@@ -181,6 +181,18 @@ fn build_from_grid(args: &BuildArgs) -> anyhow::Result<(Mesh, MeshStats)> {
             sidecar.shape
         );
     }
+    if sidecar
+        .values
+        .as_ref()
+        .is_some_and(|h| *h != Sidecar::hash(&values))
+    {
+        bail!(
+            "{}: its sidecar {} was written for other values (a sample cut short between \
+             its two files?): sample again",
+            args.tree.display(),
+            side.display()
+        );
+    }
     let spec = sidecar.spec();
     let grid = DenseGrid::new(&values, spec.dims, spec.origin, spec.step)
         .with_context(|| format!("{}", args.tree.display()))?;

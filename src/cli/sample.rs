@@ -46,7 +46,7 @@ pub(super) fn run(args: SampleArgs) -> anyhow::Result<()> {
     let bar = progress(slab_count(&spec), "sampling", args.quiet);
     let values = sample_grid(&field, &spec, args.budget.max_memory, Some(&bar))?;
     bar.finish_and_clear();
-    let sidecar = Sidecar::new(&spec);
+    let sidecar = Sidecar::new(&spec, &values);
     write_atomic(&args.output, |w| npy::write_f32(w, &sidecar.shape, &values))?;
     let text = serde_json::to_string_pretty(&sidecar).context("encoding the sidecar")?;
     write_atomic(&side, |w| writeln!(w, "{text}"))?;

@@ -2,11 +2,13 @@
 //! sizes that set them, progress bars.
 
 mod atomic;
+mod hash;
 mod paths;
 mod png;
 mod size;
 
 pub use atomic::{write_atomic, write_bytes_atomic, write_bytes_atomic_like};
+pub use hash::{content_hash, files_hash};
 pub use paths::{check_file_name, check_outputs};
 pub use png::write_rgba_png;
 pub use size::parse_byte_size;

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::MeshError;
 use crate::field::{Aabb, Field, Grid, ISO, eval_grid};
-use crate::io::check_budget;
+use crate::io::{check_budget, content_hash};
 
 /// `dims` samples spanning `b` corner to corner. An axis of one sample takes the box's
 /// middle on that axis, where the box may be flat: a section on a plane is
@@ -67,11 +67,16 @@ pub struct Sidecar {
     pub iso: f32,
     /// Human-readable index convention.
     pub layout: String,
+    /// Content hash of the grid's values (16 hex digits), so that a grid and a sidecar
+    /// from different runs (one cut short between its two files) are told apart.
+    /// Sidecars written before it have none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub values: Option<String>,
 }
 
 impl Sidecar {
-    /// The sidecar of `spec`.
-    pub fn new(spec: &Grid) -> Self {
+    /// The sidecar of `values` sampled on `spec`.
+    pub fn new(spec: &Grid, values: &[f32]) -> Self {
         let [nx, ny, nz] = spec.dims;
         Sidecar {
             shape: [nz, ny, nx],
@@ -79,7 +84,13 @@ impl Sidecar {
             spacing: spec.step.into(),
             iso: ISO,
             layout: "float32 C order, value[z][y][x] at origin + (x, y, z) * spacing".into(),
+            values: Some(Sidecar::hash(values)),
         }
+    }
+
+    /// The content hash a sidecar records for `values`.
+    pub fn hash(values: &[f32]) -> String {
+        format!("{:016x}", content_hash(&[bytemuck::cast_slice(values)]))
     }
 
     /// The sidecar path of an `.npy` path: same stem, `.json`.
@@ -138,7 +149,9 @@ mod tests {
         assert!(v[..6].iter().all(|&x| x == 1.0));
         assert!(v[12..18].iter().all(|&x| x == ISO));
         assert!(v[24..].iter().all(|&x| x == 0.0));
-        let s = Sidecar::new(&spec);
+        let s = Sidecar::new(&spec, &v);
+        assert_eq!(s.values, Some(Sidecar::hash(&v)));
+        assert_ne!(Sidecar::hash(&v), Sidecar::hash(&v[1..]));
         assert_eq!(s.shape, [5, 2, 3]);
         assert_eq!(s.spec(), spec);
         assert!(grid_spanning(&spec_box(), [0, 2, 2]).is_err());

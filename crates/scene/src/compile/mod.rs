@@ -20,11 +20,11 @@ use crate::field::{Aabb, Field, NodeId, Primitive, Transition, Tree, TreeBuilder
 use crate::field::{Erosion, Resistance};
 use crate::geology::Geology;
 use crate::io::DEFAULT_MEMORY_BUDGET;
+use crate::io::{content_hash, files_hash};
 use crate::landform::Ground;
 use crate::scene::{DemCache, HeightfieldSpec};
 use crate::voxel::FeatureVolumeSpec;
 use crate::voxel::SField;
-use crate::voxel::cache::{content_hash, files_hash};
 use crate::voxel::spec::BuildOptions;
 use crate::voxel::spec::CurveSource;
 

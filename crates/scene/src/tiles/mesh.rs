@@ -14,10 +14,10 @@ use crate::io::write_bytes_atomic;
 use std::sync::Arc;
 
 use crate::compile::Compiled;
+use crate::io::files_hash;
 use crate::mesh::export::{self, ExportOptions, Origin};
 use crate::mesh::{Mesh, MeshOptions, polygonize};
 use crate::scene::SceneFile;
-use crate::voxel::cache::files_hash;
 
 /// Skirt depth in cells of the tile's level.
 pub const SKIRT_CELLS: f32 = 2.0;

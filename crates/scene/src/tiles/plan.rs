@@ -363,10 +363,10 @@ impl Plan {
     }
 }
 
-/// The content hash of `bytes` ([`crate::voxel::cache::content_hash`]), as 16
+/// The content hash of `bytes` ([`crate::io::content_hash`]), as 16
 /// hexadecimal digits.
 pub(crate) fn hash_hex(bytes: &[u8]) -> String {
-    format!("{:016x}", crate::voxel::cache::content_hash(&[bytes]))
+    format!("{:016x}", crate::io::content_hash(&[bytes]))
 }
 
 #[cfg(test)]

@@ -29,6 +29,7 @@ use glam::{IVec3, Vec3};
 use super::pipeline::{BrickBounds, Params, Stats, Volume, run};
 use super::sparse::{BRICK_NODES, Bricks, LevelGeom};
 use crate::curves::{CurveError, Features};
+use crate::io::content_hash;
 
 /// The most bytes the cache directory keeps.
 pub const MAX_BYTES: u64 = 1 << 30;
@@ -249,34 +250,6 @@ fn decode(file: &[u8], key: u64) -> Option<Volume> {
         && r.0.is_empty()
         && (v.normals.is_empty() || v.normals.len() == v.levels.len());
     complete.then_some(v)
-}
-
-/// FNV-1a over bytes: a stable content hash for the cache.
-pub fn content_hash(parts: &[&[u8]]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for p in parts {
-        for &b in *p {
-            h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
-        }
-        h = (h ^ 0xff).wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
-
-/// The content hash of the files `files`, in order: each file's contents, or a marker for
-/// one that cannot be read (a sidecar a reader would have taken when present). What the
-/// Feature Volume memo and the tiles key their inputs by.
-pub fn files_hash(files: &[std::path::PathBuf]) -> u64 {
-    let parts: Vec<[u8; 8]> = files
-        .iter()
-        .map(
-            |f| match crate::io::read_regular(f, crate::io::DEFAULT_MEMORY_BUDGET) {
-                Ok(bytes) => content_hash(&[&bytes]).to_le_bytes(),
-                Err(_) => *b"absent\0\0",
-            },
-        )
-        .collect();
-    content_hash(&parts.iter().map(|p| p.as_slice()).collect::<Vec<_>>())
 }
 
 /// The content hash of a run: the canonical text of the primitives and the parameters
