@@ -579,6 +579,14 @@ fn generator_counts_past_their_limits_are_refused() {
 #[test]
 fn messages_name_the_real_problem() {
     let (dir, tree) = with_arch();
+    // A box whose minimum is past its maximum is refused, not silently swapped.
+    let glb = dir.path().join("b.glb");
+    let flipped = ["--box", "10", "0", "0", "0", "10", "10"];
+    let (ok, err) = karstic(&[&["build", s(&tree), "-o", s(&glb)][..], &flipped].concat());
+    assert!(
+        !ok && err.contains("--box: the minimum x 10 is past the maximum 0"),
+        "{err}"
+    );
     let out = dir.path().join("h.tif");
     let (ok, err) = karstic(&[
         "heightmap",

@@ -232,6 +232,12 @@ fn empty_operators_and_bad_jobs_are_refused_at_load() {
         "(version: 1, root: Union(name: \"u\", children: []))",
         "t.ron:1:32: Union \"u\" has no children",
     );
+    // A definition without a name cannot be used: it was accepted and ignored.
+    check(
+        "(version: 1,\n defs: [Primitive(shape: Point(center: (0, 0, 0)), falloff: 1)],\n \
+         root: Primitive(shape: Point(center: (0, 0, 0)), falloff: 2))",
+        "t.ron:2:2: defs[0] (Primitive) has no name",
+    );
     let ball = "Primitive(shape: Point(center: (0, 0, 0)), falloff: 1)";
     let job = |section: &str| format!("(version: 1,\n job: (cell: 1, {section}),\n root: {ball})");
     check(

@@ -85,7 +85,7 @@ pub(super) fn run(args: BuildArgs) -> anyhow::Result<()> {
             super::load_compiled(&args.tree, args.budget.max_memory, &outputs, args.quiet)?;
         let (mesh, stats) = build_from_field(&compiled.tree, &args)?;
         let support = compiled.tree.support();
-        let bbox = args.bbox.as_deref().map(super::corners);
+        let bbox = args.bbox.as_deref().map(super::corners).transpose()?;
         let opts = ExportOptions {
             albedo: args.tint.then(|| {
                 Arc::new(karstic::picture::materials(
@@ -134,7 +134,7 @@ fn is_npy(path: &Path) -> bool {
 
 /// The grid over `--box` (or the field's support) at `--cell` or `--res`.
 fn grid_for(support: Aabb, args: &BuildArgs) -> anyhow::Result<GridSpec> {
-    let bbox = args.bbox.as_deref().map_or(support, super::corners);
+    let bbox = args.bbox.as_deref().map_or(Ok(support), super::corners)?;
     let grid = match (args.cell, args.res) {
         (Some(c), _) => GridSpec::with_cell(&bbox, c)?,
         (None, r) => GridSpec::with_resolution(&bbox, r.unwrap_or(256))?,

@@ -56,7 +56,7 @@ pub(super) fn run(args: MasksArgs) -> anyhow::Result<()> {
         args.tree.display()
     );
     let ground = compiled.ground.as_deref();
-    let bbox = args.bbox.as_deref().map(super::corners);
+    let bbox = args.bbox.as_deref().map(super::corners).transpose()?;
     let frame = texture_frame(bbox.as_ref(), ground, &support);
     let cell = args.cell.unwrap_or_else(|| match ground {
         Some(g) => g.heightfield().cell().min_element(),

@@ -95,9 +95,21 @@ fn finite(s: &str) -> Result<f32, String> {
     }
 }
 
-/// The box of a `--box XMIN YMIN ZMIN XMAX YMAX ZMAX` flag (clap checks there are six).
-fn corners(v: &[f32]) -> Aabb {
-    Aabb::new(Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]))
+/// The box of a `--box XMIN YMIN ZMIN XMAX YMAX ZMAX` flag (clap checks there are six):
+/// a minimum past its maximum is refused, not swapped (a typo would move the box).
+fn corners(v: &[f32]) -> anyhow::Result<Aabb> {
+    if let Some(a) = (0..3).find(|&a| v[a] > v[a + 3]) {
+        anyhow::bail!(
+            "--box: the minimum {} {} is past the maximum {}",
+            ["x", "y", "z"][a],
+            v[a],
+            v[a + 3]
+        );
+    }
+    Ok(Aabb::new(
+        Vec3::new(v[0], v[1], v[2]),
+        Vec3::new(v[3], v[4], v[5]),
+    ))
 }
 
 /// Prints `notices` (a DEM's units, a fallback taken) to standard error, unless `quiet`.

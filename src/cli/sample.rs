@@ -41,7 +41,7 @@ pub(super) fn run(args: SampleArgs) -> anyhow::Result<()> {
     let bbox = args
         .bbox
         .as_deref()
-        .map_or_else(|| field.support(), super::corners);
+        .map_or_else(|| Ok(field.support()), super::corners)?;
     let spec = grid_spanning(&bbox, [args.res[0], args.res[1], args.res[2]])?;
     let bar = progress(slab_count(&spec), "sampling", args.quiet);
     let values = sample_grid(&field, &spec, args.budget.max_memory, Some(&bar))?;

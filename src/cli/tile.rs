@@ -105,7 +105,7 @@ fn plan(a: PlanArgs) -> anyhow::Result<()> {
     let tree = &compiled.tree;
     let job = file.scene.job.as_ref();
     let region = match (&a.bbox, a.job_region) {
-        (Some(b), _) => super::corners(b),
+        (Some(b), _) => super::corners(b)?,
         (None, true) => {
             let r = job.and_then(|j| j.region).with_context(|| {
                 format!(

@@ -52,6 +52,16 @@ impl Problem {
 
 /// Checks `scene` (see the module documentation); the first problem found.
 pub fn validate(scene: &Scene) -> Result<(), Problem> {
+    // A definition is used through its name: one without is silently unreachable.
+    if let Some(i) = scene.defs.iter().position(|d| d.name().is_none()) {
+        return Err(Problem {
+            message: format!(
+                "defs[{i}] ({}) has no name: nothing can use it (give it `name: \"...\"`)",
+                scene.defs[i].kind()
+            ),
+            at: Some(Locate::Key("defs")),
+        });
+    }
     let graph = Graph::of(scene)?;
     graph.check_acyclic()?;
     if let Some(p) = graph.empty_operator {
