@@ -261,7 +261,7 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
                 _ => 1.0,
             };
             let p = ray.at(tr.t);
-            let albedo = s.materials.albedo(p, n);
+            let albedo = s.materials.albedo_seen(p, n, s.trace.cone * tr.t);
             let c = sh.seen(ray.origin, ray.dir, tr.t, albedo * sh.light(n, lit, ao));
             Pixel {
                 rgba: to_srgb8(sh.display(c)),

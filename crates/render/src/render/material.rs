@@ -31,6 +31,9 @@ use crate::mesh::export::Albedo;
 /// Seed of the noise that moves material boundaries.
 pub const VARIATION_SEED: u32 = 0x05ee_dc01;
 
+/// Seed of the rock's weathering ([`Materials::weathering`]).
+pub const WEATHERING_SEED: u32 = 0x5a17_0c4e;
+
 /// Wavelength of the dry-grass patches, in units of [`Materials::variation_wavelength`].
 pub const DRY_SCALE: f32 = 2.5;
 
@@ -180,6 +183,29 @@ impl Materials {
         }
     }
 
+    /// The weathering of a geology's bare rock at `p` seen `footprint` metres a pixel: a
+    /// factor on its albedo (about 0.6 to 1.2), 1 without a geology. Rock faces are not one
+    /// colour per bed: the surface crust mottles over metres, thin laminae within a bed
+    /// vary along it, water running down a face leaves dark streaks of varnish below
+    /// ledges, and iron oxide stains it warm in patches. Each term fades to its mean as
+    /// its scale nears the footprint (a pixel shows the average, not one sample of it),
+    /// so a far view is not speckled.
+    pub fn weathering(&self, p: Vec3, footprint: f32) -> Vec3 {
+        if self.geology.is_none() {
+            return Vec3::ONE;
+        }
+        let seen =
+            |wavelength: f32| 1.0 - smoothstep(0.25 * wavelength, 0.5 * wavelength, footprint);
+        let noise = |k: u32, q: Vec3| simplex(WEATHERING_SEED ^ k, q);
+        let mottle = 0.5 * seen(3.0) * noise(1, p / 3.0) + 0.3 * seen(0.9) * noise(2, p / 0.9);
+        let laminae = seen(0.7) * noise(3, Vec3::new(p.x / 30.0, p.y / 30.0, p.z / 0.7));
+        let streak = seen(1.6) * noise(4, Vec3::new(p.x / 1.6, p.y / 1.6, p.z / 24.0));
+        let varnish = smoothstep(0.1, 0.55, streak);
+        let iron = seen(10.0) * smoothstep(0.15, 0.6, noise(5, p / 10.0));
+        let grey = (1.0 + 0.14 * mottle + 0.1 * laminae) * (1.0 - 0.35 * varnish);
+        Vec3::splat(grey) * Vec3::ONE.lerp(Vec3::new(1.12, 0.96, 0.82), iron)
+    }
+
     /// Albedo of a point with this cover and `rock` the albedo of its bare rock.
     pub fn albedo_of(&self, c: &Cover, rock: Vec3) -> Vec3 {
         self.grass
@@ -189,11 +215,18 @@ impl Materials {
             .lerp(rock, c.rock)
     }
 
-    /// Albedo at `p` with outward unit normal `n`.
+    /// Albedo at `p` with outward unit normal `n`, without the rock's weathering (the
+    /// exported meshes' colours).
     pub fn albedo(&self, p: Vec3, n: Vec3) -> Vec3 {
+        self.albedo_seen(p, n, f32::INFINITY)
+    }
+
+    /// Albedo at `p` with outward unit normal `n` seen `footprint` metres a pixel: the
+    /// pictures' colour, with the rock's [`Materials::weathering`] at that scale.
+    pub fn albedo_seen(&self, p: Vec3, n: Vec3, footprint: f32) -> Vec3 {
         let c = self.cover(p, n);
         let rock = if c.rock > 0.0 {
-            self.rock_at(p)
+            self.rock_at(p) * self.weathering(p, footprint)
         } else {
             self.rock
         };
@@ -211,5 +244,33 @@ pub fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
 impl Albedo for Materials {
     fn albedo(&self, p: Vec3, n: Vec3) -> Vec3 {
         Materials::albedo(self, p, n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geology::Geology;
+
+    /// The weathering varies the rock's albedo where a pixel resolves it, about a mean of
+    /// 1 (beds keep their order of colour), fades to 1 where a pixel is wider than its
+    /// scales, and leaves rock without a geology, and the exports' colours, alone.
+    #[test]
+    fn weathering_shows_where_resolved_and_fades_where_not() {
+        let scene = Aabb::new(Vec3::ZERO, Vec3::splat(200.0));
+        let plain = Materials::for_scene(&scene, None);
+        let mut m = plain.clone();
+        m.geology = Some(Arc::new(Geology::uniform(0.6)));
+        let p = |i: u32| Vec3::new(7.3 * i as f32 % 200.0, 3.1 * i as f32 % 200.0, 0.37 * i as f32);
+        let grey = |f: Vec3| f.x.min(f.y).min(f.z);
+        let near: Vec<f32> = (0..4000).map(|i| grey(m.weathering(p(i), 0.01))).collect();
+        let mean = near.iter().sum::<f32>() / near.len() as f32;
+        let spread = near.iter().map(|g| (g - mean).powi(2)).sum::<f32>() / near.len() as f32;
+        assert!((0.8..1.05).contains(&mean), "mean {mean}");
+        assert!(spread.sqrt() > 0.05, "spread {}", spread.sqrt());
+        assert!((0..400).all(|i| m.weathering(p(i), 50.0) == Vec3::ONE));
+        assert!((0..400).all(|i| plain.weathering(p(i), 0.01) == Vec3::ONE));
+        let wall = Vec3::X;
+        assert!((0..400).all(|i| m.albedo(p(i), wall) == m.albedo_seen(p(i), wall, 1e9)));
     }
 }
