@@ -24,7 +24,7 @@ use glam::{Vec2, Vec3};
 
 use crate::dem::HeightfieldField;
 use crate::field::Aabb;
-use crate::field::noise::simplex;
+use crate::field::noise::{simplex, simplex_grad};
 use crate::geology::Geology;
 use crate::mesh::export::Albedo;
 
@@ -199,10 +199,13 @@ impl Materials {
         let noise = |k: u32, q: Vec3| simplex(WEATHERING_SEED ^ k, q);
         let mottle = 0.5 * seen(3.0) * noise(1, p / 3.0) + 0.3 * seen(0.9) * noise(2, p / 0.9);
         let laminae = seen(0.7) * noise(3, Vec3::new(p.x / 30.0, p.y / 30.0, p.z / 0.7));
-        let streak = seen(1.6) * noise(4, Vec3::new(p.x / 1.6, p.y / 1.6, p.z / 24.0));
-        let varnish = smoothstep(0.1, 0.55, streak);
+        // Thin streaks, continuous down the face: a stretched noise thresholded into
+        // blobs read as spots, not as runs of water.
+        let streak = seen(0.8) * noise(4, Vec3::new(p.x / 0.8, p.y / 0.8, p.z / 12.0));
+        let varnish =
+            0.6 * smoothstep(-0.2, 0.7, streak) * (0.5 + 0.5 * seen(6.0) * noise(8, p / 6.0));
         let iron = seen(10.0) * smoothstep(0.15, 0.6, noise(5, p / 10.0));
-        let grey = (1.0 + 0.14 * mottle + 0.1 * laminae) * (1.0 - 0.35 * varnish);
+        let grey = (1.0 + 0.14 * mottle + 0.1 * laminae) * (1.0 - 0.4 * varnish);
         Vec3::splat(grey) * Vec3::ONE.lerp(Vec3::new(1.12, 0.96, 0.82), iron)
     }
 
@@ -213,6 +216,34 @@ impl Materials {
             .lerp(self.soil, c.soil)
             .lerp(self.snow, c.snow)
             .lerp(rock, c.rock)
+    }
+
+    /// The normal a picture shades a geology's bare rock with at `p` (outward unit normal
+    /// `n`, `footprint` metres a pixel): `n` tilted by the slope of a relief of the rock's
+    /// surface — knobs of a crust weathered over metres, chips over decimetres, and the
+    /// thin laminae of each bed standing out in ribs where they are harder — so a face
+    /// reads as rock, not as a smooth cast. Each scale fades as
+    /// [`Materials::weathering`]'s do; `n` itself without a geology or off the rock.
+    pub fn rock_normal(&self, p: Vec3, n: Vec3, footprint: f32) -> Vec3 {
+        if self.geology.is_none() {
+            return n;
+        }
+        let rock = self.cover(p, n).rock;
+        if rock <= 0.0 {
+            return n;
+        }
+        let seen =
+            |wavelength: f32| 1.0 - smoothstep(0.25 * wavelength, 0.5 * wavelength, footprint);
+        // ∇ of `amplitude · noise(p / scale)` for a noise of per-axis scales.
+        let relief = |k: u32, scale: Vec3, amplitude: f32| {
+            let (_, g) = simplex_grad(WEATHERING_SEED ^ k, p / scale);
+            amplitude * g / scale
+        };
+        let grad = seen(2.5) * relief(6, Vec3::splat(2.5), 0.3)
+            + seen(0.6) * relief(7, Vec3::splat(0.6), 0.05)
+            + seen(0.7) * relief(3, Vec3::new(30.0, 30.0, 0.7), 0.06);
+        let tangential = grad - grad.dot(n) * n;
+        (n - rock * tangential).normalize_or(n)
     }
 
     /// Albedo at `p` with outward unit normal `n`, without the rock's weathering (the
@@ -261,7 +292,13 @@ mod tests {
         let plain = Materials::for_scene(&scene, None);
         let mut m = plain.clone();
         m.geology = Some(Arc::new(Geology::uniform(0.6)));
-        let p = |i: u32| Vec3::new(7.3 * i as f32 % 200.0, 3.1 * i as f32 % 200.0, 0.37 * i as f32);
+        let p = |i: u32| {
+            Vec3::new(
+                7.3 * i as f32 % 200.0,
+                3.1 * i as f32 % 200.0,
+                0.37 * i as f32,
+            )
+        };
         let grey = |f: Vec3| f.x.min(f.y).min(f.z);
         let near: Vec<f32> = (0..4000).map(|i| grey(m.weathering(p(i), 0.01))).collect();
         let mean = near.iter().sum::<f32>() / near.len() as f32;

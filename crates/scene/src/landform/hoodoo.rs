@@ -38,6 +38,10 @@ use crate::value::{NonNegative, P2, P3, Positive};
 /// A caprock's thickness, as a fraction of its symbol's height: caps are flat slabs.
 pub const CAP: f32 = 0.4;
 
+/// How far a body's slice may sit off its column's axis, and be squeezed out of round, as
+/// a fraction of its radius.
+const SLICE_WANDER: f32 = 0.18;
+
 /// Seed of the noise that groups the hoodoos.
 const CLUMPS: u32 = 0x6_0b11;
 
@@ -249,10 +253,20 @@ impl HoodooSpec {
                                 * (0.45 + 1.1 * bed)
                                 * (1.0 - 0.3 * up(z))
                                 * (1.0 - narrows * f);
+                            // Joints and uneven wear: each slice sits off the axis and is
+                            // squeezed its own way, so the column is no solid of
+                            // revolution (its beds still bulge and pinch together).
+                            let mut signed = || 2.0 * rng.unit() - 1.0;
+                            let off = r * SLICE_WANDER * Vec2::new(signed(), signed());
+                            let squeeze = 1.0 + SLICE_WANDER * signed();
                             out.push(solid(
                                 SkeletonSpec::Ellipsoid {
-                                    center: P3(p.with_z(z)),
-                                    radii: Size3(Vec3::new(r * ex, r * ey, 0.8 * dz)),
+                                    center: P3(p.with_z(z) + off.extend(0.0)),
+                                    radii: Size3(Vec3::new(
+                                        r * ex * squeeze,
+                                        r * ey / squeeze,
+                                        0.8 * dz,
+                                    )),
                                 },
                                 falloff,
                                 Some(weathering(r, seed)),
