@@ -202,8 +202,10 @@ impl Materials {
         // Thin streaks, continuous down the face: a stretched noise thresholded into
         // blobs read as spots, not as runs of water.
         let streak = seen(0.8) * noise(4, Vec3::new(p.x / 0.8, p.y / 0.8, p.z / 12.0));
-        let varnish =
-            0.6 * smoothstep(-0.2, 0.7, streak) * (0.5 + 0.5 * seen(6.0) * noise(8, p / 6.0));
+        let varnish = 0.6
+            * seen(0.8)
+            * smoothstep(-0.2, 0.7, streak)
+            * (0.5 + 0.5 * seen(6.0) * noise(8, p / 6.0));
         let iron = seen(10.0) * smoothstep(0.15, 0.6, noise(5, p / 10.0));
         let grey = (1.0 + 0.14 * mottle + 0.1 * laminae) * (1.0 - 0.4 * varnish);
         Vec3::splat(grey) * Vec3::ONE.lerp(Vec3::new(1.12, 0.96, 0.82), iron)
