@@ -306,6 +306,69 @@ fn tree_set_takes_tree_file_values() {
     assert!(!ok && err.contains("found NaN"), "{err}");
 }
 
+/// `tree set` changes only the text of the value it sets: one edit of the main job's
+/// grotto rewrote the whole file in canonical layout (31 comment lines became 0, 226 diff
+/// lines, defaults written out, the final newline dropped). A value the file leaves out is
+/// added inside its node; a nested one (`shape.radius`) is set in place.
+#[test]
+fn tree_set_keeps_the_file_as_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let tree = dir.path().join("caves.ron");
+    let data = format!("\"{}/data/", trees().display());
+    let original = std::fs::read_to_string(trees().join("jacksboro_caves.ron"))
+        .unwrap()
+        .replace("\"data/", &data);
+    std::fs::write(&tree, &original).unwrap();
+    let (ok, err) = karstic(&["tree", "set", s(&tree), "grotto.offset", "2.5"]);
+    assert!(ok, "{err}");
+    let text = std::fs::read_to_string(&tree).unwrap();
+    let changed: Vec<(&str, &str)> = original
+        .lines()
+        .zip(text.lines())
+        .filter(|(a, b)| a != b)
+        .collect();
+    assert_eq!(original.lines().count(), text.lines().count());
+    assert_eq!(
+        changed,
+        [("                offset: 0,", "                offset: 2.5,")]
+    );
+    assert!(text.ends_with('\n'));
+    // The backup is the file before the edit, byte for byte.
+    assert_eq!(
+        std::fs::read_to_string(tree.with_extension("ron.bak")).unwrap(),
+        original
+    );
+
+    // In the arch scene: a parameter, a nested one, and one the node leaves out; each
+    // changes one line, and the comments stay.
+    let (_d, arch) = with_arch();
+    for (target, value, line) in [
+        ("span.falloff", "6.5", "falloff: 6.5"),
+        ("left_leg.shape.radius", "3", "radius: 3)"),
+        (
+            "left_leg.noise",
+            "(amplitude: 0.5, wavelength: 2, octaves: 2)",
+            "noise: (amp",
+        ),
+    ] {
+        let before = std::fs::read_to_string(&arch).unwrap();
+        let (ok, err) = karstic(&["tree", "set", s(&arch), target, value]);
+        assert!(ok, "{err}");
+        let after = std::fs::read_to_string(&arch).unwrap();
+        let diff: Vec<&str> = before
+            .lines()
+            .zip(after.lines())
+            .filter(|(a, b)| a != b)
+            .map(|(_, b)| b)
+            .collect();
+        assert!(
+            diff.len() == 1 && diff[0].contains(line),
+            "{target}: {diff:?}"
+        );
+        assert_eq!(before.matches("//").count(), after.matches("//").count());
+    }
+}
+
 /// The data-loss reproducers: a special file as output, `run`, `tree expand` and
 /// `edit --screenshot` writing over their inputs, a mask stem that leaves its folder,
 /// a file's mode lost by `tree set`, and data files' content echoed in errors.

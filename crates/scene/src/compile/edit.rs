@@ -1,16 +1,19 @@
 //! Scriptable edits of tree files: set a parameter, add a node, remove a node.
 //!
 //! Every edit validates the result (parse, names, references, compile) before writing;
-//! the file is replaced atomically and the previous version kept as `FILE.bak`. The file
-//! is written in canonical layout, so comments are not kept (they stay in the `.bak`).
+//! the file is replaced atomically and the previous version kept as `FILE.bak`. `tree
+//! set` changes only the text of the value it sets: comments, order, layout and unset
+//! defaults stay as the author wrote them (when the spliced text would not read back as
+//! the edited tree, the file is written in canonical layout). `tree add` and `tree rm`
+//! write it in canonical layout (comments stay in the `.bak`).
 
 use std::path::{Path, PathBuf};
 
 use super::compile_scene;
 use crate::io::{read_regular, write_bytes_atomic, write_bytes_atomic_like};
-use crate::scene::load::{SceneError, load, to_ron_text};
+use crate::scene::load::{SceneError, load, parse_scene, to_ron_text};
 use crate::scene::spec::{NodeSpec, Scene};
-use crate::scene::splice::{SpliceError, set_field};
+use crate::scene::splice::{SpliceError, find_named, set_field};
 use crate::scene::validate::validate;
 use crate::value::ron_options;
 
@@ -23,17 +26,41 @@ fn edit_error(path: &Path, message: impl Into<String>) -> SceneError {
 
 /// Applies `change` to the scene in `path`, validates, keeps a `.bak`, writes atomically.
 /// What the edit would break is reported by node name (the rewritten text is not the
-/// file's, so its positions would mislead).
+/// file's, so its positions would mislead). `in_text`, given the file's text, may make
+/// the same change in the text itself: when its result reads back as exactly the edited
+/// scene it is written, so comments, order, layout and unset defaults stay as the author
+/// wrote them; otherwise the scene is written in canonical layout.
 fn edit_file(
     path: &Path,
     change: impl FnOnce(&mut Scene) -> Result<(), SceneError>,
+    in_text: impl FnOnce(&str) -> Option<String>,
 ) -> Result<(), SceneError> {
     let file = load(path)?;
     let mut scene = file.scene.clone();
     change(&mut scene)?;
     validate(&scene).map_err(|p| edit_error(path, format!("after the edit: {}", p.message)))?;
     compile_scene(&scene, path, &file.base_dir)?;
-    write_keeping_backup(path, scene.to_ron().as_bytes())
+    let original = read_regular(path, crate::scene::load::MAX_TREE_FILE)
+        .ok()
+        .and_then(|b| String::from_utf8(b).ok());
+    let kept = original
+        .as_deref()
+        .and_then(in_text)
+        .filter(|text| parse_scene(text, path).is_ok_and(|s| s == scene));
+    match kept {
+        Some(text) => write_keeping_backup(path, text.as_bytes()),
+        None => write_keeping_backup(path, scene.to_ron().as_bytes()),
+    }
+}
+
+/// The file's text with the parameter `NAME.PARAM…` of [`set_param`] set to `value` in
+/// place, when the node and its text can be found.
+fn set_in_text(text: &str, target: &str, value: &str) -> Option<String> {
+    let (name, param) = target.split_once('.')?;
+    let keys: Vec<&str> = param.split('.').collect();
+    let (start, end) = find_named(text, name)?;
+    let node = set_field(&text[start..end], &keys, value).ok()?;
+    Some(format!("{}{node}{}", &text[..start], &text[end..]))
 }
 
 /// Copies the file at `path` to `FILE.bak`, then replaces it with `bytes` atomically. A
@@ -80,7 +107,11 @@ fn scene_find_mut<'a>(scene: &'a mut Scene, name: &str) -> Option<&'a mut NodeSp
 /// file (`3.5`, `(0, 0, 10)`, `Sphere(center: (0, 0, 0), radius: 4)`). An optional
 /// parameter the node leaves out (`noise`, `base_depth`) is added.
 pub fn set_param(path: &Path, target: &str, value: &str) -> Result<(), SceneError> {
-    edit_file(path, |scene| set_in_scene(scene, path, target, value))
+    edit_file(
+        path,
+        |scene| set_in_scene(scene, path, target, value),
+        |text| set_in_text(text, target, value),
+    )
 }
 
 /// The change of [`set_param`] made to a scene in memory, without validating or writing it
@@ -136,7 +167,7 @@ pub fn add_node(path: &Path, parent: &str, node_ron: &str) -> Result<(), SceneEr
             col: e.span.start.col,
             message: e.code.to_string(),
         })?;
-    edit_file(path, |scene| {
+    let change = |scene: &mut Scene| {
         let p = scene_find_mut(scene, parent)
             .ok_or_else(|| edit_error(path, format!("no node named {parent:?}")))?;
         let kind = p.kind();
@@ -149,12 +180,13 @@ pub fn add_node(path: &Path, parent: &str, node_ron: &str) -> Result<(), SceneEr
             })?
             .push(node);
         Ok(())
-    })
+    };
+    edit_file(path, change, |_| None)
 }
 
 /// `karstic tree rm FILE NAME`: removes the node named `NAME` from its parent's children.
 pub fn remove_node(path: &Path, name: &str) -> Result<(), SceneError> {
-    edit_file(path, |scene| {
+    let change = |scene: &mut Scene| {
         if scene.root.name() == Some(name) {
             return Err(edit_error(
                 path,
@@ -196,5 +228,6 @@ pub fn remove_node(path: &Path, name: &str) -> Result<(), SceneError> {
         } else {
             Err(edit_error(path, format!("no node named {name:?}")))
         }
-    })
+    };
+    edit_file(path, change, |_| None)
 }

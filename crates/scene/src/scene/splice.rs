@@ -68,6 +68,51 @@ pub fn set_field(text: &str, path: &[&str], value: &str) -> Result<String, Splic
     })
 }
 
+/// The byte range, in a whole tree file's `text`, of the node whose `name` field is
+/// `name`: the value that holds `name: "NAME"` among its named fields, searched through
+/// named fields, lists and tuples in the order they are written. `None` when no value
+/// holds it (or the text is not laid out as values the scanner knows).
+pub fn find_named(text: &str, name: &str) -> Option<(usize, usize)> {
+    let quoted = format!("{name:?}");
+    let start = skip_attributes(text);
+    search_named(text, start, value_end(text, start), &quoted)
+}
+
+/// [`find_named`] inside the value that spans `start..end`.
+fn search_named(text: &str, start: usize, end: usize, quoted: &str) -> Option<(usize, usize)> {
+    let i = skip_blank(text, start);
+    if let Some(body) = fields(text, i) {
+        let named = |f: &Field| f.key == "name" && &text[f.value.0..f.value.1] == quoted;
+        if body.fields.iter().any(named) {
+            return Some((i, trim_end(text, i, end)));
+        }
+        return body
+            .fields
+            .iter()
+            .find_map(|f| search_named(text, f.value.0, f.value.1, quoted));
+    }
+    // A list, a tuple, or a variant of unnamed values (`Some(…)`): each element.
+    let open = skip_blank(text, ident_end(text, i));
+    if !matches!(text.as_bytes().get(open), Some(b'[' | b'(')) || open >= end {
+        return None;
+    }
+    let mut j = open + 1;
+    loop {
+        j = skip_blank(text, j);
+        if j >= end || matches!(text.as_bytes()[j], b']' | b')') {
+            return None;
+        }
+        let e = value_end(text, j);
+        if let Some(found) = search_named(text, j, e, quoted) {
+            return Some(found);
+        }
+        j = skip_blank(text, e);
+        if text.as_bytes().get(j) == Some(&b',') {
+            j += 1;
+        }
+    }
+}
+
 /// The value at the start of `text` (after its attributes) as a variant name and named
 /// fields: `Sphere(center: (0, 0, 0), radius: 2)` → `("Sphere", [("center", "(0, 0, 0)"),
 /// ("radius", "2")])`; `None` when it is not a list of named fields. What the editor's
@@ -252,6 +297,18 @@ fn string_end_char(b: &[u8], mut i: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn find_named_finds_a_node_through_fields_lists_and_comments() {
+        let text = "#![enable(implicit_some)]\n(version: 1, // name: \"b\" in a comment\n \
+                    defs: [Primitive(name: \"a\", falloff: 1)],\n root: Blend(children: [\n \
+                    Anchor(at: (0, 0), child: Primitive(name: \"b\", falloff: 2)),\n]))\n";
+        let (s, e) = find_named(text, "b").unwrap();
+        assert_eq!(&text[s..e], "Primitive(name: \"b\", falloff: 2)");
+        let (s, e) = find_named(text, "a").unwrap();
+        assert_eq!(&text[s..e], "Primitive(name: \"a\", falloff: 1)");
+        assert_eq!(find_named(text, "c"), None);
+    }
 
     const NODE: &str =
         r#"Primitive(name: "a, (b)", shape: Sphere(center: (0, 0, 0), radius: 2.0), falloff: 1.5)"#;
