@@ -333,11 +333,20 @@ fn tree_set_keeps_the_file_as_written() {
         [("                offset: 0,", "                offset: 2.5,")]
     );
     assert!(text.ends_with('\n'));
-    // The backup is the file before the edit, byte for byte.
+    // The backup is the file before the edit, byte for byte; two more edits move it
+    // back a generation each (the `.bak` kept one state only).
     assert_eq!(
         std::fs::read_to_string(tree.with_extension("ron.bak")).unwrap(),
         original
     );
+    for offset in ["3", "4"] {
+        let (ok, err) = karstic(&["tree", "set", s(&tree), "grotto.offset", offset]);
+        assert!(ok, "{err}");
+    }
+    let bak = |k: &str| std::fs::read_to_string(tree.with_extension(format!("ron.bak{k}")));
+    assert_eq!(bak(".2").unwrap(), original);
+    assert!(bak(".1").unwrap().contains("offset: 2.5,"));
+    assert!(bak("").unwrap().contains("offset: 3,"));
 
     // In the arch scene: a parameter, a nested one, and one the node leaves out; each
     // changes one line, and the comments stay.

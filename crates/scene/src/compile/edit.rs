@@ -1,7 +1,8 @@
 //! Scriptable edits of tree files: set a parameter, add a node, remove a node.
 //!
 //! Every edit validates the result (parse, names, references, compile) before writing;
-//! the file is replaced atomically and the previous version kept as `FILE.bak`. `tree
+//! the file is replaced atomically and the previous versions kept (`FILE.bak`, then
+//! `FILE.bak.1` … as [`BACKUPS`] says). `tree
 //! set` changes only the text of the value it sets: comments, order, layout and unset
 //! defaults stay as the author wrote them (when the spliced text would not read back as
 //! the edited tree, the file is written in canonical layout). `tree add` and `tree rm`
@@ -63,7 +64,8 @@ fn set_in_text(text: &str, target: &str, value: &str) -> Option<String> {
     Some(format!("{}{node}{}", &text[..start], &text[end..]))
 }
 
-/// Copies the file at `path` to `FILE.bak`, then replaces it with `bytes` atomically. A
+/// Copies the file at `path` to `FILE.bak` (the earlier backups moved back a generation,
+/// [`BACKUPS`] kept), then replaces it with `bytes` atomically. A
 /// symbolic link is followed: the tree it names is edited (and backed up beside itself),
 /// and the link stays a link.
 fn write_keeping_backup(path: &Path, bytes: &[u8]) -> Result<(), SceneError> {
@@ -71,11 +73,31 @@ fn write_keeping_backup(path: &Path, bytes: &[u8]) -> Result<(), SceneError> {
     let path = target.as_deref().unwrap_or(path);
     let original =
         read_regular(path, crate::scene::load::MAX_TREE_FILE).map_err(SceneError::Read)?;
-    let mut bak = path.as_os_str().to_owned();
-    bak.push(".bak");
-    write_bytes_atomic_like(&PathBuf::from(bak), &original, path).map_err(SceneError::Write)?;
+    let backup = |k: usize| {
+        let mut bak = path.as_os_str().to_owned();
+        bak.push(if k == 0 {
+            ".bak".to_string()
+        } else {
+            format!(".bak.{k}")
+        });
+        PathBuf::from(bak)
+    };
+    // The generations move back one: FILE.bak.{k} becomes FILE.bak.{k+1}, the oldest goes.
+    for k in (0..BACKUPS - 1).rev() {
+        let (from, to) = (backup(k), backup(k + 1));
+        if std::fs::symlink_metadata(&from).is_ok_and(|m| m.is_file()) {
+            std::fs::rename(&from, &to).map_err(|source| {
+                SceneError::Write(crate::io::IoError::Write { path: to, source })
+            })?;
+        }
+    }
+    write_bytes_atomic_like(&backup(0), &original, path).map_err(SceneError::Write)?;
     write_bytes_atomic(path, bytes).map_err(SceneError::Write)
 }
+
+/// Generations of a tree file kept by its edits: `FILE.bak` (the latest), then
+/// `FILE.bak.1` … `FILE.bak.4`.
+pub const BACKUPS: usize = 5;
 
 /// Puts back `text`, an earlier version of the tree file at `path` (the editor's undo and
 /// redo), byte for byte: it is parsed and validated first, the current file is kept as
