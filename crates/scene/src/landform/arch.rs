@@ -234,10 +234,13 @@ fn blocks(rng: &mut Rng, half: f32, width: f32, crest: f32, waist: (f32, f32)) -
 }
 
 /// Blocks fallen from the fin onto the ground beside it (`ground`: the surface's height
-/// at a point of the arch's frame, `None` where it cannot be found): about one every half width along each face, a twelfth to a third of
-/// the width across, lying up to three of their sizes off the face, half sunk into the
-/// ground, turned at random (the ellipsoid that stands for a block is axis-aligned: the
-/// turn sets its radii along x and y).
+/// at a point of the arch's frame, `None` where it cannot be found): about three every
+/// width along each face, many small and few large (a cubed draw: from a twelfth to half
+/// the width across), most near the foot and a few rolled farther (up to five of their
+/// sizes off the face), sunk into the ground by a fifth to four fifths of their height,
+/// turned at random (the ellipsoid that stands for a block is axis-aligned: the turn sets
+/// its radii along x and y). An even scatter of like blocks read as "pebbles in a neat
+/// line".
 fn talus(
     rng: &mut Rng,
     blocks: &[Block],
@@ -248,7 +251,7 @@ fn talus(
         (Some(a), Some(b)) => (a.x.x, b.x.y),
         _ => return Vec::new(),
     };
-    let n = ((hi - lo) / (0.5 * width)).ceil() as usize;
+    let n = ((hi - lo) / (0.35 * width)).ceil() as usize;
     let mut out = Vec::with_capacity(2 * n);
     for side in [-1.0f32, 1.0] {
         for _ in 0..n {
@@ -257,8 +260,9 @@ fn talus(
                 continue;
             };
             let face = if side < 0.0 { -b.y.x } else { b.y.y };
-            let size = width * (0.15 + 0.25 * rng.unit());
-            let xy = Vec2::new(x, side * (face + size * (0.8 + 2.2 * rng.unit())));
+            let size = width * (0.08 + 0.42 * rng.unit().powi(3));
+            let off = 0.6 + 4.4 * rng.unit().powi(2);
+            let xy = Vec2::new(x, side * (face + size * off));
             let Some(h) = ground(xy) else {
                 continue;
             };
@@ -266,13 +270,15 @@ fn talus(
                 * size
                 * Vec3::new(
                     0.7 + 0.6 * rng.unit(),
-                    0.7 + 0.6 * rng.unit(),
-                    0.5 + 0.4 * rng.unit(),
+                    0.6 + 0.6 * rng.unit(),
+                    0.55 + 0.5 * rng.unit(),
                 );
+            // Sunk by a fifth to four fifths of its height: a block resting on a slope
+            // settles into it, and one only touching the ground would leave slivers of air
+            // under its edge.
+            let sunk = 0.2 + 0.6 * rng.unit();
             out.push(Talus {
-                // Half sunk: a block resting on a slope settles into it, and a block
-                // only touching the ground would leave slivers of air under its edge.
-                center: xy.extend(h),
+                center: xy.extend(h + half.z * (1.0 - 2.0 * sunk)),
                 half,
                 yaw: 360.0 * rng.unit(),
             });
