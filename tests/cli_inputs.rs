@@ -378,6 +378,35 @@ fn tree_set_keeps_the_file_as_written() {
     }
 }
 
+/// `tree add` appends the node's text to its parent's list, indented as the list is, and
+/// `tree rm` takes the node's lines out: the rest of the file, comments included, stays
+/// byte for byte (both rewrote the whole file in canonical layout).
+#[test]
+fn tree_add_and_rm_keep_the_rest_of_the_file() {
+    let (_d, arch) = with_arch();
+    let original = std::fs::read_to_string(&arch).unwrap();
+    let rock = "Primitive(name: \"rock\", shape: Sphere(center: (30, 0, 2), radius: 3), \
+                falloff: 2)";
+    let (ok, err) = karstic(&["tree", "add", s(&arch), "scene", rock]);
+    assert!(ok, "{err}");
+    let added = std::fs::read_to_string(&arch).unwrap();
+    let new_lines: Vec<&str> = added.lines().filter(|l| !original.contains(*l)).collect();
+    assert_eq!(new_lines.len(), 1, "{added}");
+    assert!(
+        new_lines[0]
+            .trim_start()
+            .starts_with("Primitive(name: \"rock\"")
+    );
+    assert_eq!(original.matches("//").count(), added.matches("//").count());
+    let (ok, err) = karstic(&["tree", "rm", s(&arch), "rock"]);
+    assert!(ok, "{err}");
+    let removed = std::fs::read_to_string(&arch).unwrap();
+    // Back to the original but for the comma the list's last element now carries.
+    let strip = |t: &str| t.replace([',', ' ', '\n'], "");
+    assert_eq!(strip(&removed), strip(&original), "{removed}");
+    assert_eq!(original.lines().count(), removed.lines().count());
+}
+
 /// The data-loss reproducers: a special file as output, `run`, `tree expand` and
 /// `edit --screenshot` writing over their inputs, a mask stem that leaves its folder,
 /// a file's mode lost by `tree set`, and data files' content echoed in errors.

@@ -2,11 +2,11 @@
 //!
 //! Every edit validates the result (parse, names, references, compile) before writing;
 //! the file is replaced atomically and the previous versions kept (`FILE.bak`, then
-//! `FILE.bak.1` … as [`BACKUPS`] says). `tree
-//! set` changes only the text of the value it sets: comments, order, layout and unset
-//! defaults stay as the author wrote them (when the spliced text would not read back as
-//! the edited tree, the file is written in canonical layout). `tree add` and `tree rm`
-//! write it in canonical layout (comments stay in the `.bak`).
+//! `FILE.bak.1` … as [`BACKUPS`] says). Each edit changes only the text of what it
+//! changes — `tree set` the value it sets, `tree add` the end of the parent's list, `tree
+//! rm` the node's lines — so comments, order, layout and unset defaults stay as the author
+//! wrote them; when the spliced text would not read back as exactly the edited tree, the
+//! file is written in canonical layout instead.
 
 use std::path::{Path, PathBuf};
 
@@ -14,7 +14,7 @@ use super::compile_scene;
 use crate::io::{read_regular, write_bytes_atomic, write_bytes_atomic_like};
 use crate::scene::load::{SceneError, load, parse_scene, to_ron_text};
 use crate::scene::spec::{NodeSpec, Scene};
-use crate::scene::splice::{SpliceError, find_named, set_field};
+use crate::scene::splice::{SpliceError, append_element, find_named, remove_element, set_field};
 use crate::scene::validate::validate;
 use crate::value::ron_options;
 
@@ -203,7 +203,13 @@ pub fn add_node(path: &Path, parent: &str, node_ron: &str) -> Result<(), SceneEr
             .push(node);
         Ok(())
     };
-    edit_file(path, change, |_| None)
+    edit_file(path, change, |text| {
+        let at = find_named(text, parent)?;
+        let node = node_ron.trim();
+        ["children", "carves"]
+            .iter()
+            .find_map(|key| append_element(text, at, key, node))
+    })
 }
 
 /// `karstic tree rm FILE NAME`: removes the node named `NAME` from its parent's children.
@@ -251,5 +257,7 @@ pub fn remove_node(path: &Path, name: &str) -> Result<(), SceneError> {
             Err(edit_error(path, format!("no node named {name:?}")))
         }
     };
-    edit_file(path, change, |_| None)
+    edit_file(path, change, |text| {
+        find_named(text, name).map(|at| remove_element(text, at))
+    })
 }

@@ -113,6 +113,72 @@ fn search_named(text: &str, start: usize, end: usize, quoted: &str) -> Option<(u
     }
 }
 
+/// `text` without the list element spanning `start..end` (a node [`find_named`] found)
+/// and the comma after it; when the element stands on lines of its own, those lines go
+/// with it.
+pub fn remove_element(text: &str, (start, end): (usize, usize)) -> String {
+    let b = text.as_bytes();
+    let mut e = end;
+    while e < b.len() && (b[e] == b' ' || b[e] == b'\t') {
+        e += 1;
+    }
+    if b.get(e) == Some(&b',') {
+        e += 1;
+    }
+    let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+    let rest_end = text[e..].find('\n').map_or(text.len(), |i| e + i + 1);
+    if text[line_start..start].trim().is_empty() && text[e..rest_end].trim().is_empty() {
+        format!("{}{}", &text[..line_start], &text[rest_end..])
+    } else {
+        format!("{}{}", &text[..start], &text[e..])
+    }
+}
+
+/// `text` with `element` appended to the list in field `key` of the value spanning
+/// `start..end` (a node [`find_named`] found), indented as the list's last element is;
+/// `None` when the value has no such list.
+pub fn append_element(
+    text: &str,
+    (start, _end): (usize, usize),
+    key: &str,
+    element: &str,
+) -> Option<String> {
+    let body = fields(text, start)?;
+    let list = body.fields.iter().find(|f| f.key == key)?;
+    let (open, close) = (list.value.0, list.value.1.checked_sub(1)?);
+    if text.as_bytes().get(open) != Some(&b'[') || text.as_bytes().get(close) != Some(&b']') {
+        return None;
+    }
+    // The last element's end, and the indentation of its line.
+    let mut j = open + 1;
+    let mut last = None;
+    loop {
+        j = skip_blank(text, j);
+        if j >= close {
+            break;
+        }
+        let e = value_end(text, j);
+        last = Some((j, trim_end(text, j, e)));
+        j = skip_blank(text, e);
+        if text.as_bytes().get(j) == Some(&b',') {
+            j += 1;
+        }
+    }
+    Some(match last {
+        Some((first, end)) => {
+            let line_start = text[..first].rfind('\n').map_or(0, |i| i + 1);
+            let indent = &text[line_start..first];
+            let sep = if indent.trim().is_empty() {
+                format!(",\n{indent}")
+            } else {
+                ", ".to_string()
+            };
+            format!("{}{sep}{element}{}", &text[..end], &text[end..])
+        }
+        None => format!("{}{element}{}", &text[..open + 1], &text[open + 1..]),
+    })
+}
+
 /// The value at the start of `text` (after its attributes) as a variant name and named
 /// fields: `Sphere(center: (0, 0, 0), radius: 2)` → `("Sphere", [("center", "(0, 0, 0)"),
 /// ("radius", "2")])`; `None` when it is not a list of named fields. What the editor's
@@ -308,6 +374,29 @@ mod tests {
         let (s, e) = find_named(text, "a").unwrap();
         assert_eq!(&text[s..e], "Primitive(name: \"a\", falloff: 1)");
         assert_eq!(find_named(text, "c"), None);
+    }
+
+    #[test]
+    fn elements_are_removed_with_their_lines_and_appended_at_the_lists_indent() {
+        let text = "Blend(name: \"b\", children: [\n    A(name: \"x\"), // keep\n    \
+                    A(name: \"y\"),\n])\n";
+        let y = find_named(text, "y").unwrap();
+        assert_eq!(
+            remove_element(text, y),
+            "Blend(name: \"b\", children: [\n    A(name: \"x\"), // keep\n])\n"
+        );
+        let b = find_named(text, "b").unwrap();
+        let added = append_element(text, b, "children", "A(name: \"z\")").unwrap();
+        assert!(
+            added.contains("    A(name: \"y\"),\n    A(name: \"z\"),\n])"),
+            "{added}"
+        );
+        assert_eq!(append_element(text, b, "carves", "A()"), None);
+        let empty = "Blend(children: [])";
+        assert_eq!(
+            append_element(empty, (0, empty.len()), "children", "A()").unwrap(),
+            "Blend(children: [A()])"
+        );
     }
 
     const NODE: &str =
