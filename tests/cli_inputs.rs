@@ -304,6 +304,15 @@ fn tree_set_takes_tree_file_values() {
     assert!(text.contains("Sphere("), "{text}");
     let (ok, err) = karstic(&["tree", "set", s(&tree), "ground.falloff", "NaN"]);
     assert!(!ok && err.contains("found NaN"), "{err}");
+    // A count given a fraction is told so in plain words (RON said "Expected comma").
+    let noise = "(amplitude: 0.5, wavelength: 2, octaves: 3)";
+    let (ok, err) = karstic(&["tree", "set", s(&tree), "ground.noise", noise]);
+    assert!(ok, "{err}");
+    let (ok, err) = karstic(&["tree", "set", s(&tree), "ground.noise.octaves", "9.5"]);
+    assert!(
+        !ok && err.contains("`octaves` takes a whole number, not 9.5"),
+        "{err}"
+    );
 }
 
 /// `tree set` changes only the text of the value it sets: one edit of the main job's

@@ -121,6 +121,30 @@ fn editor_set_writes_what_tree_set_writes_and_undo_restores() {
     );
 }
 
+/// A count is edited as a whole number: its widget steps and writes whole numbers (shown
+/// as `8.00`, a count took `9.5` and answered "Expected comma").
+#[test]
+fn editor_edits_counts_as_whole_numbers() {
+    let (_dir, paths) = scene_dir(&["a.ron"]);
+    let a = &paths[0];
+    let noisy = TREE.replace(
+        "falloff: 8.0,\n",
+        "falloff: 8.0,\n                    noise: (amplitude: 2, wavelength: 10, octaves: 3),\n",
+    );
+    std::fs::write(a, &noisy).unwrap();
+    let mut h = harness(a);
+    select(&mut h, "blob");
+    h.get_by_role_and_label(Role::SpinButton, "octaves")
+        .set_value_accesskit(5.5);
+    h.run_steps(2);
+    let text = std::fs::read_to_string(a).unwrap();
+    assert!(
+        text.contains("octaves: 5)") || text.contains("octaves: 6)"),
+        "{text}\n{}",
+        h.state().status()
+    );
+}
+
 #[test]
 fn editor_refuses_an_invalid_value_with_the_loaders_message() {
     let (_dir, paths) = scene_dir(&["a.ron"]);

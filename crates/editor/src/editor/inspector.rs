@@ -72,6 +72,14 @@ fn numbers(text: &str) -> Option<Vec<f64>> {
     v.filter(|v| !v.is_empty())
 }
 
+/// Whether a value's text is a whole number as a tree file writes a count (`8`, not
+/// `8.0`): its widget then shows and steps whole numbers (a count shown as `8.00` took
+/// `9.5` and answered "Expected comma").
+fn is_whole(text: &str) -> bool {
+    let digits = text.strip_prefix('-').unwrap_or(text);
+    !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit())
+}
+
 fn is_ident(text: &str) -> bool {
     !text.is_empty()
         && text.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
@@ -148,7 +156,14 @@ impl Inspector {
         let label = ui.label(key).id;
         ui.vertical(|ui| {
             let u = unit(key);
-            if let Ok(mut v) = current.parse::<f64>() {
+            if is_whole(value)
+                && let Ok(mut n) = current.parse::<i64>()
+            {
+                // A count (`iterations`, `octaves`): whole steps, written whole.
+                let r = ui.add(DragValue::new(&mut n).speed(0.1).suffix(u));
+                let r = r.labelled_by(label);
+                number_change(&r, &target, n.to_string(), changes);
+            } else if let Ok(mut v) = current.parse::<f64>() {
                 let s = speed(v);
                 let r = ui.add(DragValue::new(&mut v).speed(s).suffix(u));
                 let r = r.labelled_by(label);

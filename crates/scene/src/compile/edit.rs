@@ -160,7 +160,8 @@ pub fn set_in_scene(
             ),
         )
     };
-    let text = set_field(&to_ron_text(&*node), &keys, value).map_err(|e| match e {
+    let node_text = to_ron_text(&*node);
+    let text = set_field(&node_text, &keys, value).map_err(|e| match e {
         SpliceError::NoField { fields, .. } => no_param(&fields),
         SpliceError::NotOneValue => edit_error(
             path,
@@ -172,6 +173,22 @@ pub fn set_in_scene(
             expected, found, ..
         } if keys.last() == Some(&found.as_str()) => {
             no_param(&expected.iter().map(|s| s.to_string()).collect::<Vec<_>>())
+        }
+        // A count given a fraction: RON's own words ("Expected comma") say nothing useful.
+        _ if value
+            .trim()
+            .parse::<f64>()
+            .is_ok_and(|v| v.is_finite() && v.fract() != 0.0)
+            && {
+                let whole = set_field(&node_text, &keys, "1").unwrap_or_default();
+                ron_options().from_str::<NodeSpec>(&whole).is_ok()
+            } =>
+        {
+            let key = keys.last().copied().unwrap_or_default();
+            edit_error(
+                path,
+                format!("`{key}` takes a whole number, not {}", value.trim()),
+            )
         }
         code => edit_error(path, format!("invalid value for {target}: {code}")),
     })?;
