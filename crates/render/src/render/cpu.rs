@@ -261,15 +261,8 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
                 _ => 1.0,
             };
             let p = ray.at(tr.t);
-            let footprint = s.trace.cone * tr.t;
-            let albedo = s.materials.albedo_seen(p, n, footprint);
-            let shading = s.materials.rock_normal(p, n, footprint);
-            let c = sh.seen(
-                ray.origin,
-                ray.dir,
-                tr.t,
-                albedo * sh.light(shading, lit, ao),
-            );
+            let albedo = s.materials.albedo_seen(p, n, s.trace.cone * tr.t);
+            let c = sh.seen(ray.origin, ray.dir, tr.t, albedo * sh.light(n, lit, ao));
             Pixel {
                 rgba: to_srgb8(sh.display(c)),
                 trace: tr,

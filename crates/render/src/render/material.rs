@@ -24,7 +24,7 @@ use glam::{Vec2, Vec3};
 
 use crate::dem::HeightfieldField;
 use crate::field::Aabb;
-use crate::field::noise::{simplex, simplex_grad};
+use crate::field::noise::simplex;
 use crate::geology::Geology;
 use crate::mesh::export::Albedo;
 
@@ -218,34 +218,6 @@ impl Materials {
             .lerp(self.soil, c.soil)
             .lerp(self.snow, c.snow)
             .lerp(rock, c.rock)
-    }
-
-    /// The normal a picture shades a geology's bare rock with at `p` (outward unit normal
-    /// `n`, `footprint` metres a pixel): `n` tilted by the slope of a relief of the rock's
-    /// surface — knobs of a crust weathered over metres, chips over decimetres, and the
-    /// thin laminae of each bed standing out in ribs where they are harder — so a face
-    /// reads as rock, not as a smooth cast. Each scale fades as
-    /// [`Materials::weathering`]'s do; `n` itself without a geology or off the rock.
-    pub fn rock_normal(&self, p: Vec3, n: Vec3, footprint: f32) -> Vec3 {
-        if self.geology.is_none() {
-            return n;
-        }
-        let rock = self.cover(p, n).rock;
-        if rock <= 0.0 {
-            return n;
-        }
-        let seen =
-            |wavelength: f32| 1.0 - smoothstep(0.25 * wavelength, 0.5 * wavelength, footprint);
-        // ∇ of `amplitude · noise(p / scale)` for a noise of per-axis scales.
-        let relief = |k: u32, scale: Vec3, amplitude: f32| {
-            let (_, g) = simplex_grad(WEATHERING_SEED ^ k, p / scale);
-            amplitude * g / scale
-        };
-        let grad = seen(2.5) * relief(6, Vec3::splat(2.5), 0.3)
-            + seen(0.6) * relief(7, Vec3::splat(0.6), 0.05)
-            + seen(0.7) * relief(3, Vec3::new(30.0, 30.0, 0.7), 0.06);
-        let tangential = grad - grad.dot(n) * n;
-        (n - rock * tangential).normalize_or(n)
     }
 
     /// Albedo at `p` with outward unit normal `n`, without the rock's weathering (the
