@@ -30,8 +30,12 @@ pub fn check(generator: &GeneratorSpec, region: &Aabb) -> Result<(), LandformErr
     match generator {
         GeneratorSpec::Karst(k) => karst(&scale, k),
         GeneratorSpec::SeaErosion(g) => {
-            scale.lengths("SeaErosion", &[("band", g.band.0), ("radius", g.radius.0)])?;
-            scale.lengths("SeaErosion", &[("reach", g.reach.0)])?;
+            let lengths = [
+                ("band", g.band.0),
+                ("radius", g.radius.0),
+                ("reach", g.reach.0),
+            ];
+            scale.lengths("SeaErosion", &lengths)?;
             scale.spacing("SeaErosion.spacing", g.spacing.0, false)
         }
         GeneratorSpec::Hoodoos(h) => {
