@@ -389,8 +389,8 @@ fn dem_cache_shares_decoded_files() {
     let a = HeightfieldSpec::new("../shared/data/dem/jacksboro_int16.tif", 100.0);
     let mut b = a.clone();
     b.vertical_scale = karstic::value::Finite(-1.0);
-    let fa = a.load_with(base, &mut cache, 0).unwrap();
-    let fb = b.load_with(base, &mut cache, 0).unwrap();
+    let fa = a.load_with(base, &mut cache, 0, None).unwrap();
+    let fb = b.load_with(base, &mut cache, 0, None).unwrap();
     assert_eq!(
         cache.notices().len(),
         1,

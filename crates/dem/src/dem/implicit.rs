@@ -24,12 +24,20 @@
 //! With [`ImplicitParams::detail`], `h` becomes `h(x, y) + d(p)`, the 3D detail of Frasson
 //! et al. §5 ([`super::detail`]): the bounds widen by the detail's reach and slope, and
 //! [`HeightfieldField::height`] answers the detailed surface.
+//!
+//! With an inset ([`HeightfieldField::with_inset`]), `h` becomes `h(x, y) + δ(x, y)`: `δ` a
+//! fine grid of changes over a rectangle, zero on its border, such as the eroded
+//! amplification of the scene's erosion module. Each DEM cell's range and slope bound
+//! widen by those of the inset's cells over it.
+
+use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
 use super::detail::{Detail, DetailParams};
 use super::domain::Domain;
 use super::grid::{Heightfield, Interpolation};
+use super::inset::Inset;
 use super::prism::Prism;
 use super::pyramid::MinMaxPyramid;
 use super::{DemError, Georef};
@@ -103,6 +111,8 @@ pub struct HeightfieldField {
     cells: MinMaxPyramid<4>,
     lip_h: f32,
     detail: Option<Detail>,
+    /// The changes `δ` added to `h` over the inset's extent (tree frame), 0 beyond it.
+    inset: Option<Arc<Inset>>,
     support: Aabb,
     params: ImplicitParams,
     georef: Option<Georef>,
@@ -137,6 +147,45 @@ impl HeightfieldField {
             .map(|&v| v * p.vertical_scale + p.vertical_offset)
             .collect();
         let placed = Heightfield::new(hf.nx(), hf.ny(), hf.origin() + p.placement, hf.cell(), z)?;
+        HeightfieldField::placed(placed, p.clone(), None)
+    }
+
+    /// The leaf with `h + δ` in place of `h`: `δ` the inset's changes, in the tree frame,
+    /// whose border samples are 0 (so that `h` stays continuous across the inset's edge),
+    /// inside the DEM's extent. The leaf's other parameters and georeference are kept.
+    pub fn with_inset(&self, inset: Arc<Inset>) -> Result<HeightfieldField, DemError> {
+        let bad = |what: String| Err(DemError::Invalid { what });
+        let delta = inset.delta();
+        let (nx, ny) = (delta.nx(), delta.ny());
+        let border = (0..nx)
+            .flat_map(|i| [(i, 0), (i, ny - 1)])
+            .chain((0..ny).flat_map(|j| [(0, j), (nx - 1, j)]));
+        if let Some((i, j)) = border.into_iter().find(|&(i, j)| delta.at(i, j) != 0.0) {
+            return bad(format!(
+                "an inset's border samples must be 0; ({i}, {j}) is not"
+            ));
+        }
+        if delta.nodata_count() > 0 {
+            return bad("an inset has no nodata samples".into());
+        }
+        let (e, x) = (delta.extent(), self.hf.extent());
+        if !x.contains_rect(&e) {
+            return bad(format!(
+                "the inset {e:?} is not inside the DEM's extent {x:?}"
+            ));
+        }
+        let mut out = HeightfieldField::placed(self.hf.clone(), self.params.clone(), Some(inset))?;
+        out.georef = self.georef.clone();
+        Ok(out)
+    }
+
+    /// The leaf over the placed, scaled grid `placed`, with an optional inset.
+    fn placed(
+        placed: Heightfield,
+        p: ImplicitParams,
+        inset: Option<Arc<Inset>>,
+    ) -> Result<HeightfieldField, DemError> {
+        let bad = |what: String| Err(DemError::Invalid { what });
         let interp = p.interpolation;
         let domain = Domain::new(&placed, interp, p.domain.as_deref())?;
         let (cx, cy) = placed.cells();
@@ -158,6 +207,10 @@ impl HeightfieldField {
                 [lo, hi, s, reach]
             })
             .collect();
+        let per_cell = match &inset {
+            Some(inset) => with_inset_cells(&placed, inset.delta(), interp, per_cell),
+            None => per_cell,
+        };
         let cells = MinMaxPyramid::new(cx, cy, per_cell);
         let [zmin, zmax, lip_h, _] = cells.total();
         if zmin > zmax {
@@ -177,8 +230,9 @@ impl HeightfieldField {
             cells,
             lip_h,
             detail,
+            inset,
             support,
-            params: p.clone(),
+            params: p,
             georef: None,
         })
     }
@@ -240,7 +294,35 @@ impl HeightfieldField {
     /// cells with a surface).
     #[inline]
     pub fn base_height(&self, xy: Vec2) -> f32 {
-        self.hf.sample(xy, self.interp)
+        let h = self.hf.sample(xy, self.interp);
+        // δ is NaN beyond the inset, where it is 0
+        match self
+            .inset
+            .as_ref()
+            .map(|d| d.delta().sample(xy, self.interp))
+        {
+            Some(dh) if !dh.is_nan() => h + dh,
+            _ => h,
+        }
+    }
+
+    /// `(h(xy), ∇h(xy))` with the inset's changes, if any.
+    #[inline]
+    fn base_height_grad(&self, xy: Vec2) -> (f32, Vec2) {
+        let (h, g) = self.hf.sample_grad(xy, self.interp);
+        match self
+            .inset
+            .as_ref()
+            .map(|d| d.delta().sample_grad(xy, self.interp))
+        {
+            Some((dh, dg)) if !dh.is_nan() => (h + dh, g + dg),
+            _ => (h, g),
+        }
+    }
+
+    /// The inset (its changes `δ` in the tree frame, and their traces), if the leaf has one.
+    pub fn inset(&self) -> Option<&Inset> {
+        self.inset.as_deref()
     }
 
     /// The elevation of the terrain surface over `xy` (NaN outside the cells with a
@@ -437,6 +519,46 @@ impl HeightfieldField {
     }
 }
 
+/// `per_cell` (`[lo, hi, slope, reach]` per cell of `dem`) widened by the inset `delta`:
+/// each DEM cell's range by the range of `δ` over the inset cells overlapping it (with 0
+/// where the DEM cell reaches past the inset), its slope bound by theirs.
+fn with_inset_cells(
+    dem: &Heightfield,
+    delta: &Heightfield,
+    interp: super::Interpolation,
+    mut per_cell: Vec<[f32; 4]>,
+) -> Vec<[f32; 4]> {
+    let (ranges, slopes) = (delta.cell_ranges(interp), delta.cell_slopes(interp));
+    let (cx, _) = dem.cells();
+    let (dx, _) = delta.cells();
+    let inset = delta.extent();
+    for (k, c) in per_cell.iter_mut().enumerate() {
+        let lo = dem.origin() + Vec2::new((k % cx) as f32, (k / cx) as f32) * dem.cell();
+        let cell = Rect::new(lo, lo + dem.cell());
+        let Some((i0, i1, j0, j1)) = delta.cells_overlapping(&cell) else {
+            continue;
+        };
+        let inside = inset.contains_rect(&cell);
+        let (mut dlo, mut dhi, mut ds) = if inside {
+            (f32::INFINITY, f32::NEG_INFINITY, 0.0f32)
+        } else {
+            (0.0f32, 0.0f32, 0.0f32)
+        };
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let [a, b] = ranges[i + dx * j];
+                dlo = dlo.min(a);
+                dhi = dhi.max(b);
+                ds = ds.max(slopes[i + dx * j][1]);
+            }
+        }
+        if c[0] <= c[1] {
+            *c = [c[0] + dlo, c[1] + dhi, c[2] + ds, c[3]];
+        }
+    }
+    per_cell
+}
+
 impl Field for HeightfieldField {
     #[inline]
     fn value(&self, p: Vec3) -> f32 {
@@ -450,7 +572,7 @@ impl Field for HeightfieldField {
         if e <= 0.0 {
             return (0.0, Vec3::ZERO);
         }
-        let (h, gh) = self.hf.sample_grad(xy, self.interp);
+        let (h, gh) = self.base_height_grad(xy);
         if h.is_nan() {
             return (0.0, Vec3::ZERO);
         }

@@ -11,6 +11,7 @@
 //!   UTM eastings never pass through f32.
 //! * [`MinMaxPyramid`] ([`pyramid`]): conservative min/max over any footprint in O(1).
 //! * [`Detail`] ([`detail`]): detail amplification of the elevation (Frasson et al. §5).
+//! * [`Inset`] ([`inset`]): finer changes to a DEM over a rectangle, and their traces.
 //! * [`HeightfieldField`] ([`implicit`]): the implicit terrain primitive of
 //!   Paris et al. 2019 §5.1 (its node in tree files is `scene::HeightfieldSpec`).
 //!
@@ -27,6 +28,7 @@ pub mod geotiff_write;
 pub mod grid;
 pub mod hgt;
 pub mod implicit;
+pub mod inset;
 pub mod interp;
 pub mod png16;
 pub mod prism;
@@ -39,6 +41,7 @@ pub use error::DemError;
 pub use georef::{Crs, Georef, RasterType};
 pub use grid::{Heightfield, Interpolation};
 pub use implicit::{HeightfieldField, ImplicitParams};
+pub use inset::{Inset, Trace};
 pub use png16::ZMapping;
 pub use pyramid::MinMaxPyramid;
 

@@ -14,6 +14,10 @@
 //! soft, so the strata a tree file writes show on cliffs and canyon walls as they do in
 //! section (`karstic geology section`).
 //!
+//! Where the terrain carries an eroded amplification (`crate::dem::Inset`), its traces
+//! cover the ground too: scree where talus gathered, gravel along the channels and sand on
+//! the deposits, so the drainage the erosion carved reads in colour as well as in relief.
+//!
 //! Colours are linear RGB albedos in `[0, 1]`. The GPU shader (`crates/render/shaders/trace.wgsl`)
 //! mirrors [`Materials::cover`] and [`Materials::albedo`]; keep the two in step. It has no
 //! geology trees: a scene whose rock is coloured by one renders on the CPU.
@@ -22,7 +26,7 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
-use crate::dem::HeightfieldField;
+use crate::dem::{HeightfieldField, Trace};
 use crate::field::Aabb;
 use crate::field::noise::simplex;
 use crate::geology::Geology;
@@ -38,7 +42,8 @@ pub const WEATHERING_SEED: u32 = 0x5a17_0c4e;
 pub const DRY_SCALE: f32 = 2.5;
 
 /// How much of each material covers a surface point (each weight in `[0, 1]`; the
-/// materials layer as grass → dry grass → soil → snow → rock, each over the ones before).
+/// materials layer as grass → dry grass → soil → scree → gravel → snow → rock, each over
+/// the ones before).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Cover {
     /// Bare rock: steep faces and feature surfaces.
@@ -49,6 +54,10 @@ pub struct Cover {
     pub dry: f32,
     /// Snow over soil and grass above the snow line (0 without one).
     pub snow: f32,
+    /// Scree: the talus an eroded amplification shed below steep ground (0 without one).
+    pub scree: f32,
+    /// Damp gravel of the channels an eroded amplification carved.
+    pub gravel: f32,
 }
 
 /// Altitude snow, when a tree asks for it.
@@ -88,6 +97,10 @@ pub struct Materials {
     pub dry: Vec3,
     /// Albedo of snow.
     pub snow: Vec3,
+    /// Albedo of scree.
+    pub scree: Vec3,
+    /// Albedo of channel gravel.
+    pub gravel: Vec3,
     /// Normal `z` below which the surface is bare rock, and above which it is not (smooth
     /// blend between the two).
     pub rock_slope: (f32, f32),
@@ -126,6 +139,8 @@ impl Materials {
             grass: Vec3::new(0.08, 0.16, 0.04),
             dry: Vec3::new(0.2, 0.19, 0.08),
             snow: Vec3::new(0.8, 0.82, 0.86),
+            scree: Vec3::new(0.2, 0.18, 0.155),
+            gravel: Vec3::new(0.11, 0.1, 0.08),
             rock_slope: (0.62, 0.8),
             soil_slope: (0.82, 0.95),
             snow_line: None,
@@ -167,12 +182,34 @@ impl Materials {
             VARIATION_SEED ^ 1,
             p / (DRY_SCALE * self.variation_wavelength),
         );
+        let feature = self.feature(p);
+        let (scree, gravel, sand) = self.traces(p, wander);
         Cover {
-            rock: (1.0 - flat).max(self.feature(p)),
-            soil,
+            rock: (1.0 - flat).max(feature),
+            soil: soil.max(sand),
             dry: smoothstep(-0.2, 0.5, patches),
             snow,
+            scree: scree * (1.0 - feature),
+            gravel: gravel * (1.0 - feature),
         }
+    }
+
+    /// Scree, gravel and bare sediment at `p` from the ground's eroded amplification, if
+    /// it has one: scree where more than about a metre of talus lies, damp gravel where the
+    /// drainage area passes a few thousand square metres (a gully that runs after rain)
+    /// and bare soil where half a metre or more was deposited. `wander` frays the edges.
+    fn traces(&self, p: Vec3, wander: f32) -> (f32, f32, f32) {
+        let Some(inset) = self.ground.as_ref().and_then(|g| g.inset()) else {
+            return (0.0, 0.0, 0.0);
+        };
+        let xy = Vec2::new(p.x, p.y);
+        let t = |trace| inset.trace_at(trace, xy);
+        let fray = 0.3 * wander;
+        let scree = smoothstep(0.3, 1.5, t(Trace::Talus) + fray);
+        let area = t(Trace::Area).max(1.0).log10();
+        let channel = smoothstep(3.3, 4.0, area + fray);
+        let sand = smoothstep(0.2, 0.8, t(Trace::Deposit) + 0.5 * fray);
+        (scree, channel, sand)
     }
 
     /// Albedo of bare rock at `p`: by the geology's resistance there, else [`Self::rock`].
@@ -216,6 +253,8 @@ impl Materials {
         self.grass
             .lerp(self.dry, c.dry)
             .lerp(self.soil, c.soil)
+            .lerp(self.scree, c.scree)
+            .lerp(self.gravel, c.gravel)
             .lerp(self.snow, c.snow)
             .lerp(rock, c.rock)
     }

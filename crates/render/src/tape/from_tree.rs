@@ -77,6 +77,9 @@ fn height_grid(h: &HeightfieldField) -> Result<HeightGrid<'_>, &'static str> {
     if h.params().domain.is_some() {
         return Err("a domain polygon is not encoded");
     }
+    if h.inset().is_some() {
+        return Err("an eroded amplification is not encoded");
+    }
     if grid.nodata_count() > 0 {
         return Err("DEMs with nodata samples are not encoded");
     }

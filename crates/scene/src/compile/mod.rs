@@ -17,7 +17,7 @@ use std::sync::Arc;
 use crate::dem::HeightfieldField;
 use crate::elevation::{BuildContext, ElevationField, ElevationSpec};
 use crate::field::{Aabb, Field, NodeId, Primitive, Transition, Tree, TreeBuilder, Warp};
-use crate::field::{Erosion, Resistance};
+use crate::field::{Erosion, Rect, Resistance};
 use crate::geology::Geology;
 use crate::io::DEFAULT_MEMORY_BUDGET;
 use crate::io::{content_hash, files_hash};
@@ -66,13 +66,13 @@ fn volume_key(
     seed: u32,
     max_memory: u64,
     base_dir: &Path,
-    terrain: Option<(&HeightfieldSpec, u32)>,
+    terrain: Option<(&HeightfieldSpec, u32, Option<(Rect, f32)>)>,
 ) -> u64 {
     let mut files: Vec<PathBuf> = Vec::new();
     if let CurveSource::Path(p) = &f.curves {
         files.push(base_dir.join(p));
     }
-    if let Some(source) = terrain.and_then(|(t, _)| t.source.as_ref()) {
+    if let Some(source) = terrain.and_then(|(t, ..)| t.source.as_ref()) {
         files.extend(crate::dem::files_read(
             &base_dir.join(source),
             &crate::dem::ReadOptions::default(),
@@ -80,7 +80,14 @@ fn volume_key(
     }
     let contents = files_hash(&files).to_le_bytes();
     let spec = to_ron_text(f);
-    let terrain_text = terrain.map_or(String::new(), |(t, s)| format!("{} {s}", to_ron_text(t)));
+    // An amplification without its own region and cell takes the job's (bits: a frame
+    // that reads back the same is the same).
+    let terrain_text = terrain.map_or(String::new(), |(t, s, frame)| {
+        let frame = frame
+            .filter(|_| t.amplify.is_some())
+            .map(|(r, c)| [r.min.x, r.min.y, r.max.x, r.max.y, c].map(f32::to_bits));
+        format!("{} {s} {frame:?}", to_ron_text(t))
+    });
     let (seed, max_memory) = (seed.to_le_bytes(), max_memory.to_le_bytes());
     let mut parts: Vec<&[u8]> = vec![
         spec.as_bytes(),
@@ -91,6 +98,14 @@ fn volume_key(
     ];
     parts.push(&contents);
     content_hash(&parts)
+}
+
+/// The job region's footprint and the job's cell, which a heightfield's `amplify`
+/// defaults to.
+fn job_frame(scene: &Scene) -> Option<(Rect, f32)> {
+    let job = scene.job.as_ref()?;
+    let r = job.region.as_ref()?;
+    Some((Aabb::new(r.min.0, r.max.0).footprint(), job.cell.get()))
 }
 
 /// The node of `scene`'s terrain heightfield (its `terrain`, or its only `Heightfield`),
@@ -156,7 +171,12 @@ impl Compiler<'_> {
         }
         let spec = terrain_spec(self.scene).map_err(|e| self.error(asking, e))?;
         let hf = spec
-            .load_with(self.base_dir, &mut self.dems, self.scene.seed)
+            .load_with(
+                self.base_dir,
+                &mut self.dems,
+                self.scene.seed,
+                job_frame(self.scene),
+            )
             .map_err(|e| self.asset_error(asking, e))?;
         let hf = Arc::new(hf);
         self.terrain = Some(hf.clone());
@@ -187,6 +207,7 @@ impl Compiler<'_> {
                 Some((
                     terrain_spec(self.scene).map_err(|e| self.error(n, e))?,
                     self.scene.seed,
+                    job_frame(self.scene),
                 )),
             )
         } else {
@@ -358,7 +379,12 @@ impl Compiler<'_> {
             }
             NodeSpec::Heightfield(h) => {
                 let leaf = h
-                    .load_with(self.base_dir, &mut self.dems, self.scene.seed)
+                    .load_with(
+                        self.base_dir,
+                        &mut self.dems,
+                        self.scene.seed,
+                        job_frame(self.scene),
+                    )
                     .map_err(|e| self.asset_error(n, e))?;
                 self.builder.leaf(Arc::new(leaf), name)
             }

@@ -6,11 +6,15 @@
 //!   graph's stack ([`crate::analysis::flow::FlowGraph`]);
 //! * [`diffusion`]: `∂h/∂t = D ∇²h`, alternating-direction implicit;
 //! * [`thermal`]: talus-angle relaxation;
+//! * [`transport`]: sediment carried down the drainage and deposited;
+//! * [`amplify`]: the eroded amplification of a DEM, constrained to keep it;
 //! * [`ErosionStage`]: the tree-file and command-line form, run by [`Eroder`].
 
+pub mod amplify;
 pub mod diffusion;
 pub mod stream_power;
 pub mod thermal;
+pub mod transport;
 
 use serde::{Deserialize, Serialize};
 

@@ -39,7 +39,22 @@ pub fn step(
     graph: &mut FlowGraph,
     area: &mut Vec<f32>,
 ) {
-    let rise = uplift * dt;
+    route(z, nx, ny, dx, dy, uplift * dt, graph);
+    graph.accumulate(dx * dy, area);
+    incise(z, graph, area, law, dt);
+}
+
+/// The first half of [`step`]: uplift by `rise`, then the receivers and the stack in
+/// `graph`, depressions filled.
+pub fn route(
+    z: &mut [f32],
+    nx: usize,
+    ny: usize,
+    dx: f32,
+    dy: f32,
+    rise: f32,
+    graph: &mut FlowGraph,
+) {
     let has_nodata = FlowGraph::has_nodata(z);
     if rise != 0.0 {
         for j in 1..ny.saturating_sub(1) {
@@ -60,7 +75,11 @@ pub fn step(
             graph.update(z, nx, ny, dx, dy);
         }
     }
-    graph.accumulate(dx * dy, area);
+}
+
+/// The second half of [`step`]: every sample eroded towards its receiver in `graph`'s
+/// stack order, with drainage areas `area` (m²).
+pub fn incise(z: &mut [f32], graph: &FlowGraph, area: &[f32], law: StreamPower, dt: f32) {
     let (rec, len) = (graph.receivers(), graph.lengths());
     let (kdt, m, n) = (f64::from(law.k) * f64::from(dt), f64::from(law.m), law.n);
     for &k in graph.stack() {

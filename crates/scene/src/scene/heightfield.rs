@@ -28,8 +28,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::dem::detail::DetailParams;
 use crate::dem::implicit::{HeightfieldField, ImplicitParams};
-use crate::dem::{Dem, DemError, Interpolation, ReadOptions};
-use crate::field::{Fbm, NoiseSpec};
+use crate::dem::{Dem, DemError, Heightfield, Inset, Interpolation, ReadOptions};
+use crate::erosion::amplify::{AmplifyParams, amplify};
+use crate::field::{Fbm, NoiseSpec, Rect};
 use crate::io::DEFAULT_MEMORY_BUDGET;
 use crate::procedural::GenerateSpec;
 use crate::value::{Finite, NonNegative, P2, Positive, Unit};
@@ -111,7 +112,129 @@ pub struct HeightfieldSpec {
     /// Detail amplification (Frasson et al. §5): rock-scale 3D relief on the DEM.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub detail: Option<DetailSpec>,
+    /// Eroded amplification: gullies, channels, talus and deposits carved below the DEM's
+    /// cell over the job's region ([`crate::erosion::amplify`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub amplify: Option<AmplifySpec>,
 }
+
+/// The `amplify:` of a heightfield leaf: `()` for the defaults, over the job's region at
+/// the job's cell.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AmplifySpec {
+    /// The fine lattice's cell, metres (default: the job's cell).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cell: Option<Positive>,
+    /// The rectangle amplified, tree frame, `((x0, y0), (x1, y1))` (default: the job
+    /// region's footprint).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub region: Option<(P2, P2)>,
+    /// Erosion steps (default 40).
+    #[serde(default = "default_amplify_steps")]
+    pub steps: u32,
+    /// Stream-power erodibility per step, `K·dt`, drainage area in m² (default 0.015).
+    #[serde(default = "default_erodibility")]
+    pub erodibility: Positive,
+    /// The most the amplification changes the DEM by, about, metres (default 12).
+    #[serde(default = "default_relief")]
+    pub relief: Positive,
+    /// Hillslope diffusivity per step, m² (default 0.5).
+    #[serde(default = "default_diffusion")]
+    pub diffusion: NonNegative,
+    /// Angle of repose of the talus, degrees (default 35).
+    #[serde(default = "default_talus")]
+    pub talus: Positive,
+    /// Amplitude of the initial roughness, metres (default 8).
+    #[serde(default = "default_roughness")]
+    pub roughness: NonNegative,
+    /// Deposition coefficient `G` of the sediment carried down (default 1; 0: none).
+    #[serde(default = "default_transport")]
+    pub transport: NonNegative,
+    /// Added to the scene's seed for the roughness.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub seed_offset: u32,
+}
+
+/// Most steps an amplification takes.
+pub const MAX_AMPLIFY_STEPS: u32 = 1000;
+
+fn default_amplify_steps() -> u32 {
+    40
+}
+
+fn default_erodibility() -> Positive {
+    Positive(0.015)
+}
+
+fn default_relief() -> Positive {
+    Positive(12.0)
+}
+
+fn default_diffusion() -> NonNegative {
+    NonNegative(0.5)
+}
+
+fn default_talus() -> Positive {
+    Positive(35.0)
+}
+
+fn default_roughness() -> NonNegative {
+    NonNegative(8.0)
+}
+
+fn default_transport() -> NonNegative {
+    NonNegative(1.0)
+}
+
+impl AmplifySpec {
+    /// The parameters, the cell and region defaulting to the job's `frame` (its region's
+    /// footprint and cell), the noise seeded from the scene's `seed`; an error naming the
+    /// field when a value is out of range or nothing gives the region or cell.
+    pub fn params(&self, seed: u32, frame: Option<(Rect, f32)>) -> Result<AmplifyParams, String> {
+        let region = match (self.region, frame) {
+            (Some((a, b)), _) => Rect::new(a.0.min(b.0), a.0.max(b.0)),
+            (None, Some((r, _))) => r,
+            (None, None) => {
+                return Err("amplify.region: give it, or a job region to default to".into());
+            }
+        };
+        let cell = match (self.cell, frame) {
+            (Some(c), _) => c.get(),
+            (None, Some((_, c))) => c,
+            (None, None) => return Err("amplify.cell: give it, or a job to default to".into()),
+        };
+        if self.steps > MAX_AMPLIFY_STEPS {
+            return Err(format!(
+                "amplify.steps: at most {MAX_AMPLIFY_STEPS}, got {}",
+                self.steps
+            ));
+        }
+        if self.talus.get() >= 90.0 {
+            return Err(format!(
+                "amplify.talus: a slope angle in degrees below 90, got {}",
+                self.talus
+            ));
+        }
+        Ok(AmplifyParams {
+            cell,
+            region,
+            steps: self.steps,
+            erodibility: self.erodibility.get(),
+            m: AMPLIFY_M,
+            relief: self.relief.get(),
+            diffusion: self.diffusion.get(),
+            talus: self.talus.get(),
+            roughness: self.roughness.get(),
+            transport: self.transport.get(),
+            seed: seed.wrapping_add(self.seed_offset),
+        })
+    }
+}
+
+/// The drainage-area exponent of the amplification's stream power: with `n = 1`, the
+/// concavity of its channels (Whipple 2004: real rivers 0.35 to 0.65).
+pub const AMPLIFY_M: f32 = 0.45;
 
 fn default_flat() -> Unit {
     Unit(0.25)
@@ -175,6 +298,7 @@ impl HeightfieldSpec {
             cell_size: None,
             z_range: None,
             detail: None,
+            amplify: None,
         }
     }
 
@@ -207,18 +331,20 @@ impl HeightfieldSpec {
     }
 
     /// Loads the DEM (`source` resolved against `base_dir`, or generated) and
-    /// implicitizes it (scene seed 0).
+    /// implicitizes it (scene seed 0, no job).
     pub fn load(&self, base_dir: &Path) -> Result<HeightfieldField, DemError> {
-        self.load_with(base_dir, &mut DemCache::new(DEFAULT_MEMORY_BUDGET), 0)
+        self.load_with(base_dir, &mut DemCache::new(DEFAULT_MEMORY_BUDGET), 0, None)
     }
 
     /// [`HeightfieldSpec::load`] sharing decoded DEMs through `cache` (one per compile),
-    /// with the scene's noise `seed`.
+    /// with the scene's noise `seed` and the job's `frame` (its region's footprint and its
+    /// cell), which an `amplify` without its own region and cell takes.
     pub fn load_with(
         &self,
         base_dir: &Path,
         cache: &mut DemCache,
         seed: u32,
+        frame: Option<(Rect, f32)>,
     ) -> Result<HeightfieldField, DemError> {
         let named = |e| match e {
             DemError::Invalid { what } => DemError::Invalid {
@@ -235,8 +361,17 @@ impl HeightfieldSpec {
                 }));
             }
         };
-        let field = HeightfieldField::new(&dem.heightfield, &self.params(seed)).map_err(named)?;
-        Ok(field.with_georef(dem.georef.clone()))
+        let field = HeightfieldField::new(&dem.heightfield, &self.params(seed))
+            .map_err(named)?
+            .with_georef(dem.georef.clone());
+        let Some(a) = &self.amplify else {
+            return Ok(field);
+        };
+        let p = a
+            .params(seed, frame)
+            .map_err(|what| named(DemError::Invalid { what }))?;
+        let inset = cache.amplified(&dem, &field, &p).map_err(named)?;
+        field.with_inset(inset).map_err(named)
     }
 }
 
@@ -245,11 +380,13 @@ impl HeightfieldSpec {
 type CacheKey = (PathBuf, Option<u32>, Option<(u32, u32)>, Interpolation);
 
 /// Decoded DEMs by path (and resampling), shared by the heightfield nodes of one compile,
-/// plus the readers' notices for the caller to show.
+/// with their amplifications, plus the readers' notices for the caller to show.
 #[derive(Debug)]
 pub struct DemCache {
     budget: u64,
     dems: HashMap<CacheKey, Arc<Dem>>,
+    /// Amplifications by DEM (its address in `dems`), placed grid and parameters.
+    insets: Vec<(usize, Heightfield, AmplifyParams, Arc<Inset>)>,
     notices: Vec<String>,
 }
 
@@ -259,8 +396,31 @@ impl DemCache {
         DemCache {
             budget,
             dems: HashMap::new(),
+            insets: Vec::new(),
             notices: Vec::new(),
         }
+    }
+
+    /// The amplification `p` of `field` (the leaf built from `dem`), made once per compile.
+    fn amplified(
+        &mut self,
+        dem: &Arc<Dem>,
+        field: &HeightfieldField,
+        p: &AmplifyParams,
+    ) -> Result<Arc<Inset>, DemError> {
+        let id = Arc::as_ptr(dem) as usize;
+        let placed = field.heightfield();
+        if let Some((.., inset)) = self
+            .insets
+            .iter()
+            .find(|(d, hf, q, _)| *d == id && q == p && hf == placed)
+        {
+            return Ok(inset.clone());
+        }
+        let interp = field.params().interpolation;
+        let inset = Arc::new(amplify(placed, interp, p, self.budget)?);
+        self.insets.push((id, placed.clone(), *p, inset.clone()));
+        Ok(inset)
     }
 
     /// Notices of every DEM loaded so far, in load order.

@@ -124,15 +124,41 @@ pub fn fill_in_place(z: &mut [f32], nx: usize, ny: usize) {
 /// cells). Water that reaches a sample with no lower neighbour (the edge, next to
 /// nodata) leaves there. Nodata has area 0.
 pub fn drainage_area(filled: &Heightfield) -> Vec<f32> {
-    let (nx, ny) = (filled.nx(), filled.ny());
-    let z = filled.samples();
-    let c = filled.cell();
+    let mut area = Vec::new();
+    mfd_area(
+        filled.samples(),
+        filled.nx(),
+        filled.ny(),
+        filled.cell(),
+        FREEMAN_EXPONENT,
+        &mut area,
+    );
+    area
+}
+
+/// [`drainage_area`] of the samples `z` of an `nx × ny` grid of `cell`s, into `area`, with
+/// `exponent` on the slopes (Freeman's 1.1; 1 is Quinn et al. 1991's partition by slope,
+/// without the power's cost).
+pub fn mfd_area(
+    z: &[f32],
+    nx: usize,
+    ny: usize,
+    cell: glam::Vec2,
+    exponent: f32,
+    area: &mut Vec<f32>,
+) {
+    let c = cell;
     let cell_area = c.x * c.y;
     let dist: [f32; 8] = NEIGHBOURS.map(|(di, dj)| (di as f32 * c.x).hypot(dj as f32 * c.y));
-    // Highest first; ties by index, so the order is fixed.
-    let mut order: Vec<usize> = (0..z.len()).filter(|&k| !z[k].is_nan()).collect();
-    order.sort_unstable_by(|&a, &b| z[b].total_cmp(&z[a]).then(a.cmp(&b)));
-    let mut area: Vec<f64> = z
+    // Highest first; ties by index, so the order is fixed: keys of the elevation's ordered
+    // bits, complemented, then the index.
+    let mut order: Vec<u64> = (0..z.len())
+        .filter(|&k| !z[k].is_nan())
+        .map(|k| u64::from(!ordered(z[k])) << 32 | k as u64)
+        .collect();
+    order.sort_unstable();
+    let order = order.into_iter().map(|key| (key & 0xffff_ffff) as usize);
+    let mut acc: Vec<f64> = z
         .iter()
         .map(|v| {
             if v.is_nan() {
@@ -149,20 +175,26 @@ pub fn drainage_area(filled: &Heightfield) -> Vec<f32> {
         for (d, n) in neighbours(k, nx, ny) {
             let drop = z[k] - z[n];
             if drop > 0.0 {
-                let w = f64::from(drop / dist[d]).powf(f64::from(FREEMAN_EXPONENT));
+                let s = f64::from(drop / dist[d]);
+                let w = if exponent == 1.0 {
+                    s
+                } else {
+                    s.powf(f64::from(exponent))
+                };
                 weights[count] = (n, w);
                 total += w;
                 count += 1;
             }
         }
         if total > 0.0 {
-            let a = area[k];
+            let a = acc[k];
             for &(n, w) in &weights[..count] {
-                area[n] += a * w / total;
+                acc[n] += a * w / total;
             }
         }
     }
-    area.into_iter().map(|a| a as f32).collect()
+    area.clear();
+    area.extend(acc.into_iter().map(|a| a as f32));
 }
 
 /// Whether sample `k` of `hf` has no lower 8-neighbour while not being on the grid's edge
