@@ -76,6 +76,14 @@ fn leaves() -> Vec<(&'static str, HeightfieldField)> {
             ),
         ),
         (
+            "utm amplified",
+            utm_leaf_with(
+                60.0,
+                Interpolation::Bicubic,
+                ", amplify: Some((region: Some(((12000, 14000), (12900, 14700))), cell: Some(10), steps: 12))",
+            ),
+        ),
+        (
             "synthetic detail",
             synthetic_with(
                 Interpolation::Bilinear,

@@ -8,6 +8,7 @@ mod gltf_validator;
 mod mesh_fields;
 
 // Suites.
+mod amplify;
 mod cli_inputs;
 mod curves_cli;
 mod curves_field;

@@ -27,8 +27,9 @@
 //!
 //! With an inset ([`HeightfieldField::with_inset`]), `h` becomes `h(x, y) + δ(x, y)`: `δ` a
 //! fine grid of changes over a rectangle, zero on its border, such as the eroded
-//! amplification of the scene's erosion module. Each DEM cell's range and slope bound
-//! widen by those of the inset's cells over it.
+//! amplification of the scene's erosion module. Its cells have a pyramid of their own: over
+//! a footprint, the range and slope bound of `h + δ` are those of `h` plus those of `δ` over
+//! the inset's cells under the footprint (0 where it reaches past the inset).
 
 use std::sync::Arc;
 
@@ -111,8 +112,9 @@ pub struct HeightfieldField {
     cells: MinMaxPyramid<4>,
     lip_h: f32,
     detail: Option<Detail>,
-    /// The changes `δ` added to `h` over the inset's extent (tree frame), 0 beyond it.
-    inset: Option<Arc<Inset>>,
+    /// The changes `δ` added to `h` over the inset's extent (tree frame), 0 beyond it,
+    /// and per inset cell `[min δ, max δ, slope bound of δ]`.
+    inset: Option<(Arc<Inset>, MinMaxPyramid<3>)>,
     support: Aabb,
     params: ImplicitParams,
     georef: Option<Georef>,
@@ -207,12 +209,22 @@ impl HeightfieldField {
                 [lo, hi, s, reach]
             })
             .collect();
-        let per_cell = match &inset {
-            Some(inset) => with_inset_cells(&placed, inset.delta(), interp, per_cell),
-            None => per_cell,
-        };
         let cells = MinMaxPyramid::new(cx, cy, per_cell);
+        let inset = inset.map(|i| {
+            let d = i.delta();
+            let (dx, dy) = d.cells();
+            let per_cell = d
+                .cell_ranges(interp)
+                .into_iter()
+                .zip(d.cell_slopes(interp))
+                .map(|([lo, hi], [_, s])| [lo, hi, s])
+                .collect();
+            (i, MinMaxPyramid::new(dx, dy, per_cell))
+        });
         let [zmin, zmax, lip_h, _] = cells.total();
+        // δ is 0 on the inset's border, so its range holds 0
+        let [dlo, dhi, ds] = inset.as_ref().map_or([0.0; 3], |(_, p)| p.total());
+        let (zmin, zmax, lip_h) = (zmin + dlo, zmax + dhi, lip_h + ds);
         if zmin > zmax {
             return bad("the heightfield has no cell with a surface (too much nodata)".into());
         }
@@ -299,7 +311,7 @@ impl HeightfieldField {
         match self
             .inset
             .as_ref()
-            .map(|d| d.delta().sample(xy, self.interp))
+            .map(|(d, _)| d.delta().sample(xy, self.interp))
         {
             Some(dh) if !dh.is_nan() => h + dh,
             _ => h,
@@ -313,7 +325,7 @@ impl HeightfieldField {
         match self
             .inset
             .as_ref()
-            .map(|d| d.delta().sample_grad(xy, self.interp))
+            .map(|(d, _)| d.delta().sample_grad(xy, self.interp))
         {
             Some((dh, dg)) if !dh.is_nan() => (h + dh, g + dg),
             _ => (h, g),
@@ -322,7 +334,7 @@ impl HeightfieldField {
 
     /// The inset (its changes `δ` in the tree frame, and their traces), if the leaf has one.
     pub fn inset(&self) -> Option<&Inset> {
-        self.inset.as_deref()
+        self.inset.as_ref().map(|(i, _)| &**i)
     }
 
     /// The elevation of the terrain surface over `xy` (NaN outside the cells with a
@@ -395,9 +407,37 @@ impl HeightfieldField {
     /// (empty where no cell has a surface), the slope bound `s ≥ 0` of `h` and the
     /// detail's reach `A·max m ≥ 0` (0 without detail).
     #[inline]
-    fn cells_under(&self, (i0, i1, j0, j1): (usize, usize, usize, usize)) -> (Interval, f32, f32) {
+    fn cells_under(
+        &self,
+        fp: &Rect,
+        (i0, i1, j0, j1): (usize, usize, usize, usize),
+    ) -> (Interval, f32, f32) {
         let [lo, hi, s, reach] = self.cells.query(i0, i1, j0, j1);
-        (Interval { lo, hi }, s.max(0.0), reach.max(0.0))
+        let (h, s) = match &self.inset {
+            Some((inset, cells)) if lo <= hi => {
+                let d = inset.delta();
+                match d.cells_overlapping(fp) {
+                    Some((a0, a1, b0, b1)) => {
+                        let [dlo, dhi, ds] = cells.query(a0, a1, b0, b1);
+                        let (dlo, dhi) = if d.extent().contains_rect(fp) {
+                            (dlo, dhi)
+                        } else {
+                            (dlo.min(0.0), dhi.max(0.0))
+                        };
+                        (
+                            Interval {
+                                lo: lo + dlo,
+                                hi: hi + dhi,
+                            },
+                            s + ds,
+                        )
+                    }
+                    None => (Interval { lo, hi }, s),
+                }
+            }
+            _ => (Interval { lo, hi }, s),
+        };
+        (h, s.max(0.0), reach.max(0.0))
     }
 
     /// The range of `d` over `b` where `|d| ≤ reach` (`A·max m` over the cells under `b`;
@@ -483,7 +523,7 @@ impl HeightfieldField {
         if e.hi <= 0.0 {
             return 0.0;
         }
-        let (cells, s, reach) = self.cells_under((i0, i1, j0, j1));
+        let (cells, s, reach) = self.cells_under(&fp, (i0, i1, j0, j1));
         let z = b.z();
         // h + d − z over b, with |d| ≤ reach (the centre's detail would sharpen σ's slope
         // only where it is small anyway)
@@ -517,46 +557,6 @@ impl HeightfieldField {
     fn eps(&self, m: f32) -> f32 {
         self.prism_shape().eps(m)
     }
-}
-
-/// `per_cell` (`[lo, hi, slope, reach]` per cell of `dem`) widened by the inset `delta`:
-/// each DEM cell's range by the range of `δ` over the inset cells overlapping it (with 0
-/// where the DEM cell reaches past the inset), its slope bound by theirs.
-fn with_inset_cells(
-    dem: &Heightfield,
-    delta: &Heightfield,
-    interp: super::Interpolation,
-    mut per_cell: Vec<[f32; 4]>,
-) -> Vec<[f32; 4]> {
-    let (ranges, slopes) = (delta.cell_ranges(interp), delta.cell_slopes(interp));
-    let (cx, _) = dem.cells();
-    let (dx, _) = delta.cells();
-    let inset = delta.extent();
-    for (k, c) in per_cell.iter_mut().enumerate() {
-        let lo = dem.origin() + Vec2::new((k % cx) as f32, (k / cx) as f32) * dem.cell();
-        let cell = Rect::new(lo, lo + dem.cell());
-        let Some((i0, i1, j0, j1)) = delta.cells_overlapping(&cell) else {
-            continue;
-        };
-        let inside = inset.contains_rect(&cell);
-        let (mut dlo, mut dhi, mut ds) = if inside {
-            (f32::INFINITY, f32::NEG_INFINITY, 0.0f32)
-        } else {
-            (0.0f32, 0.0f32, 0.0f32)
-        };
-        for j in j0..=j1 {
-            for i in i0..=i1 {
-                let [a, b] = ranges[i + dx * j];
-                dlo = dlo.min(a);
-                dhi = dhi.max(b);
-                ds = ds.max(slopes[i + dx * j][1]);
-            }
-        }
-        if c[0] <= c[1] {
-            *c = [c[0] + dlo, c[1] + dhi, c[2] + ds, c[3]];
-        }
-    }
-    per_cell
 }
 
 impl Field for HeightfieldField {
@@ -601,7 +601,7 @@ impl Field for HeightfieldField {
         let Some((i0, i1, j0, j1)) = self.hf.cells_overlapping(&fp) else {
             return Interval::ZERO;
         };
-        let (h, s, reach) = self.cells_under((i0, i1, j0, j1));
+        let (h, s, reach) = self.cells_under(&fp, (i0, i1, j0, j1));
         if e.hi <= 0.0 || h.is_empty() {
             return Interval::ZERO;
         }
@@ -652,7 +652,7 @@ impl Field for HeightfieldField {
         let Some((i0, i1, j0, j1)) = self.hf.cells_overlapping(fp) else {
             return self.prism_shape().z_bands(e, Interval::EMPTY, z, out);
         };
-        let (cells, s, reach) = self.cells_under((i0, i1, j0, j1));
+        let (cells, s, reach) = self.cells_under(fp, (i0, i1, j0, j1));
         // Sharpened around the footprint's centre where the footprint lies inside Ω: a
         // mesh column's band is then about as tall as the relief under it, not as a
         // whole DEM cell's.

@@ -10,7 +10,7 @@ pub mod splice;
 pub mod validate;
 pub mod volume;
 
-pub use heightfield::{DemCache, HeightfieldSpec};
+pub use heightfield::{AmplifySpec, DemCache, HeightfieldSpec};
 pub use load::{SceneError, SceneFile, load, parse_scene};
 pub use spec::{FORMAT_VERSION, NodeSpec, Scene};
 pub use volume::VolumeFile;
