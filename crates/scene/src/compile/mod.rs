@@ -66,7 +66,7 @@ fn volume_key(
     seed: u32,
     max_memory: u64,
     base_dir: &Path,
-    terrain: Option<(&HeightfieldSpec, u32, Option<(Rect, f32)>)>,
+    terrain: Option<TerrainKey>,
 ) -> u64 {
     let mut files: Vec<PathBuf> = Vec::new();
     if let CurveSource::Path(p) = &f.curves {
@@ -99,6 +99,10 @@ fn volume_key(
     parts.push(&contents);
     content_hash(&parts)
 }
+
+/// What of the terrain a Feature Volume's run depends on: its spec, the scene's seed and
+/// the job's frame (an amplification's default region and cell).
+type TerrainKey<'a> = (&'a HeightfieldSpec, u32, Option<(Rect, f32)>);
 
 /// The job region's footprint and the job's cell, which a heightfield's `amplify`
 /// defaults to.

@@ -77,9 +77,9 @@ mod tests {
             assert!(net(i) < 0.0, "the steep reach gained at {i}: {}", net(i));
         }
         assert!(net(6) > 0.0, "nothing settled below the break");
-        for k in nx..2 * nx {
+        for (k, &v) in z.iter().enumerate().take(2 * nx - 1).skip(nx + 1) {
             let top = [k - nx, k + nx, k - 1, k + 1].map(|n| before[n]);
-            assert!(z[k] <= top.into_iter().fold(f32::MIN, f32::max) + 1e-6);
+            assert!(v <= top.into_iter().fold(f32::MIN, f32::max) + 1e-6);
         }
         let total: f32 = (0..nx * ny).map(|k| z[k] - before[k]).sum();
         let cut: f32 = eroded.iter().sum();
