@@ -1,6 +1,8 @@
 //! The heightfield leaf's hot paths on the Jacksboro UTM DEM resampled to 30 m (1030 × 1087
 //! samples): point evaluation, per-column z-bands and elevation queries, block evaluation,
-//! and the generic interval-subdivision z-bands as the baseline the pyramid replaces.
+//! and the generic interval-subdivision z-bands as the baseline the pyramid replaces; and
+//! the eroded amplification of the bundled crop over the main job's region and over the
+//! issue's 1,560 × 490 m region at 2.5 m (issue 38: ≤ 2 s on 2 cores).
 
 #[path = "../tests/common/rng.rs"]
 #[allow(dead_code)] // the draws this bench does not use
@@ -111,5 +113,34 @@ fn bench(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, bench);
+/// The eroded amplification (a tree's `amplify: ()`) of the main job's DEM over `region`
+/// at 2.5 m.
+fn amplification(c: &mut Criterion) {
+    use karstic::dem::Interpolation;
+    use karstic::erosion::amplify::amplify;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/data/jacksboro_crop.asc");
+    let dem = karstic::dem::read(&path, &Default::default())
+        .expect("the bundled DEM")
+        .heightfield;
+    let spec: karstic::scene::AmplifySpec = ron::from_str("()").expect("defaults");
+    let mut g = c.benchmark_group("amplify");
+    g.sample_size(10);
+    for (name, min, max) in [
+        (
+            "main job region 660x490 m",
+            (3300.0, 4840.0),
+            (3960.0, 5330.0),
+        ),
+        ("1560x490 m", (3000.0, 4840.0), (4560.0, 5330.0)),
+    ] {
+        let region = Rect::new(Vec2::from(min), Vec2::from(max));
+        let p = spec.params(11, Some((region, 2.5))).expect("params");
+        g.bench_function(name, |b| {
+            b.iter(|| amplify(&dem, Interpolation::Bicubic, black_box(&p), 8 << 30).unwrap())
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench, amplification);
 criterion_main!(benches);

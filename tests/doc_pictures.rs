@@ -22,7 +22,7 @@ use std::path::Path;
 
 use image::imageops::FilterType;
 use karstic::scene::spec::Nary;
-use karstic::scene::{NodeSpec, Scene};
+use karstic::scene::{HeightfieldSpec, NodeSpec, Scene};
 use karstic::value::Positive;
 use karstic::voxel::spec::CurveSource;
 
@@ -77,6 +77,8 @@ karstic heightmap trees/jacksboro_caves.ron -o top.tif --cell 2.5 --region 4100 
 karstic render trees/heightmap_top.ron -o heightmap_top.png --camera 4258 4925 662 4281 5012 642 --fov 40 --quiet
 karstic render trees/jacksboro_bare.ron -o detail_on.png --camera 3920 5150 790 3560 5120 880 --fov 50 --quiet
 karstic render trees/jacksboro_smooth.ron -o detail_off.png --camera 3920 5150 790 3560 5120 880 --fov 50 --quiet
+karstic render trees/jacksboro_bare.ron -o amplify_on.png --camera 3630 4700 1150 3630 5100 860 --fov 50 --size 640 360 --quiet
+karstic render trees/jacksboro_unamplified.ron -o amplify_off.png --camera 3630 4700 1150 3630 5100 860 --fov 50 --size 640 360 --quiet
 karstic render trees/eroded_range.ron -o eroded_range.png --camera 600 380 300 660 700 200 --fov 50 --quiet
 karstic render trees/strata_cliff.ron -o strata_cliff.png --quiet
 karstic render trees/strata_islands.ron -o strata_islands.png --quiet
@@ -121,6 +123,8 @@ const PICTURES: &[(&str, &str)] = &[
     ("heightmap_top.png", "heightmap_top.png"),
     ("detail_on.png", "detail_on.png"),
     ("detail_off.png", "detail_off.png"),
+    ("amplify_on.png", "amplify_on.png"),
+    ("amplify_off.png", "amplify_off.png"),
     ("eroded_range.png", "eroded_range.png"),
     ("strata_cliff.png", "strata_cliff.png"),
     ("strata_islands.png", "strata_islands.png"),
@@ -162,8 +166,9 @@ const UNAWARE_GROUND: f32 = 80.0;
 /// before amplification, seen as the main job sees it), and `arch_unaware.ron`, the arch
 /// volume of `curves/jacksboro_arch.ron` built without the terrain (`on_terrain: false`)
 /// but with a ground curve under the apex, united with the terrain — what a Feature
-/// Volume did to a terrain before `Replace`; `jacksboro_smooth.ron`, the terrain without its detail amplification; and
-/// `heightmap_top.ron`, the main job's heightmap as a scene.
+/// Volume did to a terrain before `Replace`; `jacksboro_smooth.ron`, the terrain without its
+/// detail amplification; `jacksboro_unamplified.ron`, the terrain without its eroded
+/// amplification; and `heightmap_top.ron`, the main job's heightmap as a scene.
 fn prepare(trees: &Path) {
     let mut main = karstic::scene::load(trees.join("jacksboro_bluff.ron"))
         .expect("the main job's tree")
@@ -215,6 +220,21 @@ fn prepare(trees: &Path) {
     let NodeSpec::Heightfield(mut smooth) = dem.clone() else {
         panic!("the main job's terrain is a Heightfield")
     };
+    assert!(
+        smooth.amplify.is_some(),
+        "the main job's terrain is amplified"
+    );
+    write(
+        "jacksboro_unamplified.ron",
+        Scene {
+            name: Some("jacksboro_unamplified".into()),
+            root: NodeSpec::Heightfield(HeightfieldSpec {
+                amplify: None,
+                ..smooth.clone()
+            }),
+            ..main.clone()
+        },
+    );
     assert!(smooth.detail.is_some(), "the main job's terrain has detail");
     smooth.detail = None;
     write(

@@ -56,9 +56,8 @@ fn name(path: &Path) -> String {
 /// the GPU walks in full at every point; lavapipe ends a shader's loop after its
 /// iteration budget, so the software adapter's values lose the carving there (a tape
 /// that skips far children, as the CPU's BVH does, is not built yet). And the bluff: its
-/// geology colours its rock, which the shader cannot, and its tape's value differs from
-/// its tree's by 1.1e-4 at one point near its cliff line's northern end (an open finding
-/// of issue 36's closing note).
+/// terrain's eroded amplification has no encoding, and its geology colours its rock,
+/// which the shader cannot.
 const CPU_ONLY: &[&str] = &[
     "elevation_valley",
     "fin_arch",

@@ -16,7 +16,7 @@ pub(super) struct MasksArgs {
     /// Tree file (.ron).
     tree: PathBuf,
     /// Output folder (created if needed): STEM_slope.png, STEM_rock.png, STEM_cave.png,
-    /// STEM_flow.png and STEM_masks.json.
+    /// STEM_flow.png, STEM_talus.png, STEM_deposit.png, STEM_wear.png and STEM_masks.json.
     #[arg(short, long)]
     output: PathBuf,
     /// Pixel size in metres (default: the DEM's cell, or 1/512 of the support's width).

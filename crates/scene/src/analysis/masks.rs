@@ -14,6 +14,10 @@
 //! * **flow**: drainage area of the terrain heightfield (of the top surface without one)
 //!   after depression filling ([`super::flow`]), `ln(A / a) / ln(A_max / a)` for a pixel
 //!   of area `a`, so channels show at every scale.
+//! * **talus**, **deposit**, **wear**: the traces of the terrain's eroded amplification
+//!   ([`crate::erosion::amplify`]), 0 without one: the thickness of talus and of
+//!   sediment on the ground (255 = [`LOOSE_FULL`] metres or more) and how deep running
+//!   water cut below the DEM (255 = [`WEAR_FULL`] metres or more).
 
 use std::path::{Path, PathBuf};
 
@@ -24,7 +28,7 @@ use rayon::prelude::*;
 
 use super::column::{Column, ColumnProbe};
 use super::flow::{drainage_area, fill_depressions};
-use crate::dem::Heightfield;
+use crate::dem::{Heightfield, Trace};
 use crate::field::{Field, Rect, Tree};
 use crate::io::{IoError, check_budget, write_atomic, write_bytes_atomic};
 use crate::render::Materials;
@@ -50,11 +54,17 @@ pub enum MaskError {
     },
 }
 
+/// Thickness of talus or sediment that a mask shows as 255, metres.
+pub const LOOSE_FULL: f32 = 2.0;
+
+/// Depth of cutting below the DEM that the wear mask shows as 255, metres.
+pub const WEAR_FULL: f32 = 4.0;
+
 /// Pixels per side at most.
 pub const MAX_SIDE: usize = 32_768;
 
-/// Bytes of working memory per pixel (the four masks, the column, the flow grids).
-const BYTES_PER_PIXEL: u64 = 48;
+/// Bytes of working memory per pixel (the seven masks, the column, the flow grids).
+const BYTES_PER_PIXEL: u64 = 60;
 
 /// The pixels of the masks: `nx × ny` cells over `frame`, pixel `(i, j)` (`j = 0` the
 /// southern row) centred at `frame.min + (i + ½, j + ½)·pixel`.
@@ -130,11 +140,25 @@ pub enum Layer {
     Cave,
     /// Flow accumulation.
     Flow,
+    /// Talus of the eroded amplification.
+    Talus,
+    /// Sediment of the eroded amplification.
+    Deposit,
+    /// Cutting by running water in the eroded amplification.
+    Wear,
 }
 
 impl Layer {
     /// Every layer.
-    pub const ALL: [Layer; 4] = [Layer::Slope, Layer::Rock, Layer::Cave, Layer::Flow];
+    pub const ALL: [Layer; 7] = [
+        Layer::Slope,
+        Layer::Rock,
+        Layer::Cave,
+        Layer::Flow,
+        Layer::Talus,
+        Layer::Deposit,
+        Layer::Wear,
+    ];
 
     /// The layer's name, the suffix of its file.
     pub fn name(self) -> &'static str {
@@ -143,11 +167,14 @@ impl Layer {
             Layer::Rock => "rock",
             Layer::Cave => "cave",
             Layer::Flow => "flow",
+            Layer::Talus => "talus",
+            Layer::Deposit => "deposit",
+            Layer::Wear => "wear",
         }
     }
 }
 
-/// The four masks over a raster, each value in `[0, 1]`, row-major from the south
+/// The masks over a raster, each value in `[0, 1]`, row-major from the south
 /// (`v[i + nx·j]`).
 #[derive(Clone, Debug)]
 pub struct Masks {
@@ -161,6 +188,12 @@ pub struct Masks {
     pub cave: Vec<f32>,
     /// Log-scaled drainage area.
     pub flow: Vec<f32>,
+    /// Talus thickness over [`LOOSE_FULL`].
+    pub talus: Vec<f32>,
+    /// Sediment thickness over [`LOOSE_FULL`].
+    pub deposit: Vec<f32>,
+    /// Depth cut below the DEM over [`WEAR_FULL`].
+    pub wear: Vec<f32>,
 }
 
 /// What one pixel's column holds.
@@ -191,12 +224,24 @@ impl Masks {
             })
             .collect();
         let flow = flow_mask(materials, raster, &pixels);
+        let inset = materials.ground.as_ref().and_then(|g| g.inset());
+        let trace = |t: Trace, full: f32| -> Vec<f32> {
+            (0..raster.nx * raster.ny)
+                .map(|k| {
+                    let xy = raster.center(k % raster.nx, k / raster.nx);
+                    inset.map_or(0.0, |i| (i.trace_at(t, xy) / full).clamp(0.0, 1.0))
+                })
+                .collect()
+        };
         Masks {
             raster: *raster,
             slope: pixels.iter().map(|p| p.slope).collect(),
             rock: pixels.iter().map(|p| p.rock).collect(),
             cave: pixels.iter().map(|p| p.cave).collect(),
             flow,
+            talus: trace(Trace::Talus, LOOSE_FULL),
+            deposit: trace(Trace::Deposit, LOOSE_FULL),
+            wear: trace(Trace::Incision, WEAR_FULL),
         }
     }
 
@@ -207,6 +252,9 @@ impl Masks {
             Layer::Rock => &self.rock,
             Layer::Cave => &self.cave,
             Layer::Flow => &self.flow,
+            Layer::Talus => &self.talus,
+            Layer::Deposit => &self.deposit,
+            Layer::Wear => &self.wear,
         }
     }
 
@@ -256,6 +304,9 @@ impl Masks {
             "rock": "bare-rock cover of the material model, 0..255",
             "cave": "255 = solid over empty space (cave, arch, overhang); below: the top surface's departure from the terrain",
             "flow": "ln(drainage area / pixel area) / ln(max / pixel area), 0..255",
+            "talus": format!("talus thickness of the eroded amplification, 255 = {LOOSE_FULL} m or more"),
+            "deposit": format!("sediment thickness of the eroded amplification, 255 = {LOOSE_FULL} m or more"),
+            "wear": format!("depth cut below the DEM by the eroded amplification, 255 = {WEAR_FULL} m or more"),
         });
         let json = files.last().expect("the sidecar");
         write_atomic(json, |w| {

@@ -68,12 +68,12 @@ pub fn route(
     if graph.update(z, nx, ny, dx, dy) > 0 {
         // Most pits are single samples that rounding or diffusion left on a filled flat:
         // raising each to just above its lowest neighbour is what the flood would do to
-        // them, at a fraction of its cost. What remains takes the whole flood.
-        raise_pits(z, nx, ny, graph, has_nodata);
-        if graph.update(z, nx, ny, dx, dy) > 0 {
+        // them, at a fraction of its cost. Where that does not drain them all, the flood
+        // fills what remains (and the receivers are found once more, not twice).
+        if !raise_pits(z, nx, ny, graph, has_nodata) {
             fill_in_place(z, nx, ny);
-            graph.update(z, nx, ny, dx, dy);
         }
+        graph.update(z, nx, ny, dx, dy);
     }
 }
 
@@ -108,7 +108,8 @@ pub fn incise(z: &mut [f32], graph: &FlowGraph, area: &[f32], law: StreamPower, 
 /// `graph` (valid, non-base samples that are their own receivers) and following the
 /// neighbours a raise turns into pits, for at most [`LOCAL_RAISES`] raises per initial
 /// pit (a deep basin would take one per float step: the flood's work). In a fixed order.
-fn raise_pits(z: &mut [f32], nx: usize, ny: usize, graph: &FlowGraph, has_nodata: bool) {
+/// Returns whether no pit is left.
+fn raise_pits(z: &mut [f32], nx: usize, ny: usize, graph: &FlowGraph, has_nodata: bool) -> bool {
     let rec = graph.receivers();
     let mut todo: Vec<usize> = (0..z.len())
         .filter(|&k| rec[k] as usize == k && is_pit(z, nx, ny, k, has_nodata))
@@ -116,11 +117,11 @@ fn raise_pits(z: &mut [f32], nx: usize, ny: usize, graph: &FlowGraph, has_nodata
     todo.reverse();
     let mut budget = todo.len() * LOCAL_RAISES;
     while let Some(k) = todo.pop() {
-        if budget == 0 {
-            return;
-        }
         if !is_pit(z, nx, ny, k, has_nodata) {
             continue;
+        }
+        if budget == 0 {
+            return false;
         }
         budget -= 1;
         let lowest = neighbours(nx, k)
@@ -129,6 +130,7 @@ fn raise_pits(z: &mut [f32], nx: usize, ny: usize, graph: &FlowGraph, has_nodata
         z[k] = lowest.next_up();
         todo.extend(neighbours(nx, k).filter(|&n| is_pit(z, nx, ny, n, has_nodata)));
     }
+    true
 }
 
 /// Raises per initial pit that [`raise_pits`] may make.

@@ -130,10 +130,10 @@ pub struct AmplifySpec {
     /// region's footprint).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub region: Option<(P2, P2)>,
-    /// Erosion steps (default 40).
+    /// Erosion steps (default 32).
     #[serde(default = "default_amplify_steps")]
     pub steps: u32,
-    /// Stream-power erodibility per step, `K·dt`, drainage area in m² (default 0.015).
+    /// Stream-power erodibility per step, `K·dt`, drainage area in m² (default 0.02).
     #[serde(default = "default_erodibility")]
     pub erodibility: Positive,
     /// The most the amplification changes the DEM by, about, metres (default 12).
@@ -160,11 +160,11 @@ pub struct AmplifySpec {
 pub const MAX_AMPLIFY_STEPS: u32 = 1000;
 
 fn default_amplify_steps() -> u32 {
-    40
+    32
 }
 
 fn default_erodibility() -> Positive {
-    Positive(0.015)
+    Positive(0.02)
 }
 
 fn default_relief() -> Positive {

@@ -33,8 +33,10 @@ pub(crate) const NEIGHBOURS: [(isize, isize); 8] = [
 
 /// A cell in the flood's queue: lowest elevation first, then lowest index (so equal
 /// elevations pop in a fixed order). The elevation is kept as an integer with the order of
-/// the floats (finite values only: nodata never enters the queue), so comparing is cheap.
-type Low = Reverse<(u32, usize)>;
+/// the floats (finite values only: nodata never enters the queue) in the high half of one
+/// word, the index in the low half (grids hold fewer than 2³² samples), so comparing is
+/// one integer comparison.
+type Low = Reverse<u64>;
 
 /// `z`'s bits as a `u32` that sorts as `z` does.
 fn ordered(z: f32) -> u32 {
@@ -43,7 +45,7 @@ fn ordered(z: f32) -> u32 {
 }
 
 fn low(z: f32, k: usize) -> Low {
-    Reverse((ordered(z), k))
+    Reverse(u64::from(ordered(z)) << 32 | k as u64)
 }
 
 /// The valid neighbours of sample `k` of an `nx × ny` grid, as indices.
@@ -96,14 +98,14 @@ pub fn fill_in_place(z: &mut [f32], nx: usize, ny: usize) {
         let k = match pit.pop_front() {
             Some(k) => k,
             None => match open.pop() {
-                Some(Reverse((_, k))) => k,
+                Some(Reverse(key)) => (key & 0xffff_ffff) as usize,
                 None => break,
             },
         };
         let zc = z[k];
-        for (_, n) in neighbours(k, nx, ny) {
+        let mut visit = |n: usize| {
             if done[n] {
-                continue;
+                return;
             }
             done[n] = true;
             // Raise a pit to just above its spill point.
@@ -112,6 +114,17 @@ pub fn fill_in_place(z: &mut [f32], nx: usize, ny: usize) {
                 pit.push_back(n);
             } else {
                 open.push(low(z[n], n));
+            }
+        };
+        let (i, j) = (k % nx, k / nx);
+        if i > 0 && j > 0 && i + 1 < nx && j + 1 < ny {
+            // inside: the neighbours by offset, in the fixed order
+            for (di, dj) in NEIGHBOURS {
+                visit((k as isize + di + nx as isize * dj) as usize);
+            }
+        } else {
+            for (_, n) in neighbours(k, nx, ny) {
+                visit(n);
             }
         }
     }
