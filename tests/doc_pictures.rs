@@ -165,7 +165,7 @@ const UNAWARE_GROUND: f32 = 80.0;
 /// `trees/`: `jacksboro_bare.ron`, its terrain alone under the same `job` section (the DEM
 /// before amplification, seen as the main job sees it), and `arch_unaware.ron`, the arch
 /// volume of `curves/jacksboro_arch.ron` built without the terrain (`on_terrain: false`)
-/// but with a ground curve under the apex, united with the terrain — what a Feature
+/// but with a ground curve under the apex, united with the terrain (not amplified: it has no job) — what a Feature
 /// Volume did to a terrain before `Replace`; `jacksboro_smooth.ron`, the terrain without its
 /// detail amplification; `jacksboro_unamplified.ron`, the terrain without its eroded
 /// amplification; and `heightmap_top.ron`, the main job's heightmap as a scene.
@@ -245,6 +245,14 @@ fn prepare(trees: &Path) {
             ..main.clone()
         },
     );
+    // Without a job, nothing gives the amplification its region: the DEM as read.
+    let NodeSpec::Heightfield(plain) = dem else {
+        panic!("the main job's terrain is a Heightfield")
+    };
+    let plain = NodeSpec::Heightfield(HeightfieldSpec {
+        amplify: None,
+        ..plain
+    });
     write(
         "arch_unaware.ron",
         Scene {
@@ -252,7 +260,7 @@ fn prepare(trees: &Path) {
             job: None,
             root: NodeSpec::Union(Nary {
                 name: None,
-                children: vec![dem, arch],
+                children: vec![plain, arch],
             }),
             ..main
         },

@@ -35,6 +35,7 @@ fn steady_state_matches_slope_area(n_exp: f32) {
         m: NonNegative(0.4),
         n: Positive(n_exp),
         diffusion: NonNegative(0.0),
+        deposition: NonNegative(0.0),
     };
     let mut e = Eroder::new(&noise(n, cell, 1.0, 5), BUDGET).unwrap();
     let mut change = f32::INFINITY;
@@ -273,6 +274,55 @@ fn recipes_refuse_bad_values_naming_the_field() {
         .validate()
         .is_ok()
     );
+}
+
+/// Hydraulic erosion with transport and deposition (issue 38): a step of the same stream
+/// power on a ridged range with the deposition coefficient `G = 1` keeps part of what it
+/// cuts, as fill on the valley floors (the samples of most drainage area); the ridges,
+/// which nothing flows into, are cut alike.
+#[test]
+fn deposition_fills_the_valley_floors() {
+    let g: GenerateSpec = ron::from_str(
+        "(kind: Ridged((wavelength: 600)), size: (65, 65), cell: 20, relief: 120, seed: 3)",
+    )
+    .unwrap();
+    let hf = g.build(BUDGET).unwrap();
+    let run = |deposition: f32| {
+        let spec: StreamPowerSpec = ron::from_str(&format!(
+            "(steps: 0, dt: 20000, k: 5e-4, deposition: {deposition})"
+        ))
+        .unwrap();
+        let mut e = Eroder::new(&hf, BUDGET).unwrap();
+        e.stream_power_step(&spec);
+        e.samples().to_vec()
+    };
+    let (bare, filled) = (run(0.0), run(1.0));
+    let mut graph = FlowGraph::new();
+    let mut z = bare.clone();
+    karstic::analysis::flow::fill_in_place(&mut z, 65, 65);
+    graph.update(&z, 65, 65, 20.0, 20.0);
+    let mut area = Vec::new();
+    graph.accumulate(400.0, &mut area);
+    let mut order: Vec<usize> = (0..area.len()).collect();
+    order.sort_by(|&a, &b| area[a].total_cmp(&area[b]));
+    let mean_rise =
+        |ks: &[usize]| ks.iter().map(|&k| filled[k] - bare[k]).sum::<f32>() / ks.len() as f32;
+    let n = order.len();
+    // the ridges: samples nothing flows into (their own cell only)
+    let ridges: Vec<usize> = order
+        .iter()
+        .copied()
+        .filter(|&k| area[k] <= 400.0)
+        .collect();
+    let floors = &order[n - n / 20..];
+    let (r, f) = (mean_rise(&ridges), mean_rise(floors));
+    assert!(f > 0.5, "the valley floors rose {f} m with deposition");
+    assert!(
+        r.abs() < 0.2 * f,
+        "the ridges moved {r} m, the floors {f} m"
+    );
+    let volume = |z: &[f32]| z.iter().map(|&v| f64::from(v)).sum::<f64>();
+    assert!(volume(&filled) > volume(&bare), "deposition kept nothing");
 }
 
 #[test]

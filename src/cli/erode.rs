@@ -1,5 +1,5 @@
 //! `karstic erode IN -o OUT`: uplift and stream-power erosion (with optional hillslope
-//! diffusion), then optional thermal erosion, on a DEM.
+//! diffusion and deposition), then optional thermal erosion, on a DEM.
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -40,6 +40,10 @@ pub(super) struct ErodeArgs {
     /// Hillslope diffusivity, m²/yr (0: none).
     #[arg(value_parser = super::finite, long, value_name = "M2_PER_YR", default_value_t = 0.0)]
     diffusion: f32,
+    /// Deposition coefficient G of the sediment carried down (Yuan et al. 2019): fans and
+    /// valley fill where the slope eases (0: none, what is cut leaves the grid).
+    #[arg(value_parser = super::finite, long, value_name = "G", default_value_t = 0.0)]
+    deposition: f32,
     /// Then thermal erosion down to this talus angle, degrees.
     #[arg(value_parser = super::finite, long, value_name = "DEGREES")]
     talus: Option<f32>,
@@ -78,6 +82,7 @@ pub(super) fn run(args: ErodeArgs) -> anyhow::Result<()> {
         m: NonNegative(flag("m", args.m, |v| v >= 0.0)?),
         n: Positive(flag("n", args.n, |v| v > 0.0)?),
         diffusion: NonNegative(flag("diffusion", args.diffusion, |v| v >= 0.0)?),
+        deposition: NonNegative(flag("deposition", args.deposition, |v| v >= 0.0)?),
     };
     ErosionStage::StreamPower(sp).validate()?;
     let thermal = match args.talus {

@@ -49,8 +49,9 @@ fn default_iterations() -> u32 {
     10_000
 }
 
-/// Uplift and stream-power erosion, with optional hillslope diffusion:
-/// `(steps: 200, dt: 20000, uplift: 0.001, k: 2e-4, m: 0.4, n: 1, diffusion: 0.01)`.
+/// Uplift and stream-power erosion, with optional hillslope diffusion and deposition:
+/// `(steps: 200, dt: 20000, uplift: 0.001, k: 2e-4, m: 0.4, n: 1, diffusion: 0.01,
+/// deposition: 1)`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StreamPowerSpec {
@@ -72,6 +73,14 @@ pub struct StreamPowerSpec {
     /// Hillslope diffusivity `D`, m²/yr (default 0: none).
     #[serde(default)]
     pub diffusion: NonNegative,
+    /// Deposition coefficient `G` of the sediment carried down (Yuan et al. 2019,
+    /// [`transport`]; default 0: detachment-limited, what is cut leaves the grid).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub deposition: NonNegative,
+}
+
+fn is_zero(v: &NonNegative) -> bool {
+    v.get() == 0.0
 }
 
 /// Thermal erosion down to a talus angle: `(talus: 35, tolerance: 0.01)`.
@@ -122,6 +131,8 @@ pub struct Eroder {
     z: Vec<f32>,
     graph: FlowGraph,
     area: Vec<f32>,
+    /// Before a step, for what it cut (with deposition only).
+    before: Vec<f32>,
 }
 
 impl Eroder {
@@ -144,6 +155,7 @@ impl Eroder {
             z: hf.samples().to_vec(),
             graph: FlowGraph::new(),
             area: Vec::new(),
+            before: Vec::new(),
         })
     }
 
@@ -155,6 +167,11 @@ impl Eroder {
             m: s.m.get(),
             n: s.n.get(),
         };
+        let g = s.deposition.get();
+        if g > 0.0 {
+            self.before.clear();
+            self.before.extend_from_slice(&self.z);
+        }
         stream_power::step(
             &mut self.z,
             nx,
@@ -167,6 +184,22 @@ impl Eroder {
             &mut self.graph,
             &mut self.area,
         );
+        if g > 0.0 {
+            // what the step cut (uplift taken out: it raised the samples before the cut)
+            let rise = s.uplift.get() * s.dt.get();
+            let has_nodata = FlowGraph::has_nodata(&self.z);
+            let cut: Vec<f32> = (0..self.z.len())
+                .map(|k| {
+                    let up = if FlowGraph::base_level(&self.z, nx, ny, k, has_nodata) {
+                        0.0
+                    } else {
+                        rise
+                    };
+                    (self.before[k] + up - self.z[k]).max(0.0)
+                })
+                .collect();
+            transport::deposit(&mut self.z, &self.graph, &self.area, &cut, c.x * c.y, g);
+        }
         if s.diffusion.get() > 0.0 {
             diffusion::step(&mut self.z, nx, ny, c.x, c.y, s.diffusion.get(), s.dt.get());
         }
