@@ -103,7 +103,7 @@ fn main_job_masks_mark_the_caves_and_follow_the_dem() {
     // The PNGs: one per layer, north row first, the cave mask 255 over the grotto.
     let dir = tempfile::tempdir().unwrap();
     let files = masks.write(dir.path(), "job").unwrap();
-    assert_eq!(files.len(), 5);
+    assert_eq!(files.len(), Layer::ALL.len() + 1);
     let png = image::open(dir.path().join("job_cave.png"))
         .unwrap()
         .to_luma8();
@@ -144,4 +144,56 @@ fn masks_command_writes_the_layers_and_refuses_bad_cells() {
     assert!(!bad.status.success());
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(err.contains("cell size must be > 0"), "{err}");
+}
+
+/// The eroded amplification's traces as masks (issue 38): on the amplified main job
+/// (`trees/jacksboro_bluff.ron`) the wear mask follows the channels — high where the flow
+/// mask is, low on the interfluves — and talus and sediment show somewhere; on a terrain
+/// without amplification (`jacksboro_caves.ron`) the three are 0.
+#[test]
+fn amplification_traces_are_masks() {
+    let file = karstic::scene::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/trees/jacksboro_bluff.ron"
+    ))
+    .unwrap();
+    let compiled = file.compile().unwrap();
+    // Down the open slope east of the cliff line, inside the amplified region.
+    let region = Aabb::new(
+        glam::Vec3::new(3700.0, 4860.0, 700.0),
+        glam::Vec3::new(3940.0, 5300.0, 1100.0),
+    );
+    let raster = Raster::new(region.footprint(), 2.5, karstic::io::DEFAULT_MEMORY_BUDGET).unwrap();
+    let materials = Materials::for_scene(&region, compiled.ground);
+    let masks = Masks::compute(&compiled.tree, &materials, &raster);
+    let mean = |v: &[f32], pick: &dyn Fn(usize) -> bool| {
+        let (s, n) = (0..v.len())
+            .filter(|&k| pick(k))
+            .fold((0.0, 0), |(s, n), k| (s + v[k], n + 1));
+        s / n.max(1) as f32
+    };
+    let mut flow = masks.flow.clone();
+    flow.sort_by(f32::total_cmp);
+    let high = flow[flow.len() * 95 / 100];
+    let low = flow[flow.len() / 2];
+    let channels = mean(&masks.wear, &|k| masks.flow[k] >= high);
+    let slopes = mean(&masks.wear, &|k| masks.flow[k] <= low);
+    assert!(
+        channels > 2.0 * slopes && channels > 0.2,
+        "wear {channels} along the channels, {slopes} on the slopes"
+    );
+    assert!(masks.deposit.iter().any(|&v| v > 0.1), "no sediment");
+    for l in [Layer::Talus, Layer::Deposit, Layer::Wear] {
+        assert!(
+            masks.layer(l).iter().all(|v| (0.0..=1.0).contains(v)),
+            "{l:?}"
+        );
+    }
+    let (plain, _) = main_job_masks();
+    for l in [Layer::Talus, Layer::Deposit, Layer::Wear] {
+        assert!(
+            plain.layer(l).iter().all(|&v| v == 0.0),
+            "{l:?} without amplification"
+        );
+    }
 }

@@ -3,7 +3,8 @@
 //!
 //! Over a rectangle, the DEM is upsampled to a fine lattice, roughened by a little fBm (the
 //! seeds of channel heads), then eroded step by step: stream power along the fine
-//! drainage (Braun and Willett 2013, [`super::stream_power`]), thermal shedding of the
+//! drainage where it passes the area of a channel head (Braun and Willett 2013,
+//! [`super::stream_power`]; Montgomery and Dietrich 1988), thermal shedding of the
 //! slopes above the angle of repose ([`super::thermal`]) and, optionally, transport and
 //! deposition ([`super::transport`]). After each step the change `δ` from the upsampled
 //! DEM is constrained:
@@ -50,6 +51,9 @@ pub struct AmplifyParams {
     pub erodibility: f32,
     /// Drainage-area exponent `m` (the channels' concavity `m/n`).
     pub m: f32,
+    /// Drainage area where channels start, m² (Montgomery and Dietrich 1988): above it
+    /// running water cuts; below it the slope only creeps and sheds.
+    pub channel_area: f32,
     /// The most the amplification changes the DEM by, about, metres.
     pub relief: f32,
     /// Hillslope diffusivity per step, m² (rounds the rills and sets the gullies' spacing).
@@ -152,11 +156,16 @@ pub fn amplify(
     let mut before = vec![0.0f32; n];
     let tan = p.talus.to_radians();
     let mut cut = vec![0.0f32; n];
+    let mut channel = vec![0.0f32; n];
     for _ in 0..p.steps {
         before.copy_from_slice(&z);
         stream_power::route(&mut z, nx, ny, c, c, 0.0, &mut graph);
         mfd_area(&z, nx, ny, Vec2::splat(c), 1.0, &mut area);
-        stream_power::incise(&mut z, &graph, &area, law, 1.0);
+        // Water cuts where a channel has started; the hillslopes above only creep.
+        for (w, &a) in channel.iter_mut().zip(&area) {
+            *w = if a >= p.channel_area { a } else { 0.0 };
+        }
+        stream_power::incise(&mut z, &graph, &channel, law, 1.0);
         for k in 0..n {
             cut[k] = (before[k] - z[k]).max(0.0);
         }
@@ -348,6 +357,7 @@ mod tests {
             steps: 0,
             erodibility: 0.01,
             m: 0.45,
+            channel_area: 2000.0,
             relief: 5.0,
             diffusion: 1.0,
             talus: 35.0,

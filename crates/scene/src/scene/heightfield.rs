@@ -136,6 +136,10 @@ pub struct AmplifySpec {
     /// Stream-power erodibility per step, `K·dt`, drainage area in m² (default 0.02).
     #[serde(default = "default_erodibility")]
     pub erodibility: Positive,
+    /// Drainage area where channels start, m² (default 2,000): below it the slopes only
+    /// creep and shed, so gullies begin partway down and join.
+    #[serde(default = "default_channel_area")]
+    pub channel_area: NonNegative,
     /// The most the amplification changes the DEM by, about, metres (default 12).
     #[serde(default = "default_relief")]
     pub relief: Positive,
@@ -165,6 +169,10 @@ fn default_amplify_steps() -> u32 {
 
 fn default_erodibility() -> Positive {
     Positive(0.02)
+}
+
+fn default_channel_area() -> NonNegative {
+    NonNegative(2000.0)
 }
 
 fn default_relief() -> Positive {
@@ -222,6 +230,7 @@ impl AmplifySpec {
             steps: self.steps,
             erodibility: self.erodibility.get(),
             m: AMPLIFY_M,
+            channel_area: self.channel_area.get(),
             relief: self.relief.get(),
             diffusion: self.diffusion.get(),
             talus: self.talus.get(),
