@@ -168,17 +168,8 @@ fn concavity(z: &[f32], area: &[f32], nx: usize, ny: usize, cell: f32, amin: f32
                 continue;
             }
             let mut s = 0.0f32;
-            for (di, dj) in [
-                (1i32, 0i32),
-                (1, 1),
-                (0, 1),
-                (-1, 1),
-                (-1, 0),
-                (-1, -1),
-                (0, -1),
-                (1, -1),
-            ] {
-                let n = (i as i32 + di) as usize + nx * (j as i32 + dj) as usize;
+            for (di, dj) in karstic::analysis::flow::NEIGHBOURS {
+                let n = (i as isize + di) as usize + nx * (j as isize + dj) as usize;
                 let l = cell * ((di * di + dj * dj) as f32).sqrt();
                 s = s.max((z[k] - z[n]) / l);
             }

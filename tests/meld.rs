@@ -353,3 +353,43 @@ fn a_tunnel_through_a_ridge_is_open_from_portal_to_portal() {
         5.0,
     );
 }
+
+/// On an amplified terrain (issue 38): the main job's cave volume, built on the eroded
+/// amplification of its DEM (`trees/jacksboro_bluff.ron`'s `terrain_with_cave`, under the
+/// same job), changes the amplified terrain only near its tunnel.
+#[test]
+fn a_feature_volume_melds_with_an_amplified_terrain() {
+    let s = scene("jacksboro_bluff");
+    let named = s.scene.named();
+    let with_cave = named["terrain_with_cave"].clone();
+    let NodeSpec::Replace(r) = &with_cave else {
+        panic!("terrain_with_cave is a Replace")
+    };
+    let NodeSpec::Heightfield(dem) = &*r.base else {
+        panic!("its base is the DEM")
+    };
+    assert!(dem.amplify.is_some(), "the main job's DEM is amplified");
+    let build = |root: NodeSpec| {
+        let mut scene = s.scene.clone();
+        scene.root = root;
+        scene.geology = None;
+        compile_scene(&scene, &s.path, &s.base_dir).unwrap().tree
+    };
+    let (t, b) = (build(with_cave.clone()), build((*r.base).clone()));
+    assert_melds(
+        &t,
+        &b,
+        Aabb::new(
+            Vec3::new(3340.0, 4880.0, 780.0),
+            Vec3::new(3860.0, 5070.0, 1000.0),
+        ),
+        &[
+            Vec2::new(3800.0, 4950.0),
+            Vec2::new(3660.0, 4950.0),
+            Vec2::new(3520.0, 4965.0),
+            Vec2::new(3390.0, 5000.0),
+        ],
+        30.0,
+        5.0,
+    );
+}

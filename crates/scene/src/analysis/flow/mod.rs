@@ -20,7 +20,7 @@ pub use graph::FlowGraph;
 pub const FREEMAN_EXPONENT: f32 = 1.1;
 
 /// The eight neighbours `(di, dj)`, in a fixed order (determinism).
-pub(crate) const NEIGHBOURS: [(isize, isize); 8] = [
+pub const NEIGHBOURS: [(isize, isize); 8] = [
     (1, 0),
     (1, 1),
     (0, 1),
