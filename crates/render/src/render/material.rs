@@ -183,10 +183,12 @@ impl Materials {
             p / (DRY_SCALE * self.variation_wavelength),
         );
         let feature = self.feature(p);
-        let (scree, gravel, sand) = self.traces(p, wander);
+        let (scree, gravel, sand, gully) = self.traces(p, wander);
         Cover {
             rock: (1.0 - flat).max(feature),
-            soil: soil.max(sand),
+            // A gully's walls are grown over, as a humid slope's are; bare, their lit
+            // side reads as a ledge of rock standing out of the slope.
+            soil: (soil * (1.0 - 0.8 * gully)).max(sand),
             dry: smoothstep(-0.2, 0.5, patches),
             snow,
             scree: scree * (1.0 - feature),
@@ -194,13 +196,14 @@ impl Materials {
         }
     }
 
-    /// Scree, gravel and bare sediment at `p` from the ground's eroded amplification, if
-    /// it has one: scree where more than about a metre of talus lies, damp gravel where the
-    /// drainage area passes a few thousand square metres (a gully that runs after rain)
-    /// and bare soil where half a metre or more was deposited. `wander` frays the edges.
-    fn traces(&self, p: Vec3, wander: f32) -> (f32, f32, f32) {
+    /// Scree, gravel, bare sediment and gully at `p` from the ground's eroded
+    /// amplification, if it has one: scree where more than about a metre of talus lies,
+    /// damp gravel where the drainage area passes a few thousand square metres (a gully
+    /// that runs after rain), bare soil where half a metre or more was deposited, and how
+    /// far inside a gully cut a metre below the DEM `p` lies. `wander` frays the edges.
+    fn traces(&self, p: Vec3, wander: f32) -> (f32, f32, f32, f32) {
         let Some(inset) = self.ground.as_ref().and_then(|g| g.inset()) else {
-            return (0.0, 0.0, 0.0);
+            return (0.0, 0.0, 0.0, 0.0);
         };
         let xy = Vec2::new(p.x, p.y);
         let t = |trace| inset.trace_at(trace, xy);
@@ -209,7 +212,8 @@ impl Materials {
         let area = t(Trace::Area).max(1.0).log10();
         let channel = smoothstep(3.3, 4.0, area + fray);
         let sand = smoothstep(0.2, 0.8, t(Trace::Deposit) + 0.5 * fray);
-        (scree, channel, sand)
+        let gully = smoothstep(0.2, 1.2, t(Trace::Incision) + 0.5 * fray);
+        (scree, channel, sand, gully)
     }
 
     /// Albedo of bare rock at `p`: by the geology's resistance there, else [`Self::rock`].
