@@ -135,6 +135,14 @@ fn assert_melds(t: &Tree, bare: &Tree, region: Aabb, curve: &[Vec2], radius: f32
     );
 }
 
+/// The plan path of the main jobs' tunnel cave (`jacksboro_caves.ron`, `jacksboro_bluff.ron`).
+const TUNNEL: [Vec2; 4] = [
+    Vec2::new(3800.0, 4950.0),
+    Vec2::new(3660.0, 4950.0),
+    Vec2::new(3520.0, 4965.0),
+    Vec2::new(3390.0, 5000.0),
+];
+
 #[test]
 fn default_scene_changes_the_terrain_only_near_its_features() {
     let s = scene("jacksboro_caves");
@@ -165,12 +173,7 @@ fn default_scene_changes_the_terrain_only_near_its_features() {
             Vec3::new(3290.0, 4830.0, 720.0),
             Vec3::new(3910.0, 5120.0, 1040.0),
         ),
-        &[
-            Vec2::new(3800.0, 4950.0),
-            Vec2::new(3660.0, 4950.0),
-            Vec2::new(3520.0, 4965.0),
-            Vec2::new(3390.0, 5000.0),
-        ],
+        &TUNNEL,
         30.0,
         5.0,
     );
@@ -383,12 +386,7 @@ fn a_feature_volume_melds_with_an_amplified_terrain() {
             Vec3::new(3340.0, 4880.0, 780.0),
             Vec3::new(3860.0, 5070.0, 1000.0),
         ),
-        &[
-            Vec2::new(3800.0, 4950.0),
-            Vec2::new(3660.0, 4950.0),
-            Vec2::new(3520.0, 4965.0),
-            Vec2::new(3390.0, 5000.0),
-        ],
+        &TUNNEL,
         30.0,
         5.0,
     );

@@ -47,7 +47,7 @@ use crate::field::falloff::{
     ISO, WYVILL_MAX_SLOPE, sigma, sigma_d, sigma_interval, sigma_max_slope, sigma_slope,
     wyvill_interval, wyvill_slope,
 };
-use crate::field::{Aabb, Field, Interval, Rect, ZBands};
+use crate::field::{Aabb, Bound, Field, Interval, Rect, ZBands};
 
 /// Parameters of the implicitization (validated by [`HeightfieldField::new`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -413,31 +413,29 @@ impl HeightfieldField {
         (i0, i1, j0, j1): (usize, usize, usize, usize),
     ) -> (Interval, f32, f32) {
         let [lo, hi, s, reach] = self.cells.query(i0, i1, j0, j1);
-        let (h, s) = match &self.inset {
-            Some((inset, cells)) if lo <= hi => {
-                let d = inset.delta();
-                match d.cells_overlapping(fp) {
-                    Some((a0, a1, b0, b1)) => {
-                        let [dlo, dhi, ds] = cells.query(a0, a1, b0, b1);
-                        let (dlo, dhi) = if d.extent().contains_rect(fp) {
-                            (dlo, dhi)
-                        } else {
-                            (dlo.min(0.0), dhi.max(0.0))
-                        };
-                        (
-                            Interval {
-                                lo: lo + dlo,
-                                hi: hi + dhi,
-                            },
-                            s + ds,
-                        )
-                    }
-                    None => (Interval { lo, hi }, s),
-                }
-            }
-            _ => (Interval { lo, hi }, s),
-        };
-        (h, s.max(0.0), reach.max(0.0))
+        let mut h = Bound::new(Interval { lo, hi }, s);
+        if lo <= hi
+            && let Some(d) = self.inset_under(fp)
+        {
+            h = h + d;
+        }
+        (h.range, h.lipschitz.max(0.0), reach.max(0.0))
+    }
+
+    /// The bound of the inset's `δ` over the footprint `fp` (0 included where `fp` reaches
+    /// past the inset), `None` without an inset or where `fp` misses it.
+    #[inline]
+    fn inset_under(&self, fp: &Rect) -> Option<Bound> {
+        let (inset, cells) = self.inset.as_ref()?;
+        let d = inset.delta();
+        let (a0, a1, b0, b1) = d.cells_overlapping(fp)?;
+        let [lo, hi, s] = cells.query(a0, a1, b0, b1);
+        let b = Bound::new(Interval { lo, hi }, s);
+        Some(if d.extent().contains_rect(fp) {
+            b
+        } else {
+            b.hull_zero()
+        })
     }
 
     /// The range of `d` over `b` where `|d| ≤ reach` (`A·max m` over the cells under `b`;

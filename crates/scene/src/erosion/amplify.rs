@@ -141,7 +141,7 @@ pub fn amplify(
         .into_par_iter()
         .map(|k| base[k] + p.roughness * taper[k] * rough.value(at(k).extend(0.0)))
         .collect();
-    let cons = Constraint::new(dem, origin, nx, ny, c);
+    let mut cons = Constraint::new(dem, origin, nx, ny, c);
     let law = StreamPower {
         k: p.erodibility,
         m: p.m,
@@ -158,8 +158,8 @@ pub fn amplify(
     let mut cut = vec![0.0f32; n];
     let mut channel = vec![0.0f32; n];
     for _ in 0..p.steps {
-        before.copy_from_slice(&z);
         stream_power::route(&mut z, nx, ny, c, c, 0.0, &mut graph);
+        before.copy_from_slice(&z);
         mfd_area(&z, nx, ny, Vec2::splat(c), 1.0, &mut area);
         // Water cuts where a channel has started; the hillslopes above only creep.
         for (w, &a) in channel.iter_mut().zip(&area) {
@@ -246,8 +246,11 @@ struct Constraint {
     cell: Vec<u32>,
     /// Per fine sample: the four cell centres around it and their weights.
     corners: Vec<([u32; 4], [f32; 4])>,
-    /// Cells covered.
-    cells: usize,
+    /// Scratch, reused step to step: the change, and per DEM cell its sum, count and mean.
+    d: Vec<f32>,
+    sum: Vec<f64>,
+    count: Vec<u32>,
+    mean: Vec<f32>,
 }
 
 impl Constraint {
@@ -281,51 +284,51 @@ impl Constraint {
         Constraint {
             cell,
             corners,
-            cells: cx * cy,
+            d: Vec::with_capacity(nx * ny),
+            sum: vec![0.0; cx * cy],
+            count: vec![0; cx * cy],
+            mean: vec![0.0; cx * cy],
         }
     }
 
     /// Constrains `z` against the upsampled DEM `base`: the change softly limited to
     /// `relief`, its cell means taken out `rounds` times, faded by `taper`.
-    fn apply(&self, z: &mut [f32], base: &[f32], taper: &[f32], relief: f32, rounds: u32) {
-        let mut d: Vec<f32> = z
-            .iter()
-            .zip(base)
-            .map(|(&a, &b)| {
-                let d = a - b;
-                if d.is_finite() {
-                    relief * (d / relief).tanh()
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        let mut sum = vec![0.0f64; self.cells];
-        let mut count = vec![0u32; self.cells];
+    fn apply(&mut self, z: &mut [f32], base: &[f32], taper: &[f32], relief: f32, rounds: u32) {
+        let Constraint {
+            cell,
+            corners,
+            d,
+            sum,
+            count,
+            mean,
+        } = self;
+        d.clear();
+        d.extend(z.iter().zip(base).map(|(&a, &b)| {
+            let d = a - b;
+            if d.is_finite() {
+                relief * (d / relief).tanh()
+            } else {
+                0.0
+            }
+        }));
         for _ in 0..rounds {
             sum.fill(0.0);
             count.fill(0);
-            for (k, &v) in d.iter().enumerate() {
-                let c = self.cell[k] as usize;
-                sum[c] += f64::from(v);
-                count[c] += 1;
+            for (&c, &v) in cell.iter().zip(d.iter()) {
+                sum[c as usize] += f64::from(v);
+                count[c as usize] += 1;
             }
-            let mean: Vec<f32> = sum
-                .iter()
-                .zip(&count)
-                .map(|(&s, &n)| {
-                    if n > 0 {
-                        (s / f64::from(n)) as f32
-                    } else {
-                        0.0
-                    }
-                })
-                .collect();
-            d.par_iter_mut()
-                .zip(&self.corners)
-                .for_each(|(v, (ids, w))| {
-                    *v -= (0..4).map(|q| w[q] * mean[ids[q] as usize]).sum::<f32>();
-                });
+            for ((m, &s), &n) in mean.iter_mut().zip(sum.iter()).zip(count.iter()) {
+                *m = if n > 0 {
+                    (s / f64::from(n)) as f32
+                } else {
+                    0.0
+                };
+            }
+            let mean = &*mean;
+            d.par_iter_mut().zip(&*corners).for_each(|(v, (ids, w))| {
+                *v -= (0..4).map(|q| w[q] * mean[ids[q] as usize]).sum::<f32>();
+            });
         }
         z.par_iter_mut()
             .zip(base.par_iter().zip(d.par_iter().zip(taper)))

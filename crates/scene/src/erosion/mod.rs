@@ -131,7 +131,7 @@ pub struct Eroder {
     z: Vec<f32>,
     graph: FlowGraph,
     area: Vec<f32>,
-    /// Before a step, for what it cut (with deposition only).
+    /// What a step cut (with deposition only).
     before: Vec<f32>,
 }
 
@@ -168,37 +168,21 @@ impl Eroder {
             n: s.n.get(),
         };
         let g = s.deposition.get();
+        let rise = s.uplift.get() * s.dt.get();
+        stream_power::route(&mut self.z, nx, ny, c.x, c.y, rise, &mut self.graph);
+        self.graph.accumulate(c.x * c.y, &mut self.area);
         if g > 0.0 {
             self.before.clear();
             self.before.extend_from_slice(&self.z);
         }
-        stream_power::step(
-            &mut self.z,
-            nx,
-            ny,
-            c.x,
-            c.y,
-            law,
-            s.uplift.get(),
-            s.dt.get(),
-            &mut self.graph,
-            &mut self.area,
-        );
+        stream_power::incise(&mut self.z, &self.graph, &self.area, law, s.dt.get());
         if g > 0.0 {
-            // what the step cut (uplift taken out: it raised the samples before the cut)
-            let rise = s.uplift.get() * s.dt.get();
-            let has_nodata = FlowGraph::has_nodata(&self.z);
-            let cut: Vec<f32> = (0..self.z.len())
-                .map(|k| {
-                    let up = if FlowGraph::base_level(&self.z, nx, ny, k, has_nodata) {
-                        0.0
-                    } else {
-                        rise
-                    };
-                    (self.before[k] + up - self.z[k]).max(0.0)
-                })
-                .collect();
-            transport::deposit(&mut self.z, &self.graph, &self.area, &cut, c.x * c.y, g);
+            // what the step cut, in place of the heights before it; then where it settles
+            for (b, &a) in self.before.iter_mut().zip(&self.z) {
+                *b = (*b - a).max(0.0);
+            }
+            let cut = &self.before;
+            transport::deposit(&mut self.z, &self.graph, &self.area, cut, c.x * c.y, g);
         }
         if s.diffusion.get() > 0.0 {
             diffusion::step(&mut self.z, nx, ny, c.x, c.y, s.diffusion.get(), s.dt.get());

@@ -17,35 +17,11 @@ pub struct StreamPower {
     pub n: f32,
 }
 
-/// One step of uplift and stream-power erosion on the samples `z` of an `nx × ny` grid of
-/// `dx × dy` cells, reusing `graph` and `area` between steps.
-///
-/// Interior samples rise by `uplift · dt` (base level, the edge and the rim of nodata, stays
-/// put). Depressions are filled first when the receivers find pits (Priority-Flood + ε,
-/// Barnes et al. 2014: a closed basin fills with sediment up to its spill point), then
-/// every sample is eroded in stack order: with `F = K dt A^m / L^n`, the new elevation
-/// solves `h − h₀ + F (h − h_r)^n = 0` — in closed form for `n = 1`, by Newton's method
-/// otherwise (Braun and Willett 2013 §2.3). A sample not above its receiver is left alone.
-#[allow(clippy::too_many_arguments)]
-pub fn step(
-    z: &mut [f32],
-    nx: usize,
-    ny: usize,
-    dx: f32,
-    dy: f32,
-    law: StreamPower,
-    uplift: f32,
-    dt: f32,
-    graph: &mut FlowGraph,
-    area: &mut Vec<f32>,
-) {
-    route(z, nx, ny, dx, dy, uplift * dt, graph);
-    graph.accumulate(dx * dy, area);
-    incise(z, graph, area, law, dt);
-}
-
-/// The first half of [`step`]: uplift by `rise`, then the receivers and the stack in
-/// `graph`, depressions filled.
+/// The first half of a step of uplift and stream-power erosion on the samples `z` of an
+/// `nx × ny` grid of `dx × dy` cells: interior samples rise by `rise` (base level, the
+/// edge and the rim of nodata, stays put), then `graph` gets the receivers and the stack.
+/// Depressions are filled first when the receivers find pits (Priority-Flood + ε, Barnes
+/// et al. 2014: a closed basin fills with sediment up to its spill point).
 pub fn route(
     z: &mut [f32],
     nx: usize,
@@ -77,8 +53,11 @@ pub fn route(
     }
 }
 
-/// The second half of [`step`]: every sample eroded towards its receiver in `graph`'s
-/// stack order, with drainage areas `area` (m²).
+/// The second half of a step ([`route`] first): every sample eroded towards its receiver
+/// in `graph`'s stack order, with drainage areas `area` (m²). With `F = K dt A^m / L^n`,
+/// the new elevation solves `h − h₀ + F (h − h_r)^n = 0` — in closed form for `n = 1`, by
+/// Newton's method otherwise (Braun and Willett 2013 §2.3). A sample not above its
+/// receiver is left alone.
 pub fn incise(z: &mut [f32], graph: &FlowGraph, area: &[f32], law: StreamPower, dt: f32) {
     let (rec, len) = (graph.receivers(), graph.lengths());
     let (kdt, m, n) = (f64::from(law.k) * f64::from(dt), f64::from(law.m), law.n);
