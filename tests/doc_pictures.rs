@@ -84,6 +84,8 @@ karstic render trees/strata_cliff.ron -o strata_cliff.png --quiet
 karstic render trees/strata_islands.ron -o strata_islands.png --quiet
 karstic geology section trees/strata_cliff.ron --plane -100 0 60 0 --z -5 75 --width 960 --outline -o strata_cliff_section.png
 karstic render trees/sea_cliffs.ron -o sea_cliffs.png --quiet
+karstic render trees/sea_stacks.ron -o sea_stacks.png --quiet
+karstic render trees/sea_stacks.ron -o sea_stacks_foot.png --camera 150 60 6 120 112 8 --fov 55 --size 640 360 --quiet
 karstic sample trees/karst_network.ron --box 0 300 -5 396 300.5 75 --res 397 2 161 -o karst_section.npy
 karstic render trees/hoodoo_field.ron -o hoodoo_field.png --size 640 360 --quiet
 karstic render trees/fin_arch.ron -o fin_arch.png --size 640 360 --quiet
@@ -130,6 +132,8 @@ const PICTURES: &[(&str, &str)] = &[
     ("strata_islands.png", "strata_islands.png"),
     ("strata_cliff_section.png", "strata_cliff_section.png"),
     ("sea_cliffs.png", "sea_cliffs.png"),
+    ("sea_stacks.png", "sea_stacks.png"),
+    ("sea_stacks_foot.png", "sea_stacks_foot.png"),
     ("karst_section.npy", "karst_section.png"),
     ("hoodoo_field.png", "hoodoo_field.png"),
     ("fin_arch.png", "fin_arch.png"),

@@ -43,6 +43,7 @@ mod render_cli;
 mod render_gpu;
 mod render_trace;
 mod render_trees;
+mod sea_cliff;
 mod tape_conformance;
 mod tape_header;
 mod tiles;

@@ -20,6 +20,9 @@ const OCTAVE_SHIFT: vec3<f32> = vec3<f32>(0.5477, 0.3127, 0.7531);
 const CAVE_TILT: f32 = 0.7853982;
 const CAVE_RAMP: f32 = 0.12;
 const CAVE_FLOOR: f32 = 0.12;
+
+// Water (the renderer's shade.rs): what a wetted floor keeps of its light.
+const WET: f32 = 0.4;
 const CAVE_DIRS: u32 = 5u;
 const CAVE_STEPS: u32 = 6u;
 

@@ -291,7 +291,7 @@ fn seen(o: vec3<f32>, d: vec3<f32>, t: f32, surface: vec3<f32>) -> vec3<f32> {
         if tw < far {
             let through = exp(-(far - tw) / u.water.y);
             let deep = u.water_colour.xyz * light(vec3<f32>(0.0, 0.0, 1.0), 1.0, 1.0);
-            let body = mix(deep, surface, through);
+            let body = mix(deep, surface * WET, through);
             let fresnel = 0.02 + 0.98 * pow(1.0 - clamp(-d.z, 0.0, 1.0), 5.0);
             let mirrored = sky(vec3<f32>(d.x, d.y, -d.z));
             return haze(mix(body, mirrored, fresnel), tw);

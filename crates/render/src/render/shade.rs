@@ -29,8 +29,9 @@
 //!   and overviews read alike.
 //! * **Water.** A tree's job may set a water level (a sea, a lake): rays from above that
 //!   cross it before the terrain see the water's surface, a Fresnel mix (Schlick 1994) of
-//!   the sky it mirrors and of the water's body; through the body the terrain below fades,
-//!   over [`Water::clarity`] metres of path, to the colour of deep water lit from above, so
+//!   the sky it mirrors and of the water's body; through the body the terrain below,
+//!   darkened by [`WET`] (a wetted floor), fades over [`Water::clarity`] metres of path to
+//!   the colour of deep water lit from above, so
 //!   shallows show their floor and the open sea does not. Pictures only: meshes stop at
 //!   the terrain.
 //! * **Tone mapping.** Narkowicz's fit of the ACES filmic curve, then sRGB.
@@ -65,6 +66,11 @@ pub const CAVE_RAMP: f32 = 0.12;
 
 /// The share of the sky light left where every cave-scale direction is closed.
 pub const CAVE_FLOOR: f32 = 0.12;
+
+/// The share of its light a floor keeps under water: wet rock and sand are darker than
+/// dry (water fills the pores and the light is trapped by internal reflection; about half,
+/// Lekner and Dorf 1988), and weed and algae darken a sea floor more.
+pub const WET: f32 = 0.4;
 
 /// Seed of the hash that picks each pixel's point of the sun's disk.
 pub const SUN_SEED: u32 = 0x5_0a12;
@@ -231,13 +237,14 @@ impl Shading {
         }
     }
 
-    /// The radiance leaving water's surface along `−d`: the floor's `below` seen through
-    /// `path` metres of water (`∞`: no floor), fading to deep water lit from above, mixed
-    /// with the mirrored sky by the Fresnel term of Schlick 1994 for water (reflectance 0.02 head-on).
+    /// The radiance leaving water's surface along `−d`: the floor's `below`, darkened by
+    /// [`WET`], seen through `path` metres of water (`∞`: no floor), fading to deep water
+    /// lit from above, mixed with the mirrored sky by the Fresnel term of Schlick 1994 for
+    /// water (reflectance 0.02 head-on).
     fn water_surface(&self, w: &Water, d: Vec3, path: f32, below: Vec3) -> Vec3 {
         let through = (-path / w.clarity).exp();
         let deep = w.colour * self.light(Vec3::Z, 1.0, 1.0);
-        let body = deep.lerp(below, through);
+        let body = deep.lerp(below * WET, through);
         let cos = (-d.z).clamp(0.0, 1.0);
         let fresnel = 0.02 + 0.98 * (1.0 - cos).powi(5);
         let mirrored = self.sky(Vec3::new(d.x, d.y, -d.z));

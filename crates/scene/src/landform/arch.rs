@@ -175,20 +175,8 @@ fn lowest_ground(ground: &Ground, center: Vec2, axis: Vec2, half: f32, width: f3
 /// the ground, the resistance rises most steeply going up (a soft bed under a hard one);
 /// 45% of the span when the rock is the same all the way up.
 fn hard_bed(ground: &Ground, xy: Vec2, g: f32, span: f32) -> f32 {
-    let rho = |dz: f32| (ground.resistance)(xy.extend(g + dz));
     let step = (0.01 * span).max(0.1);
-    let (lo, hi) = (0.3 * span, 0.7 * span);
-    let mut best = (0.0, 0.45 * span);
-    let mut dz = lo;
-    while dz <= hi {
-        let rise = rho(dz + step) - rho(dz - step);
-        if rise > best.0 {
-            best = (rise, dz);
-        }
-        dz += step;
-    }
-    // A rise of less than 0.05 over two steps is noise, not a bed.
-    if best.0 < 0.05 { 0.45 * span } else { best.1 }
+    super::hard_bed_base(ground, xy, g, (0.3 * span, 0.7 * span), step).unwrap_or(0.45 * span)
 }
 
 /// A fin's joint blocks over `[-half, half]`, mean width `width`, under `crest`: joints

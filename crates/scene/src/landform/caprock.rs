@@ -41,9 +41,10 @@
 
 use glam::{Vec2, Vec3};
 
+use super::joints::{JointGrid, block_falloff, boxed, quarter_turn};
 use super::{Ground, LandformError, noise, p3, round3, solid};
+use crate::field::SkeletonSpec;
 use crate::field::skeleton::Size3;
-use crate::field::{NoiseSpec, SkeletonSpec};
 use crate::rng::Rng;
 use crate::scene::NodeSpec;
 use crate::scene::landform::{CaprockSpec, RecessSpec, SpurSpec};
@@ -55,9 +56,6 @@ const JOINTS: (f32, f32) = (2.0, 200.0);
 
 /// Bed thicknesses the generator accepts, metres.
 const THICKNESS: (f32, f32) = (1.0, 300.0);
-
-/// At most this many joint blocks: beyond, the joints are too close for the region.
-const MAX_BLOCKS: usize = 20_000;
 
 /// A joint block of the bed, in the tree frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -195,34 +193,6 @@ impl CliffLine {
     }
 }
 
-/// The falloff of the blocks for joints `spacing` apart: rounded edges, and small enough
-/// that the blocks' fields do not meet across a joint ([`joint_set`]'s narrowest crack,
-/// 1.4 falloffs, is wider than the 1.2 falloffs over which two blended fields close it).
-fn block_falloff(spacing: f32) -> f32 {
-    (0.06 * spacing).clamp(0.3, 1.5)
-}
-
-/// Joint positions across `[lo, hi]`: a joint before `lo`, then steps of 50% to 160% of
-/// `spacing` until past `hi`; each with the width its weathering opened: for a third of
-/// them 1.4 to 2.8 block falloffs and at least one `cell` of air between the blocks'
-/// surfaces (a narrower crack falls between the samples of a mesh at that cell and leaves
-/// specks of air sealed in the rock), none (a tight joint) for the others.
-fn joint_set(rng: &mut Rng, lo: f32, hi: f32, spacing: f32, cell: f32) -> Vec<(f32, f32)> {
-    let falloff = block_falloff(spacing);
-    let mut out = Vec::new();
-    let mut x = lo - spacing * rng.unit();
-    loop {
-        let open = rng.unit() < 1.0 / 3.0;
-        let width = (falloff * (1.4 + 1.4 * rng.unit())).max(cell + falloff);
-        let gap = if open { width } else { 0.0 };
-        out.push((x, gap));
-        if x > hi {
-            return out;
-        }
-        x += spacing * (0.5 + 1.1 * rng.unit());
-    }
-}
-
 impl CaprockSpec {
     /// The cliff line on `ground`.
     pub fn shape(&self, ground: &Ground) -> Result<CliffLine, LandformError> {
@@ -240,33 +210,17 @@ impl CaprockSpec {
             )));
         }
         let (top, base) = (self.top.0, self.top.0 - t);
-        let axis = Vec2::from_angle(self.strike.0.to_radians());
-        let across = axis.perp();
-        let to_frame = |p: Vec2| Vec2::new(p.dot(axis), p.dot(across));
-        let to_world = |q: Vec2| axis * q.x + across * q.y;
         let r = ground.region;
-        let corners = [
-            Vec2::new(r.min.x, r.min.y),
-            Vec2::new(r.max.x, r.min.y),
-            Vec2::new(r.min.x, r.max.y),
-            Vec2::new(r.max.x, r.max.y),
-        ]
-        .map(to_frame);
-        let lo = corners.iter().fold(Vec2::INFINITY, |a, &c| a.min(c));
-        let hi = corners.iter().fold(Vec2::NEG_INFINITY, |a, &c| a.max(c));
         let mut rng = Rng::new(ground.seed ^ 0xca9_70c4);
-        let (ju, jv) = (
-            joint_set(&mut rng, lo.x, hi.x, s, ground.top.cell().max_element()),
-            joint_set(&mut rng, lo.y, hi.y, s, ground.top.cell().max_element()),
-        );
-        let (nu, nv) = (ju.len() - 1, jv.len() - 1);
-        if nu * nv > MAX_BLOCKS {
-            return Err(LandformError::Invalid(format!(
-                "caprock joints {s} m apart make {} blocks over the region (at most {MAX_BLOCKS}): \
-                 space them wider or shrink the region",
-                nu * nv
-            )));
-        }
+        let grid = JointGrid::new(
+            &mut rng,
+            &r,
+            self.strike.0,
+            s,
+            ground.top.cell().max_element(),
+            "caprock",
+        )?;
+        let (axis, (nu, nv)) = (grid.axis, grid.dims());
         let bedding = Vec2::new(
             top - t * (0.6 + 0.1 * rng.unit()),
             top - t * (0.25 + 0.1 * rng.unit()),
@@ -277,19 +231,16 @@ impl CaprockSpec {
         let mut cells: Vec<Option<JointBlock>> = Vec::with_capacity(nu * nv);
         for j in 0..nv {
             for i in 0..nu {
-                let (a, b) = (ju[i], ju[i + 1]);
-                let (c, d) = (jv[j], jv[j + 1]);
-                let q0 = Vec2::new(a.0 + 0.5 * a.1, c.0 + 0.5 * c.1);
-                let q1 = Vec2::new(b.0 - 0.5 * b.1, d.0 - 0.5 * d.1);
+                let (q0, q1) = grid.footprint(i, j);
                 let jitter = 0.25 * (2.0 * rng.unit() - 1.0);
                 let top_jitter = rng.unit();
                 let inset = Vec2::new(0.04 + 0.12 * rng.unit(), 0.03 + 0.06 * rng.unit()) * t;
                 let beds = bedding + 0.05 * t * Vec2::new(rng.unit() - 0.5, rng.unit() - 0.5);
-                let center = to_world(0.5 * (q0 + q1));
+                let center = grid.to_world(0.5 * (q0 + q1));
                 let half = 0.5 * (q1 - q0);
                 // The footprint's corners from `lo` to `hi`, in the tree frame.
                 let corners = |lo: Vec2, hi: Vec2| {
-                    [lo, hi, Vec2::new(lo.x, hi.y), Vec2::new(hi.x, lo.y)].map(to_world)
+                    [lo, hi, Vec2::new(lo.x, hi.y), Vec2::new(hi.x, lo.y)].map(|q| grid.to_world(q))
                 };
                 let [c0, c1, c2, c3] = corners(q0, q1);
                 let heights = [center, c0, c1, c2, c3].map(|p| ground.height(p));
@@ -329,7 +280,7 @@ impl CaprockSpec {
                     spur: spur.is_some(),
                     face: false,
                     bare: [false; 4],
-                    joints: [b.1, a.1, d.1, c.1],
+                    joints: grid.widths(i, j),
                 }));
             }
         }
@@ -349,7 +300,8 @@ impl CaprockSpec {
                 let sides = [(1, 0), (-1, 0), (0, 1), (0, -1)];
                 let bare = sides.map(|(di, dj)| !standing(i + di, j + dj));
                 let face = sides.iter().zip(bare).any(|(&(di, dj), bare)| {
-                    let n = b.center + to_world(Vec2::new(di as f32, dj as f32) * 2.0 * b.half);
+                    let n =
+                        b.center + grid.to_world(Vec2::new(di as f32, dj as f32) * 2.0 * b.half);
                     bare && ground.height(n) < h
                 });
                 faces[k] = (face, bare);
@@ -762,30 +714,10 @@ fn lying(line: &CliffLine, ground: &Ground, rng: &mut Rng, xy: Vec2, size: f32) 
     })
 }
 
-/// `half` turned by a quarter turn about the vertical, or not, at random.
-fn quarter_turn(rng: &mut Rng, half: Vec3) -> Vec3 {
-    match rng.unit() < 0.5 {
-        true => half,
-        false => Vec3::new(half.y, half.x, half.z),
-    }
-}
-
-fn boxed(center: Vec3, half: Vec3, yaw: f32, falloff: f32, noise: Option<NoiseSpec>) -> NodeSpec {
-    solid(
-        SkeletonSpec::Box {
-            center: p3(center),
-            half_size: Size3(half.map(round3)),
-            yaw: Finite(round3(yaw)),
-        },
-        round3(falloff).max(0.01),
-        noise,
-    )
-}
-
 impl Window {
     /// The opening: a vault spanning the window at the floor, cut level at the roof, through
     /// the spur and no farther (the hill beside it keeps its ground).
-    fn hollow(&self) -> NodeSpec {
+    pub(super) fn hollow(&self) -> NodeSpec {
         let rise = self.roof - self.floor.z;
         let vault = solid(
             SkeletonSpec::Ellipsoid {
@@ -861,25 +793,12 @@ impl CliffLine {
         out
     }
 
-    /// The fallen blocks: weathered round (ellipsoids of the block's extents along the
-    /// tree's axes, roughened: boxes lying within a few metres of the ground take its
-    /// grass on their flat tops), outside the blocks' warp, which would lift a block of a
-    /// few metres off the ground it lies on.
+    /// The fallen blocks (see [`Fallen::rock`]).
     pub fn fallen_rocks(&self) -> Vec<NodeSpec> {
         self.fallen
             .iter()
             .enumerate()
-            .map(|(k, f)| {
-                let size = 2.0 * f.half.max_element();
-                solid(
-                    SkeletonSpec::Ellipsoid {
-                        center: p3(f.center),
-                        radii: Size3(f.half.map(round3)),
-                    },
-                    round3((0.2 * size).max(0.2)),
-                    noise(0.15 * size, 0.5 * size, 3, 100 + k as u32),
-                )
-            })
+            .map(|(k, f)| f.rock(k))
             .collect()
     }
 
@@ -904,68 +823,85 @@ impl CliffLine {
             .collect()
     }
 
-    /// The recesses: each a level-roofed hollow, turned to face out of the cliff.
+    /// The recesses and the spurs' windows.
     pub fn hollows(&self) -> Vec<NodeSpec> {
-        let recesses = self
-            .recesses
-            .iter()
-            .enumerate()
-            .map(|(k, r)| {
-                let (length, depth, height) = (r.size.x, r.size.y, r.size.z);
-                // In the recess's frame x runs along the face and +y into the hill.
-                let along = r.out.perp();
-                // One vault per piece of face, set back into the hill so it opens the face
-                // without cutting the slope before it.
-                let pieces = (length / PIECE).ceil().max(1.0);
-                let vaults = r
-                    .faces
-                    .iter()
-                    .enumerate()
-                    .map(|(i, f)| {
-                        let d = *f - r.mouth.truncate();
-                        let local = Vec2::new(d.dot(along), -d.dot(r.out) + 0.5 * depth);
-                        solid(
-                            SkeletonSpec::Ellipsoid {
-                                center: p3(local.extend(r.mouth.z)),
-                                radii: Size3(
-                                    Vec3::new(length / pieces, 0.75 * depth, 1.3 * height)
-                                        .map(round3),
-                                ),
-                            },
-                            round3((0.15 * height).max(0.5)),
-                            noise(0.1 * height, 0.6 * height, 3, 60 + 16 * k as u32 + i as u32),
-                        )
-                    })
-                    .collect();
-                let vault = NodeSpec::Union(Nary {
-                    name: None,
-                    children: vaults,
-                });
-                let roof = boxed(
-                    Vec3::new(0.0, 0.0, r.mouth.z + 0.5 * height),
-                    Vec3::new(length, 2.0 * depth, 0.5 * height),
-                    0.0,
-                    (0.05 * height).max(0.3),
-                    noise(0.03 * height, 0.4 * length, 2, 80 + k as u32),
-                );
-                NodeSpec::Transform(TransformSpec {
-                    name: None,
-                    translate: p3(r.mouth.truncate().extend(0.0)),
-                    rotate: Some(Rotation {
-                        axis: Dir3(Vec3::Z),
-                        degrees: Finite(round3(along.y.atan2(along.x).to_degrees())),
-                    }),
-                    scale: Default::default(),
-                    child: Box::new(NodeSpec::Intersection(Nary {
-                        name: None,
-                        children: vec![vault, roof],
-                    })),
-                })
-            })
-            .collect::<Vec<_>>();
+        let recesses = self.recesses.iter().enumerate().map(|(k, r)| r.hollow(k));
         recesses
-            .into_iter()
             .chain(self.windows.iter().map(Window::hollow))
             .collect()
+    }
+}
+
+impl Fallen {
+    /// Fallen block `k` weathered round (an ellipsoid of the block's extents along the
+    /// tree's axes, roughened: boxes lying within a few metres of the ground take its
+    /// grass on their flat tops), to stand outside the blocks' warp, which would lift a
+    /// block of a few metres off the ground it lies on.
+    pub(super) fn rock(&self, k: usize) -> NodeSpec {
+        let size = 2.0 * self.half.max_element();
+        solid(
+            SkeletonSpec::Ellipsoid {
+                center: p3(self.center),
+                radii: Size3(self.half.map(round3)),
+            },
+            round3((0.2 * size).max(0.2)),
+            noise(0.15 * size, 0.5 * size, 3, 100 + k as u32),
+        )
+    }
+}
+
+impl Recess {
+    /// The hollow of recess `k`: a level-roofed vault turned to face out of the cliff.
+    pub(super) fn hollow(&self, k: usize) -> NodeSpec {
+        let r = self;
+        let (length, depth, height) = (r.size.x, r.size.y, r.size.z);
+        // In the recess's frame x runs along the face and +y into the hill.
+        let along = r.out.perp();
+        // One vault per piece of face, set back into the hill so it opens the face
+        // without cutting the slope before it.
+        let pieces = (length / PIECE).ceil().max(1.0);
+        let vaults = r
+            .faces
+            .iter()
+            .enumerate()
+            .map(|(i, f)| {
+                let d = *f - r.mouth.truncate();
+                let local = Vec2::new(d.dot(along), -d.dot(r.out) + 0.5 * depth);
+                solid(
+                    SkeletonSpec::Ellipsoid {
+                        center: p3(local.extend(r.mouth.z)),
+                        radii: Size3(
+                            Vec3::new(length / pieces, 0.75 * depth, 1.3 * height).map(round3),
+                        ),
+                    },
+                    round3((0.15 * height).max(0.5)),
+                    noise(0.1 * height, 0.6 * height, 3, 60 + 16 * k as u32 + i as u32),
+                )
+            })
+            .collect();
+        let vault = NodeSpec::Union(Nary {
+            name: None,
+            children: vaults,
+        });
+        let roof = boxed(
+            Vec3::new(0.0, 0.0, r.mouth.z + 0.5 * height),
+            Vec3::new(length, 2.0 * depth, 0.5 * height),
+            0.0,
+            (0.05 * height).max(0.3),
+            noise(0.03 * height, 0.4 * length, 2, 80 + k as u32),
+        );
+        NodeSpec::Transform(TransformSpec {
+            name: None,
+            translate: p3(r.mouth.truncate().extend(0.0)),
+            rotate: Some(Rotation {
+                axis: Dir3(Vec3::Z),
+                degrees: Finite(round3(along.y.atan2(along.x).to_degrees())),
+            }),
+            scale: Default::default(),
+            child: Box::new(NodeSpec::Intersection(Nary {
+                name: None,
+                children: vec![vault, roof],
+            })),
+        })
     }
 }

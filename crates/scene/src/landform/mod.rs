@@ -15,7 +15,9 @@
 mod arch;
 mod canyon;
 mod caprock;
+mod coast;
 mod hoodoo;
+mod joints;
 mod karst;
 mod scale;
 mod sea;
@@ -26,8 +28,10 @@ use glam::{IVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 pub use arch::ArchShape;
-pub use caprock::{Apron, CliffLine, Fallen, JointBlock, REPOSE, Recess};
+pub use caprock::{Apron, CliffLine, Fallen, JointBlock, REPOSE, Recess, Window};
+pub use coast::{Bed, Clear, CoastBlock, Notch, SeaCliff, Slab};
 pub use hoodoo::{Hoodoo, Terminal};
+pub use joints::JointGrid;
 
 use crate::dem::{Heightfield, Interpolation};
 use crate::field::noise::Octaves;
@@ -250,6 +254,30 @@ pub fn point(center: Vec3, falloff: f32, energy: f32) -> NodeSpec {
     })
 }
 
+/// The base of a hard bed over `xy`, as a height above `g` within `range` of it: where the
+/// resistance rises most steeply going up, probed every `step` (a soft bed under a hard
+/// one, Paris et al. 2019 §6.1); `None` where it rises by less than 0.05 over two steps
+/// anywhere in the range (noise, not a bed).
+pub(crate) fn hard_bed_base(
+    ground: &Ground,
+    xy: Vec2,
+    g: f32,
+    range: (f32, f32),
+    step: f32,
+) -> Option<f32> {
+    let rho = |dz: f32| (ground.resistance)(xy.extend(g + dz));
+    let mut best = (0.0, range.0);
+    let mut dz = range.0;
+    while dz <= range.1 {
+        let rise = rho(dz + step) - rho(dz - step);
+        if rise > best.0 {
+            best = (rise, dz);
+        }
+        dz += step;
+    }
+    (best.0 >= 0.05).then_some(best.1)
+}
+
 /// Hermite step from 0 at `a` to 1 at `b`.
 pub(crate) fn smoothstep(a: f32, b: f32, x: f32) -> f32 {
     let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
@@ -349,7 +377,8 @@ pub enum Joining {
     /// `Union([base, Blend(rocks)])`: new rock standing on the terrain.
     Accrete,
     /// `Difference(Union([base, Blend(rocks)]), [Union(hollows)])`: rock standing on the
-    /// terrain, then hollows cut into both.
+    /// terrain, then hollows cut into both; with clears, the base is
+    /// `Difference(base, [Union(clears)])`.
     Sculpt,
 }
 
@@ -382,6 +411,9 @@ pub struct Generated {
     pub joining: Joining,
     /// What is cut out of the base and the primitives afterwards ([`Joining::Sculpt`]).
     pub hollows: Vec<NodeSpec>,
+    /// What is cut out of the base alone before the primitives join it
+    /// ([`Joining::Sculpt`]): ground the rocks rebuild (a sea cliff's face).
+    pub clears: Vec<NodeSpec>,
 }
 
 impl Generated {
@@ -391,6 +423,7 @@ impl Generated {
             primitives,
             joining,
             hollows: Vec::new(),
+            clears: Vec::new(),
         }
     }
 }
@@ -411,8 +444,10 @@ impl LandformSpec {
                     primitives,
                     joining: Joining::Sculpt,
                     hollows,
+                    clears: Vec::new(),
                 }
             }
+            GeneratorSpec::SeaCliff(c) => c.generate(ground)?,
         };
         if generated.joining == Joining::Carve {
             let width = fade_width(&ground.region, self.cell.0);
@@ -429,7 +464,18 @@ impl LandformSpec {
     /// The plain node this landform expands into (its base already expanded).
     pub fn expansion(self, generated: Generated) -> NodeSpec {
         let suffix = generated.joining.suffix();
-        let mut children = vec![*self.base];
+        let base = match generated.clears.is_empty() {
+            true => *self.base,
+            false => NodeSpec::Difference(DifferenceSpec {
+                name: None,
+                base: self.base,
+                carves: vec![NodeSpec::Union(Nary {
+                    name: self.name.as_ref().map(|n| format!("{n}-clears")),
+                    children: generated.clears,
+                })],
+            }),
+        };
+        let mut children = vec![base];
         // An empty blend is refused by the tree file's checks: nothing generated, nothing
         // added.
         if !generated.primitives.is_empty() {

@@ -63,6 +63,16 @@ pub fn check(generator: &GeneratorSpec, region: &Aabb) -> Result<(), LandformErr
             scale.lengths("Arch", &lengths)
         }
         GeneratorSpec::Caprock(c) => caprock(&scale, c),
+        GeneratorSpec::SeaCliff(c) => {
+            let lengths = [
+                ("platform", c.platform.0),
+                ("notch", c.notch.0),
+                ("reach", c.reach.0),
+            ];
+            scale.lengths("SeaCliff", &lengths)?;
+            scale.spacing("SeaCliff.joints", c.joints.0, false)?;
+            talus("SeaCliff", c.talus.0)
+        }
     }
 }
 
@@ -88,10 +98,14 @@ fn caprock(scale: &Scale, c: &CaprockSpec) -> Result<(), LandformError> {
         let window = s.window.map_or(0.0, |w| w.0);
         scale.lengths("Caprock.spurs", &[("width", s.width.0), ("window", window)])?;
     }
-    if c.talus.0 > MAX_TALUS {
+    talus("Caprock", c.talus.0)
+}
+
+/// Fallen blocks a metre of face at most [`MAX_TALUS`].
+fn talus(what: &str, v: f32) -> Result<(), LandformError> {
+    if v > MAX_TALUS {
         return Err(LandformError::Invalid(format!(
-            "`Caprock.talus` is {} blocks a metre of face: at most {MAX_TALUS}",
-            c.talus.0
+            "`{what}.talus` is {v} blocks a metre of face: at most {MAX_TALUS}"
         )));
     }
     Ok(())

@@ -31,31 +31,11 @@ impl SeaSpec {
             .collect())
     }
 
-    /// The section at sea level as a heightfield: 1 m below sea level where the base is
-    /// air there (sea), well above where it is rock.
-    fn section(&self, ground: &Ground) -> Result<Heightfield, LandformError> {
-        let top = &ground.top;
-        let (nx, ny) = (top.nx(), top.ny());
-        let sea = self.sea_level.0;
-        let z = (0..nx * ny)
-            .map(|k| {
-                let p = ground.sample_point(k).truncate().extend(sea);
-                if ground.solid(p) {
-                    sea + 1.0 + self.band.0
-                } else {
-                    sea - 1.0
-                }
-            })
-            .collect();
-        Heightfield::new(nx, ny, Vec2::ZERO, top.cell(), z)
-            .map_err(|e| LandformError::Invalid(e.to_string()))
-    }
-
     /// The surface samples and their effects.
     pub fn samples(&self, ground: &Ground) -> Result<Vec<(Vec3, f32)>, LandformError> {
         let sea = self.sea_level.0;
         let band = self.band.0;
-        let section = self.section(ground)?;
+        let section = section(ground, sea, band)?;
         let alpha = coastal_accessibility(&section, sea, 0.5, self.reach.0);
         let top = &ground.top;
         let (nx, ny) = (top.nx(), top.ny());
@@ -119,4 +99,24 @@ impl SeaSpec {
         }
         Ok(out)
     }
+}
+
+/// The section of `ground` at `sea` level as a heightfield: 1 m below sea level where the
+/// base is air there (sea), `above` metres over it where it is rock, so an undercut counts
+/// as sea.
+pub(super) fn section(ground: &Ground, sea: f32, above: f32) -> Result<Heightfield, LandformError> {
+    let top = &ground.top;
+    let (nx, ny) = (top.nx(), top.ny());
+    let z = (0..nx * ny)
+        .map(|k| {
+            let p = ground.sample_point(k).truncate().extend(sea);
+            if ground.solid(p) {
+                sea + 1.0 + above
+            } else {
+                sea - 1.0
+            }
+        })
+        .collect();
+    Heightfield::new(nx, ny, Vec2::ZERO, top.cell(), z)
+        .map_err(|e| LandformError::Invalid(e.to_string()))
 }

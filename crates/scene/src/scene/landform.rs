@@ -264,3 +264,74 @@ pub struct SeaSpec {
     #[serde(default = "default_min_effect")]
     pub min_effect: Unit,
 }
+
+fn sea_cliff_default_joints() -> Positive {
+    Positive(10.0)
+}
+
+fn sea_cliff_default_platform() -> NonNegative {
+    NonNegative(24.0)
+}
+
+fn sea_cliff_default_notch() -> NonNegative {
+    NonNegative(3.0)
+}
+
+fn sea_cliff_default_caves() -> Unit {
+    Unit(0.55)
+}
+
+fn sea_cliff_default_stacks() -> Unit {
+    Unit(0.35)
+}
+
+fn sea_cliff_default_talus() -> NonNegative {
+    NonNegative(0.3)
+}
+
+fn sea_cliff_default_reach() -> Positive {
+    Positive(40.0)
+}
+
+/// Parameters of a sea cliff of jointed, bedded rock: the base's coast rebuilt as a face
+/// of joint blocks with a wave-cut notch, a platform before it, sea caves, arches and
+/// stacks where the waves find the rock soft, and boulders at its foot.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SeaCliffSpec {
+    /// Sea level, metres (default 0).
+    #[serde(default)]
+    pub sea_level: Finite,
+    /// Mean spacing of the joints, metres (default 10).
+    #[serde(default = "sea_cliff_default_joints")]
+    pub joints: Positive,
+    /// Strike of the first joint set, degrees counter-clockwise from east (default 0).
+    #[serde(default)]
+    pub strike: Finite,
+    /// Width of the wave-cut platform the cliff left as it retreated, metres (default 24;
+    /// 0 for none).
+    #[serde(default = "sea_cliff_default_platform")]
+    pub platform: NonNegative,
+    /// Depth of the wave-cut notch where the waves' erosion effect is full, metres
+    /// (default 3; 0 for none).
+    #[serde(default = "sea_cliff_default_notch")]
+    pub notch: NonNegative,
+    /// The erosion effect at the waterline from which the sea opens a cave (default
+    /// 0.55); through a headland one block wide, the cave is an arch.
+    #[serde(default = "sea_cliff_default_caves")]
+    pub caves: Unit,
+    /// The chance that a block off an exposed headland is left standing as a stack
+    /// (default 0.35; 0 for none).
+    #[serde(default = "sea_cliff_default_stacks")]
+    pub stacks: Unit,
+    /// Boulders fallen from the face per metre of it (default 0.3; 0 for none).
+    #[serde(default = "sea_cliff_default_talus")]
+    pub talus: NonNegative,
+    /// The effect's share left on the hardest rock, `β` of Paris et al. 2019 §6.1
+    /// (default 0.5).
+    #[serde(default = "sea_default_beta")]
+    pub beta: Unit,
+    /// How far the coastal accessibility looks out to sea, metres (default 40).
+    #[serde(default = "sea_cliff_default_reach")]
+    pub reach: Positive,
+}

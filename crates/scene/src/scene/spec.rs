@@ -3,7 +3,9 @@
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use super::landform::{ArchSpec, CanyonSpec, CaprockSpec, HoodooSpec, KarstSpec, SeaSpec};
+use super::landform::{
+    ArchSpec, CanyonSpec, CaprockSpec, HoodooSpec, KarstSpec, SeaCliffSpec, SeaSpec,
+};
 use crate::elevation::ElevationSpec;
 use crate::field::{NoiseSpec, PrimitiveSpec};
 use crate::scene::HeightfieldSpec;
@@ -482,6 +484,8 @@ pub enum GeneratorSpec {
     Arch(ArchSpec),
     /// A caprock cliff line: a hard bed cropping out as a cliff of joint blocks.
     Caprock(CaprockSpec),
+    /// A sea cliff of joint blocks: notch, platform, sea caves, arches, stacks, boulders.
+    SeaCliff(SeaCliffSpec),
 }
 
 impl Scene {

@@ -15,7 +15,7 @@ use glam::Vec3;
 
 use crate::field::falloff::{ISO, WYVILL_MAX_SLOPE, WYVILL_PEAK_X};
 use crate::field::noise::{F3, G3, GAIN, LACUNARITY, OCTAVE_SHIFT, R2, SIMPLEX_SCALE};
-use crate::render::shade::{CAVE_DIRS, CAVE_FLOOR, CAVE_RAMP, CAVE_STEPS, CAVE_TILT};
+use crate::render::shade::{CAVE_DIRS, CAVE_FLOOR, CAVE_RAMP, CAVE_STEPS, CAVE_TILT, WET};
 use crate::tape::FEATURES;
 use crate::tape::format::GROUPS;
 use crate::voxel::sparse::{BRICK, BRICK_NODES, NONE};
@@ -87,6 +87,11 @@ pub fn wgsl_header() -> String {
             ("CAVE_RAMP", CAVE_RAMP),
             ("CAVE_FLOOR", CAVE_FLOOR),
         ],
+    );
+    f32s(
+        &mut line,
+        "Water (the renderer's shade.rs): what a wetted floor keeps of its light.",
+        &[("WET", WET)],
     );
     line(format!("const CAVE_DIRS: u32 = {CAVE_DIRS}u;"));
     line(format!("const CAVE_STEPS: u32 = {CAVE_STEPS}u;"));
