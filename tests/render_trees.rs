@@ -21,10 +21,10 @@ use karstic::render::trace::TraceParams;
 use karstic::render::{Camera, Method, RenderSettings, cpu, render};
 use karstic::tape::{Tape, TapeError, tape_from_tree};
 
-/// The scenes `trees/*.ron` and `trees/curves/*.ron`, sorted.
+/// The scenes `trees/*.ron`, `trees/curves/*.ron` and `trees/paper/*.ron`, sorted.
 fn tree_files() -> Vec<PathBuf> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees");
-    let mut files: Vec<PathBuf> = [root.clone(), root.join("curves")]
+    let mut files: Vec<PathBuf> = [root.clone(), root.join("curves"), root.join("paper")]
         .iter()
         .flat_map(|dir| std::fs::read_dir(dir).unwrap())
         .map(|e| e.unwrap().path())
@@ -63,6 +63,9 @@ const CPU_ONLY: &[&str] = &[
     "fin_arch",
     "jacksboro_bluff",
     "jacksboro_canyon",
+    "paper/fig4_fault",
+    "paper/fig4_fold",
+    "paper/fig4_local",
     "strata_cliff",
     "strata_islands",
 ];

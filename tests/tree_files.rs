@@ -12,8 +12,10 @@ fn repo() -> PathBuf {
 }
 
 fn tree_files() -> Vec<PathBuf> {
-    let mut v: Vec<PathBuf> = std::fs::read_dir(repo().join("trees"))
-        .unwrap()
+    let trees = repo().join("trees");
+    let mut v: Vec<PathBuf> = [trees.clone(), trees.join("paper")]
+        .iter()
+        .flat_map(|dir| std::fs::read_dir(dir).unwrap())
         .map(|e| e.unwrap().path())
         .filter(|p| p.extension().is_some_and(|e| e == "ron"))
         .collect();

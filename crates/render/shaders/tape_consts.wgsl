@@ -21,8 +21,13 @@ const CAVE_TILT: f32 = 0.7853982;
 const CAVE_RAMP: f32 = 0.12;
 const CAVE_FLOOR: f32 = 0.12;
 
-// Water (the renderer's shade.rs): what a wetted floor keeps of its light.
+// Water (the renderer's shade.rs): a wetted floor's light; waves; surf.
 const WET: f32 = 0.4;
+const WAVE_LENGTH: f32 = 9.0;
+const WAVE_SHORT: f32 = 0.3;
+const WAVE_SLOPE: f32 = 0.06;
+const SURF_DEPTH: f32 = 0.8;
+const WAVE_SEED: u32 = 14974u;
 const CAVE_DIRS: u32 = 5u;
 const CAVE_STEPS: u32 = 6u;
 

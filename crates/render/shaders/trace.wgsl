@@ -283,18 +283,47 @@ fn display(c_in: vec3<f32>) -> vec3<f32> {
     return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), vec3<f32>(0.0), vec3<f32>(1.0));
 }
 
+// shade.rs waves.
+fn waves(at: vec3<f32>, tw: f32) -> vec3<f32> {
+    let long = WAVE_LENGTH;
+    let short = WAVE_SHORT * WAVE_LENGTH;
+    let e = 0.05 * short;
+    let gx = wave_height(at.x + e, at.y) - wave_height(at.x - e, at.y);
+    let gy = wave_height(at.x, at.y + e) - wave_height(at.x, at.y - e);
+    let g = vec3<f32>(gx, gy, 0.0) * (long / (2.0 * e));
+    let calm = 1.0 - smooth_step(250.0 * short, 500.0 * short, tw);
+    return normalize(vec3<f32>(0.0, 0.0, 1.0) - g * (WAVE_SLOPE * calm));
+}
+
+// shade.rs waves: the height of the two octaves.
+fn wave_height(x: f32, y: f32) -> f32 {
+    let long = WAVE_LENGTH;
+    let short = WAVE_SHORT * WAVE_LENGTH;
+    return simplex(WAVE_SEED, vec3<f32>(x / long, y / long, 0.0))
+        + 0.4 * WAVE_SHORT * simplex(WAVE_SEED + 1u, vec3<f32>(x / short, y / short, 0.0));
+}
+
 // shade.rs Shading::seen (t < 0: a miss) and Shading::water_surface.
 fn seen(o: vec3<f32>, d: vec3<f32>, t: f32, surface: vec3<f32>) -> vec3<f32> {
     let far = select(t, 3.0e38, t < 0.0);
     if u.water.z > 0.0 && o.z > u.water.x && d.z < 0.0 {
         let tw = (u.water.x - o.z) / d.z;
         if tw < far {
-            let through = exp(-(far - tw) / u.water.y);
-            let deep = u.water_colour.xyz * light(vec3<f32>(0.0, 0.0, 1.0), 1.0, 1.0);
-            let body = mix(deep, surface * WET, through);
-            let fresnel = 0.02 + 0.98 * pow(1.0 - clamp(-d.z, 0.0, 1.0), 5.0);
-            let mirrored = sky(vec3<f32>(d.x, d.y, -d.z));
-            return haze(mix(body, mirrored, fresnel), tw);
+            let at = o + d * tw;
+            let path = far - tw;
+            let through = exp(-path / u.water.y);
+            let up = light(vec3<f32>(0.0, 0.0, 1.0), 1.0, 1.0);
+            let body = mix(u.water_colour.xyz * up, surface * WET, through);
+            let n = waves(at, tw);
+            let cos_n = clamp(-dot(d, n), 0.0, 1.0);
+            let fresnel = 0.02 + 0.98 * pow(1.0 - cos_n, 5.0);
+            let r = d - 2.0 * dot(d, n) * n;
+            let mirrored = sky(vec3<f32>(r.x, r.y, abs(r.z)));
+            let water = mix(body, mirrored, fresnel);
+            let depth = path * -d.z;
+            let broken = smooth_step(-0.2, 0.5, simplex(WAVE_SEED + 2u, at / (WAVE_SHORT * WAVE_LENGTH)));
+            let surf = smooth_step(SURF_DEPTH, 0.15 * SURF_DEPTH, depth) * broken;
+            return haze(mix(water, vec3<f32>(0.8) * up, 0.85 * surf), tw);
         }
     }
     if t < 0.0 {

@@ -41,8 +41,9 @@
 
 use glam::Vec3;
 
-use crate::field::noise::mix32;
+use crate::field::noise::{mix32, simplex};
 use crate::field::{Aabb, ISO};
+use crate::render::material::smoothstep;
 
 /// Points along the normal sampled for ambient occlusion.
 pub const AO_SAMPLES: u32 = 4;
@@ -71,6 +72,21 @@ pub const CAVE_FLOOR: f32 = 0.12;
 /// dry (water fills the pores and the light is trapped by internal reflection; about half,
 /// Lekner and Dorf 1988), and weed and algae darken a sea floor more.
 pub const WET: f32 = 0.4;
+
+/// The longer wavelength of the waves on water, metres; the shorter is [`WAVE_SHORT`] of it.
+pub const WAVE_LENGTH: f32 = 9.0;
+
+/// The shorter waves' wavelength, as a share of [`WAVE_LENGTH`].
+pub const WAVE_SHORT: f32 = 0.3;
+
+/// The waves' slope: the scale of the water's tilt (a wind sea of a few metres' waves).
+pub const WAVE_SLOPE: f32 = 0.06;
+
+/// Seed of the waves' noise (the surf's is the next).
+pub const WAVE_SEED: u32 = 0x3a7e;
+
+/// Floors closer than this under the surface, metres, break the waves into surf.
+pub const SURF_DEPTH: f32 = 0.8;
 
 /// Seed of the hash that picks each pixel's point of the sun's disk.
 pub const SUN_SEED: u32 = 0x5_0a12;
@@ -227,7 +243,8 @@ impl Shading {
         {
             let tw = (w.level - o.z) / d.z;
             if tw < t {
-                return self.haze(self.water_surface(&w, d, t - tw, surface), tw);
+                let at = o + d * tw;
+                return self.haze(self.water_surface(&w, at, tw, d, t - tw, surface), tw);
             }
         }
         if t.is_finite() {
@@ -237,18 +254,30 @@ impl Shading {
         }
     }
 
-    /// The radiance leaving water's surface along `−d`: the floor's `below`, darkened by
-    /// [`WET`], seen through `path` metres of water (`∞`: no floor), fading to deep water
-    /// lit from above, mixed with the mirrored sky by the Fresnel term of Schlick 1994 for
-    /// water (reflectance 0.02 head-on).
-    fn water_surface(&self, w: &Water, d: Vec3, path: f32, below: Vec3) -> Vec3 {
+    /// The radiance leaving water's surface at `at`, `tw` from the eye, along `−d`: the
+    /// floor's `below`, darkened by [`WET`], seen through `path` metres of water (`∞`: no
+    /// floor), fading to deep water lit from above, mixed with the sky it mirrors by the
+    /// Fresnel term of Schlick 1994 for water (reflectance 0.02 head-on) about the normal
+    /// of the [`waves`] there; where the floor lies within [`SURF_DEPTH`] of the surface,
+    /// broken into patches of white surf.
+    fn water_surface(&self, w: &Water, at: Vec3, tw: f32, d: Vec3, path: f32, below: Vec3) -> Vec3 {
         let through = (-path / w.clarity).exp();
-        let deep = w.colour * self.light(Vec3::Z, 1.0, 1.0);
-        let body = deep.lerp(below * WET, through);
-        let cos = (-d.z).clamp(0.0, 1.0);
+        let up = self.light(Vec3::Z, 1.0, 1.0);
+        let body = (w.colour * up).lerp(below * WET, through);
+        let n = waves(at, tw);
+        let cos = (-d.dot(n)).clamp(0.0, 1.0);
         let fresnel = 0.02 + 0.98 * (1.0 - cos).powi(5);
-        let mirrored = self.sky(Vec3::new(d.x, d.y, -d.z));
-        body.lerp(mirrored, fresnel)
+        let r = d - 2.0 * d.dot(n) * n;
+        let mirrored = self.sky(Vec3::new(r.x, r.y, r.z.abs()));
+        let water = body.lerp(mirrored, fresnel);
+        let depth = path * -d.z;
+        let broken = smoothstep(
+            -0.2,
+            0.5,
+            simplex(WAVE_SEED + 2, at / (WAVE_SHORT * WAVE_LENGTH)),
+        );
+        let surf = smoothstep(SURF_DEPTH, 0.15 * SURF_DEPTH, depth) * broken;
+        water.lerp(Vec3::splat(0.8) * up, 0.85 * surf)
     }
 
     /// Blends `c` seen at distance `t` towards the horizon's colour.
@@ -320,6 +349,27 @@ pub fn to_srgb8(c: Vec3) -> [u8; 4] {
     [e(c.x), e(c.y), e(c.z), 255]
 }
 
+/// The unit normal of water's surface at `at`, `tw` from the eye: tilted by the slope of
+/// two octaves of noise ([`WAVE_LENGTH`] and [`WAVE_SHORT`] of it, the shorter at
+/// [`WAVE_SHORT`] × 0.4 of the longer's height), by finite differences; calm beyond the
+/// distance where a pixel (about a milliradian) spans a quarter of the short waves, which
+/// would sparkle there.
+pub fn waves(at: Vec3, tw: f32) -> Vec3 {
+    let (long, short) = (WAVE_LENGTH, WAVE_SHORT * WAVE_LENGTH);
+    let h = |x: f32, y: f32| {
+        simplex(WAVE_SEED, Vec3::new(x / long, y / long, 0.0))
+            + 0.4 * WAVE_SHORT * simplex(WAVE_SEED + 1, Vec3::new(x / short, y / short, 0.0))
+    };
+    let e = 0.05 * short;
+    let g = Vec3::new(
+        h(at.x + e, at.y) - h(at.x - e, at.y),
+        h(at.x, at.y + e) - h(at.x, at.y - e),
+        0.0,
+    ) * (long / (2.0 * e));
+    let calm = 1.0 - smoothstep(250.0 * short, 500.0 * short, tw);
+    (Vec3::Z - g * (WAVE_SLOPE * calm)).normalize()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -388,12 +438,56 @@ mod tests {
         assert_eq!(s.seen(o, down, 5.0, floor), s.haze(floor, 5.0));
         let up = Vec3::new(0.0, 0.6, 0.8);
         assert_eq!(s.seen(o, up, f32::INFINITY, floor), s.sky(up));
-        // Grazing rays mirror the sky: the water turns sky-coloured.
+        // Grazing rays mirror the sky: far off (where the waves are calmed, below a
+        // pixel) the water turns sky-coloured.
         let graze = Vec3::new(0.0, 0.999, -0.045).normalize();
-        let far = s.seen(o, graze, f32::INFINITY, floor);
-        let sky = s.haze(s.sky(Vec3::new(graze.x, graze.y, -graze.z)), 10.0 / 0.045);
+        let high = Vec3::new(0.0, 0.0, 100.0);
+        let far = s.seen(high, graze, f32::INFINITY, floor);
+        let sky = s.haze(s.sky(Vec3::new(graze.x, graze.y, -graze.z)), 100.0 / 0.045);
         assert!((far - sky).length() < 0.25 * sky.length(), "{far} vs {sky}");
         assert!(open.length() < 0.5 * far.length(), "{open} vs {far}");
+    }
+
+    #[test]
+    fn waves_tilt_the_water_near_and_calm_it_far_and_shallows_break_into_surf() {
+        // Near: the normal varies from point to point, by a few degrees, about the
+        // vertical.
+        let normals: Vec<Vec3> = (0..400)
+            .map(|k| waves(Vec3::new(0.37 * k as f32, 0.21 * k as f32, 0.0), 50.0))
+            .collect();
+        let mean = normals.iter().copied().sum::<Vec3>() / normals.len() as f32;
+        let tilt = normals
+            .iter()
+            .map(|n| n.z.acos().to_degrees())
+            .fold(0.0, f32::max);
+        assert!(mean.normalize().z > 0.999, "{mean}");
+        assert!((3.0..20.0).contains(&tilt), "tilted by up to {tilt}°");
+        // Far: flat.
+        let far = waves(Vec3::new(11.0, 7.0, 0.0), 1.0e4);
+        assert!((far - Vec3::Z).length() < 1e-6, "{far}");
+        // Surf: over a floor 0.1 m down the water whitens where the surf breaks, over
+        // 3 m it does not.
+        let s = Shading {
+            water: Some(Water::at(0.0)),
+            ..scene()
+        };
+        let down = Vec3::new(0.0, 0.6, -0.8);
+        let floor = Vec3::new(0.3, 0.25, 0.2);
+        let (mut white, mut checked) = (0, 0);
+        for k in 0..200 {
+            let o = Vec3::new(1.3 * k as f32, 0.0, 10.0);
+            let t = 10.0 / 0.8;
+            let shallow = s.seen(o, down, t + 0.1 / 0.8, floor);
+            let deep = s.seen(o, down, t + 3.0 / 0.8, floor);
+            checked += 1;
+            if shallow.min_element() > 1.5 * deep.max_element() {
+                white += 1;
+            }
+        }
+        assert!(
+            (checked / 5..checked * 4 / 5).contains(&white),
+            "{white} of {checked} shallows whitened: the surf breaks in patches"
+        );
     }
 
     #[test]

@@ -41,7 +41,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::joints::{JointGrid, block_falloff, boxed, quarter_turn};
+use super::joints::{JointGrid, block_falloff, boxed, fallen_half, quarter_turn};
 use super::{Ground, LandformError, noise, p3, round3, solid};
 use crate::field::SkeletonSpec;
 use crate::field::skeleton::Size3;
@@ -697,14 +697,7 @@ fn lying(line: &CliffLine, ground: &Ground, rng: &mut Rng, xy: Vec2, size: f32) 
     {
         return None;
     }
-    // Slabs and blocks: a bed's joints part it into pieces from flat to near cubic.
-    let half = 0.5
-        * size
-        * Vec3::new(
-            0.7 + 0.6 * rng.unit(),
-            0.45 + 0.55 * rng.unit(),
-            0.3 + 0.6 * rng.unit(),
-        );
+    let half = fallen_half(rng, size);
     // Sunk by a third to two thirds of its height: fallen rock settles into the slope's
     // debris, some deeper than others.
     let sunk = 0.3 + 0.7 * rng.unit();

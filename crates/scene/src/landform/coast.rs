@@ -36,7 +36,7 @@
 use glam::{Vec2, Vec3};
 
 use super::caprock::{Fallen, Recess, Window};
-use super::joints::{JointGrid, block_falloff, boxed, quarter_turn};
+use super::joints::{JointGrid, block_falloff, boxed, fallen_half, quarter_turn};
 use super::sea::section;
 use super::{Generated, Ground, Joining, LandformError, effect, hard_bed_base, noise, p3, solid};
 use crate::analysis::relief::coastal_accessibility;
@@ -106,7 +106,37 @@ pub struct CoastBlock {
     pub taper: f32,
 }
 
+/// A side of a block that faces the sea.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Side {
+    /// Which: `+u`, `−u`, `+v`, `−v` of the joint frame.
+    index: usize,
+    /// Horizontal direction out of it, unit.
+    out: Vec2,
+    /// Its middle.
+    face: Vec2,
+    /// Its length.
+    length: f32,
+}
+
 impl CoastBlock {
+    /// Its sides that face the sea, in a joint frame of first axis `axis`.
+    fn seaward_sides(&self, axis: Vec2) -> impl Iterator<Item = Side> + '_ {
+        let axes = [axis, -axis, axis.perp(), -axis.perp()];
+        (0..4).filter(|&n| self.seaward[n]).map(move |n| {
+            let (depth, length) = match n < 2 {
+                true => (self.half.x, 2.0 * self.half.y),
+                false => (self.half.y, 2.0 * self.half.x),
+            };
+            Side {
+                index: n,
+                out: axes[n],
+                face: self.center + axes[n] * depth,
+                length,
+            }
+        })
+    }
+
     /// Its root's height.
     pub fn root(&self) -> f32 {
         self.beds.first().map_or(0.0, |b| b.z.x)
@@ -302,7 +332,7 @@ impl SeaCliffSpec {
             let seaward = SIDES.map(|(di, dj)| {
                 index(i as isize + di, j as isize + dj).is_some_and(|n| kinds[n] == Kind::Sea)
             });
-            let mut beds = beds(ground, center, (root, top), sea, s, &mut rng);
+            let mut beds = beds(ground, center, (root, top), sea, (s, 0.03), &mut rng);
             // A broken edge: one face block in four has lost a bed or a few off its top.
             if seaward.contains(&true) && rng.unit() < 0.25 {
                 let lost = 1 + (3.0 * rng.unit()) as usize;
@@ -351,7 +381,9 @@ impl SeaCliffSpec {
                 if d > reach {
                     continue;
                 }
-                let top = sea + 0.2 - PLATFORM_SLOPE * d;
+                // Falling faster over its outer third, so its edge goes under the sea
+                // instead of stopping at a step.
+                let top = sea + 0.2 - PLATFORM_SLOPE * d - 0.3 * (d - 0.7 * reach).max(0.0);
                 // Each piece a little off the lattice and of its own size, so the edge is
                 // ragged, not a staircase.
                 let jitter = Vec2::new(rng.unit() - 0.5, rng.unit() - 0.5) * 0.5;
@@ -385,7 +417,19 @@ impl SeaCliffSpec {
                 let center = center + grid.to_world(shift);
                 let half = half * shrink;
                 let top = sea + (cliff_top - sea) * (0.5 + 0.45 * rng.unit());
-                let beds = beds(ground, center, (lowest - 2.0, top), sea, s, &mut rng);
+                let mut beds = beds(
+                    ground,
+                    center,
+                    (lowest - 2.0, top),
+                    sea,
+                    (s, 0.08),
+                    &mut rng,
+                );
+                // Its top beds worn narrower than the rest: what is left of a cap.
+                let n = beds.len();
+                for bed in beds.iter_mut().skip(n.saturating_sub(2)) {
+                    bed.inset += (0.1 + 0.2 * rng.unit()) * half.min_element();
+                }
                 blocks.push(CoastBlock {
                     center,
                     half,
@@ -406,13 +450,13 @@ impl SeaCliffSpec {
         for b in &blocks {
             let height = b.top() - sea;
             let mut effects = [0.0f32; 4];
-            for side in (0..4).filter(|&n| b.seaward[n]) {
-                let out = axes[side];
-                let (depth, length) = match side < 2 {
-                    true => (b.half.x, 2.0 * b.half.y),
-                    false => (b.half.y, 2.0 * b.half.x),
-                };
-                let face = b.center + out * depth;
+            for Side {
+                index: side,
+                out,
+                face,
+                length,
+            } in b.seaward_sides(grid.axis)
+            {
                 let probe = face - out * 0.5;
                 let open = if b.stack { 1.0 } else { exposure(face - out) };
                 let rho = (ground.resistance)(probe.extend(sea + 0.5));
@@ -423,7 +467,9 @@ impl SeaCliffSpec {
                     let along = length * ((p as f32 + 0.5) / pieces as f32 - 0.5);
                     // No deeper than a sixth of the block's width: the waves cut a
                     // narrow stack no further before it falls.
-                    let d = (self.notch.0 * e * (0.75 + 0.5 * rng.unit()))
+                    // A stack, narrow, stands only while its notch is shallow.
+                    let share = if b.stack { 0.5 } else { 1.0 };
+                    let d = (share * self.notch.0 * e * (0.75 + 0.5 * rng.unit()))
                         .min(b.half.min_element() / 3.0);
                     if d < 0.3 {
                         continue;
@@ -468,16 +514,13 @@ impl SeaCliffSpec {
                 });
                 continue;
             }
-            for side in (0..4).filter(|&n| b.seaward[n] && effects[n] >= self.caves.0) {
-                let out = axes[side];
-                let (depth, length) = match side < 2 {
-                    true => (b.half.x, 2.0 * b.half.y),
-                    false => (b.half.y, 2.0 * b.half.x),
-                };
-                if length < 5.0 {
+            for side in b.seaward_sides(grid.axis) {
+                let Side {
+                    out, face, length, ..
+                } = side;
+                if effects[side.index] < self.caves.0 || length < 5.0 {
                     continue;
                 }
-                let face = b.center + out * depth;
                 let width = 0.55 * length;
                 caves.push(Recess {
                     mouth: face.extend(floor),
@@ -488,18 +531,71 @@ impl SeaCliffSpec {
             }
         }
 
-        // Boulders on the platform at the foot of the cliff's seaward sides.
+        // Boulders on the platform at the foot of the cliff's seaward sides, and a few
+        // about each stack's foot.
         let notch_depth = self.notch.0 * 1.25;
+        // Where a boulder of `size` at `xy` comes to rest: on the platform, or on the sea
+        // floor (cleared to 4 m under the sea where the base's cliff stood) clear of the
+        // platform's edge; none in the cliff or a stack, where a cave's or an arch's
+        // hollow reaching out of the face would cut it, or near the region's sides.
+        let rest = |xy: Vec2, size: f32| -> Option<f32> {
+            let off_cliff = grid.block_at(xy).is_some_and(|(i, j)| !cliff[i + nu * j]);
+            let reach_of =
+                |sl: &Slab| (grid.to_frame(xy - sl.center).abs() - sl.half).max_element();
+            let under = slabs.iter().filter(|sl| reach_of(sl) < 0.0);
+            let beside = slabs.iter().any(|sl| reach_of(sl) < 0.5 * size + 2.0);
+            let base = match under.map(|sl| sl.z.y).reduce(f32::max) {
+                Some(top) => top,
+                None if beside => return None,
+                None => ground.height(xy).min(sea - 4.0),
+            };
+            let in_stack = blocks.iter().any(|o| {
+                o.stack
+                    && (grid.to_frame(xy - o.center).abs() - o.half)
+                        .cmplt(Vec2::splat(0.5 * size))
+                        .all()
+            });
+            let by_cave = caves.iter().any(|r| {
+                let d = xy - r.mouth.truncate();
+                d.dot(r.out.perp()).abs() < 0.5 * r.size.x + size
+                    && d.dot(r.out) < 0.25 * r.size.y + size + 2.0
+            }) || arches
+                .iter()
+                .any(|a| a.floor.truncate().distance(xy) < 0.5 * a.span + a.width + size);
+            let fits = base.is_finite()
+                && off_cliff
+                && !in_stack
+                && !by_cave
+                && size >= cell
+                && ground.side_room(xy) >= 1.5 * size + reach(s);
+            fits.then_some(base)
+        };
         let mut fallen = Vec::new();
-        for b in blocks.iter().filter(|b| !b.stack) {
+        let mut lay = |xy: Vec2, size: f32, rng: &mut Rng| {
+            let Some(base) = rest(xy, size) else { return };
+            let half = fallen_half(rng, size);
+            let sunk = 0.2 + 0.5 * rng.unit();
+            fallen.push(Fallen {
+                center: xy.extend(base - sunk * half.z),
+                half: quarter_turn(rng, half),
+            });
+        };
+        for b in &blocks {
+            if b.stack {
+                let n = 2 + (3.0 * rng.unit()) as usize;
+                for _ in 0..n {
+                    let d = Vec2::from_angle(rng.unit() * std::f32::consts::TAU);
+                    let size = s * (0.15 + 0.3 * rng.unit().powi(3));
+                    let off = b.half.length() + 0.5 * size + 2.0 * rng.unit();
+                    lay(b.center + d * off, size, &mut rng);
+                }
+                continue;
+            }
             let height = b.top() - sea;
-            for side in (0..4).filter(|&n| b.seaward[n]) {
-                let out = axes[side];
-                let (depth, length) = match side < 2 {
-                    true => (b.half.x, 2.0 * b.half.y),
-                    false => (b.half.y, 2.0 * b.half.x),
-                };
-                let face = b.center + out * depth;
+            for Side {
+                out, face, length, ..
+            } in b.seaward_sides(grid.axis)
+            {
                 let expected = self.talus.0 * length;
                 let n = expected.floor() as usize + usize::from(rng.unit() < expected.fract());
                 for _ in 0..n {
@@ -507,53 +603,7 @@ impl SeaCliffSpec {
                     let size = s * (0.2 + 0.5 * rng.unit().powi(3)) * (0.7 + 0.6 * far);
                     let off = notch_depth + 0.5 * size + (0.05 + 0.9 * far * far) * 0.35 * height;
                     let xy = face + out * off + out.perp() * (length * (rng.unit() - 0.5));
-                    let off_cliff = grid.block_at(xy).is_some_and(|(i, j)| !cliff[i + nu * j]);
-                    if !off_cliff {
-                        continue;
-                    }
-                    // On the platform, or on the sea floor (cleared to 4 m under the sea
-                    // where the base's cliff stood) clear of the platform's edge.
-                    let reach_of =
-                        |sl: &Slab| (grid.to_frame(xy - sl.center).abs() - sl.half).max_element();
-                    let under = slabs.iter().filter(|sl| reach_of(sl) < 0.0);
-                    let beside = slabs.iter().any(|sl| reach_of(sl) < 0.5 * size + 2.0);
-                    let base = match under.map(|sl| sl.z.y).reduce(f32::max) {
-                        Some(top) => top,
-                        None if beside => continue,
-                        None => ground.height(xy).min(sea - 4.0),
-                    };
-                    let standing = blocks
-                        .iter()
-                        .any(|o| o.stack && o.center.distance(xy) < o.half.length() + size);
-                    // None where a cave's or an arch's hollow, reaching out of the face,
-                    // would cut it.
-                    let by_cave = caves.iter().any(|r| {
-                        let d = xy - r.mouth.truncate();
-                        d.dot(r.out.perp()).abs() < 0.5 * r.size.x + size
-                            && d.dot(r.out) < 0.25 * r.size.y + size + 2.0
-                    }) || arches
-                        .iter()
-                        .any(|a| a.floor.truncate().distance(xy) < 0.5 * a.span + a.width + size);
-                    if !base.is_finite()
-                        || standing
-                        || by_cave
-                        || size < cell
-                        || ground.side_room(xy) < 1.5 * size + reach(s)
-                    {
-                        continue;
-                    }
-                    let half = 0.5
-                        * size
-                        * Vec3::new(
-                            0.7 + 0.6 * rng.unit(),
-                            0.45 + 0.55 * rng.unit(),
-                            0.3 + 0.6 * rng.unit(),
-                        );
-                    let sunk = 0.2 + 0.5 * rng.unit();
-                    fallen.push(Fallen {
-                        center: xy.extend(base - sunk * half.z),
-                        half: quarter_turn(&mut rng, half),
-                    });
+                    lay(xy, size, &mut rng);
                 }
             }
         }
@@ -696,16 +746,17 @@ fn median(mut v: Vec<f32>) -> Option<f32> {
 
 /// The beds of a block over `xy` from `root` to `top`: one from the root to 2 m under sea
 /// level, then a new bed wherever the resistance up the column departs from its bed's
-/// mean by 0.12 (at least a metre thick, at most 6 m); each weathered back by
+/// mean by 0.2 (from 1.5 m to 9 m thick: the geology's beds, not every ripple of its
+/// noise); each weathered back by
 /// [`RECESSION`] joint spacings times twice its softness squared, ±15% (a bed recedes
 /// alike from block to block, so its ledge runs along the face), and set off the block's
-/// axis by up to 3% of a joint spacing.
+/// axis by up to `shift` joint spacings.
 fn beds(
     ground: &Ground,
     xy: Vec2,
     (root, top): (f32, f32),
     sea: f32,
-    spacing: f32,
+    (spacing, shift): (f32, f32),
     rng: &mut Rng,
 ) -> Vec<Bed> {
     let rho = |z: f32| (ground.resistance)(xy.extend(z));
@@ -713,7 +764,7 @@ fn beds(
     let mut bed = |lo: f32, hi: f32, mean: f32| Bed {
         z: Vec2::new(lo, hi),
         inset: RECESSION * spacing * 2.0 * (1.0 - mean).powi(2) * (0.85 + 0.3 * rng.unit()),
-        shift: 0.03 * spacing * Vec2::new(2.0 * rng.unit() - 1.0, 2.0 * rng.unit() - 1.0),
+        shift: shift * spacing * Vec2::new(2.0 * rng.unit() - 1.0, 2.0 * rng.unit() - 1.0),
     };
     let mut out = vec![Bed {
         z: Vec2::new(root, start),
@@ -726,7 +777,7 @@ fn beds(
     while z + step < top {
         let r = rho(z + 0.5 * step);
         let mean = if n > 0 { sum / n as f32 } else { r };
-        if n > 0 && z - lo >= 1.0 && ((r - mean).abs() > 0.12 || z - lo >= 6.0) {
+        if n > 0 && z - lo >= 1.5 && ((r - mean).abs() > 0.2 || z - lo >= 9.0) {
             out.push(bed(lo, z, mean));
             (lo, sum, n) = (z, 0.0, 0);
         }

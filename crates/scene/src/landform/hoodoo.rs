@@ -33,6 +33,7 @@ use crate::field::{NoiseSpec, SkeletonSpec};
 use crate::rng::Rng;
 use crate::scene::NodeSpec;
 use crate::scene::landform::HoodooSpec;
+use crate::scene::spec::{Nary, WarpSpec};
 use crate::value::{NonNegative, P2, P3, Positive};
 
 /// A caprock's thickness, as a fraction of its symbol's height: caps are flat slabs.
@@ -47,6 +48,9 @@ const CLUMPS: u32 = 0x6_0b11;
 
 /// The thickness of a body's slices, metres: about a bed's.
 const SLICE: f32 = 1.0;
+
+/// The fluting warp over the hoodoos: its amplitude and wavelength in symbol sizes.
+const FLUTING: (f32, f32) = (0.07, 0.8);
 
 /// At most this many slices in a body.
 const SLICES: usize = 12;
@@ -289,6 +293,25 @@ impl HoodooSpec {
                 }
             }
         }
-        Ok(out)
+        if out.is_empty() {
+            return Ok(out);
+        }
+        // Fluting: one warp over the whole field, a tenth of the symbols' size high and half
+        // of it long, so each column bends and grooves its own way and none is a solid
+        // turned on a lathe (its slices alone, each a little off the axis, still read so).
+        Ok(vec![NodeSpec::Warp(WarpSpec {
+            name: None,
+            turbulence: NoiseSpec {
+                amplitude: NonNegative(FLUTING.0 * self.size.0),
+                wavelength: Positive(FLUTING.1 * self.size.0),
+                octaves: Octaves::new(3).unwrap_or_default(),
+                seed_offset: 21,
+            },
+            region: None,
+            child: Box::new(NodeSpec::Blend(Nary {
+                name: None,
+                children: out,
+            })),
+        })])
     }
 }

@@ -166,6 +166,17 @@ pub fn boxed(
     )
 }
 
+/// The half extents of a block of `size` fallen from a bedded face: slabs and blocks, as a
+/// bed's joints part it into pieces from flat to near cubic.
+pub fn fallen_half(rng: &mut Rng, size: f32) -> Vec3 {
+    0.5 * size
+        * Vec3::new(
+            0.7 + 0.6 * rng.unit(),
+            0.45 + 0.55 * rng.unit(),
+            0.3 + 0.6 * rng.unit(),
+        )
+}
+
 /// `half` turned by a quarter turn about the vertical, or not, at random.
 pub fn quarter_turn(rng: &mut Rng, half: Vec3) -> Vec3 {
     match rng.unit() < 0.5 {

@@ -15,7 +15,10 @@ use glam::Vec3;
 
 use crate::field::falloff::{ISO, WYVILL_MAX_SLOPE, WYVILL_PEAK_X};
 use crate::field::noise::{F3, G3, GAIN, LACUNARITY, OCTAVE_SHIFT, R2, SIMPLEX_SCALE};
-use crate::render::shade::{CAVE_DIRS, CAVE_FLOOR, CAVE_RAMP, CAVE_STEPS, CAVE_TILT, WET};
+use crate::render::shade::{
+    CAVE_DIRS, CAVE_FLOOR, CAVE_RAMP, CAVE_STEPS, CAVE_TILT, SURF_DEPTH, WAVE_LENGTH, WAVE_SEED,
+    WAVE_SHORT, WAVE_SLOPE, WET,
+};
 use crate::tape::FEATURES;
 use crate::tape::format::GROUPS;
 use crate::voxel::sparse::{BRICK, BRICK_NODES, NONE};
@@ -90,9 +93,16 @@ pub fn wgsl_header() -> String {
     );
     f32s(
         &mut line,
-        "Water (the renderer's shade.rs): what a wetted floor keeps of its light.",
-        &[("WET", WET)],
+        "Water (the renderer's shade.rs): a wetted floor's light; waves; surf.",
+        &[
+            ("WET", WET),
+            ("WAVE_LENGTH", WAVE_LENGTH),
+            ("WAVE_SHORT", WAVE_SHORT),
+            ("WAVE_SLOPE", WAVE_SLOPE),
+            ("SURF_DEPTH", SURF_DEPTH),
+        ],
     );
+    line(format!("const WAVE_SEED: u32 = {WAVE_SEED}u;"));
     line(format!("const CAVE_DIRS: u32 = {CAVE_DIRS}u;"));
     line(format!("const CAVE_STEPS: u32 = {CAVE_STEPS}u;"));
     line(
