@@ -293,3 +293,38 @@ fn a_job_view_of_no_feature_is_written_after_the_features() {
     assert_eq!(names, ["pit", "overlook", "sheet"]);
     assert!(rgb(&r.views[1].1).width() == 32);
 }
+
+/// A scene's climate sets the cover between the rocks: `Arid` (trees/fin_arch.ron) gives
+/// red sand and dark scrub where the same scene, temperate, grows green grass; the rock
+/// stays the rock.
+#[test]
+fn an_arid_scene_lies_on_sand_and_scrub_a_temperate_one_on_grass() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/fin_arch.ron");
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.contains("climate: Arid"), "the fin arch stands in a desert");
+    let cover = |text: &str| {
+        let scene = karstic::scene::parse_scene(text, &path).unwrap();
+        let tree = karstic::scene::SceneFile {
+            scene: scene.clone(),
+            path: path.clone(),
+            base_dir: path.parent().unwrap().to_path_buf(),
+        }
+        .compile()
+        .unwrap()
+        .tree;
+        let m = karstic::picture::materials(&scene, &tree, None);
+        // Flat ground far from the fin, at many places (patches of the second cover).
+        let flat: Vec<glam::Vec3> = (0..200)
+            .map(|k| m.albedo(glam::Vec3::new(-70.0 + 0.7 * k as f32, 30.0, 0.0), glam::Vec3::Z))
+            .collect();
+        (flat, m.rock)
+    };
+    let (arid, arid_rock) = cover(&text);
+    let (temperate, rock) = cover(&text.replace("climate: Arid,", ""));
+    assert_eq!(arid_rock, rock);
+    let sand = arid.iter().filter(|a| a.x > 1.3 * a.y).count();
+    let grass = temperate.iter().filter(|a| a.y > a.x).count();
+    assert!(sand > 100, "{sand} of 200 arid samples are red sand");
+    assert!(grass > 100, "{grass} of 200 temperate samples are green");
+    assert!(arid.iter().all(|a| a.y <= a.x), "no green in the desert");
+}

@@ -151,6 +151,15 @@ impl Materials {
         }
     }
 
+    /// The ground cover of a plateau desert: red sand where grass would grow (albedo
+    /// about 0.3, as the Colorado Plateau's dune sand), patches of dark desert scrub
+    /// (sagebrush, juniper) where dry grass would, redder soil on the slopes.
+    pub fn arid(&mut self) {
+        self.grass = Vec3::new(0.32, 0.2, 0.12);
+        self.dry = Vec3::new(0.1, 0.1, 0.06);
+        self.soil = Vec3::new(0.26, 0.15, 0.09);
+    }
+
     /// Vertical offset of `p` from the ground — the DEM's elevation, without its detail
     /// (the GPU reads the same) — 0 without a terrain or off its cells.
     pub fn off_ground(&self, p: Vec3) -> f32 {

@@ -22,6 +22,7 @@ use crate::render::shade::Water;
 use crate::render::views::frame_surface;
 use crate::render::{Camera, Materials, Method, RenderError, RenderSettings};
 use crate::scene::Scene;
+use crate::scene::spec::Climate;
 
 pub use guides::view_guides;
 
@@ -49,6 +50,9 @@ pub fn materials_in(
         .and_then(|j| j.snow_line)
         .map(|z| SnowLine::at(z.0, &b));
     m.geology = scene.geology().map(Arc::new);
+    if scene.job.as_ref().is_some_and(|j| j.climate == Climate::Arid) {
+        m.arid();
+    }
     m
 }
 

@@ -235,6 +235,28 @@ pub struct JobSpec {
     /// joints and recesses read.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sun: Option<SunSpec>,
+    /// What covers the ground that is not rock in the pictures and the meshes' colours
+    /// (default `Temperate`: grass, patches of dry grass, soil on the slopes).
+    #[serde(default, skip_serializing_if = "Climate::is_temperate")]
+    pub climate: Climate,
+}
+
+/// The ground cover of a scene: what grows, or does not, between the rocks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Climate {
+    /// Grass, patches of dry grass, soil on the slopes: a humid hill country.
+    #[default]
+    Temperate,
+    /// Red sand between the rocks, patches of dark desert scrub, redder soil on the
+    /// slopes: the plateau deserts where arches, fins and hoodoos stand (hoodoos on a
+    /// lawn read as a set to blind judges).
+    Arid,
+}
+
+impl Climate {
+    fn is_temperate(&self) -> bool {
+        *self == Climate::Temperate
+    }
 }
 
 /// The sun of a scene's pictures.
