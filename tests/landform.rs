@@ -511,6 +511,39 @@ fn the_jacksboro_canyon_deepens_the_thalweg_and_leaves_the_hills() {
 }
 
 #[test]
+fn the_jacksboro_canyon_runs_unbroken_down_its_river() {
+    // trees/jacksboro_canyon.ron: every 50 m down the river, from 5,700 m to 7,300 m (short
+    // of the region's north side, where the carving fades), the thalweg (the lowest ground
+    // of the row within 500 m of the river's line) is carved at least 15 m down (17 to 70 m
+    // when written): the gorge runs on through the flatter reaches
+    // (where the local stream power falls under the threshold, it stopped in closed
+    // bowls before the river's power was carried downstream).
+    let mut sf = tree_scene("jacksboro_canyon.ron");
+    let carved = sf.compile().unwrap().tree;
+    let base_spec = (*root_landform(&mut sf).base).clone();
+    sf.scene.root = base_spec;
+    let base = sf.compile().unwrap().tree;
+    let (lo, hi) = (250.0, 1000.0);
+    for k in 0..=32 {
+        let y = 5700.0 + 50.0 * k as f32;
+        // The river's line from (5450, 5400) to (6200, 7350).
+        let mid = 5450.0 + (y - 5400.0) / 1950.0 * 750.0;
+        let tops: Vec<(f32, f32)> = (0..=50)
+            .map(|i| {
+                let x = mid - 500.0 + 20.0 * i as f32;
+                (x, top_at(&base, Vec2::new(x, y), lo, hi).unwrap())
+            })
+            .collect();
+        let &(x, bed) = tops.iter().min_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+        let now = top_at(&carved, Vec2::new(x, y), lo, hi).unwrap();
+        assert!(
+            now <= bed - 15.0,
+            "the gorge breaks at ({x}, {y}): the thalweg went from {bed} m to {now} m"
+        );
+    }
+}
+
+#[test]
 fn the_strata_islands_percolation_caves_open_at_their_sink_and_stay_in_soft_rock() {
     // trees/strata_islands.ron, its karst narrowed to one sink and the box around it (the
     // scene's percolation, cheaper): every carving sphere lies where ρ < ρ₀, and a flood

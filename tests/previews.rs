@@ -301,7 +301,10 @@ fn a_job_view_of_no_feature_is_written_after_the_features() {
 fn an_arid_scene_lies_on_sand_and_scrub_a_temperate_one_on_grass() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("trees/fin_arch.ron");
     let text = std::fs::read_to_string(&path).unwrap();
-    assert!(text.contains("climate: Arid"), "the fin arch stands in a desert");
+    assert!(
+        text.contains("climate: Arid"),
+        "the fin arch stands in a desert"
+    );
     let cover = |text: &str| {
         let scene = karstic::scene::parse_scene(text, &path).unwrap();
         let tree = karstic::scene::SceneFile {
@@ -315,7 +318,12 @@ fn an_arid_scene_lies_on_sand_and_scrub_a_temperate_one_on_grass() {
         let m = karstic::picture::materials(&scene, &tree, None);
         // Flat ground far from the fin, at many places (patches of the second cover).
         let flat: Vec<glam::Vec3> = (0..200)
-            .map(|k| m.albedo(glam::Vec3::new(-70.0 + 0.7 * k as f32, 30.0, 0.0), glam::Vec3::Z))
+            .map(|k| {
+                m.albedo(
+                    glam::Vec3::new(-70.0 + 0.7 * k as f32, 30.0, 0.0),
+                    glam::Vec3::Z,
+                )
+            })
             .collect();
         (flat, m.rock)
     };

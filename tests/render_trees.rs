@@ -52,7 +52,7 @@ fn name(path: &Path) -> String {
 /// Scenes whose nodes have no GPU encoding (elevation trees, erosion by a geology, as the
 /// fin arch's weathering):
 /// `tests/elevation_trees.rs` and `tests/geology.rs` check that the tape names the reason.
-/// And the canyon: its 158k carving spheres make a tape of as many instructions, which
+/// And the canyon: its 181k carving spheres make a tape of as many instructions, which
 /// the GPU walks in full at every point; lavapipe ends a shader's loop after its
 /// iteration budget, so the software adapter's values lose the carving there (a tape
 /// that skips far children, as the CPU's BVH does, is not built yet). And the bluff: its

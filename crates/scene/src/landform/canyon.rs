@@ -1,7 +1,7 @@
 //! River canyons and gorges (Paris et al. 2019 §6.1): the riverbed is where the stream
-//! power `σ = A^½·s` of the terrain (`analysis::relief::stream_power`, drainage by
-//! Freeman 1991 over a depression-filled grid, Barnes et al. 2014) exceeds a threshold;
-//! a convolution spreads its stress over the banks. The gorge is then carved as a volume:
+//! power `σ = A^½·s` of the terrain (drainage by Freeman 1991 over a depression-filled
+//! grid, Barnes et al. 2014), with at least `min_area` of drainage and carried on down the
+//! river, exceeds a threshold; a convolution spreads its stress over the banks. The gorge is then carved as a volume:
 //! negative spheres on a jittered lattice fill the rock from the incised floor — `depth`
 //! metres below the bed where the stream is strongest, less up the tributaries — to the
 //! surface, each of energy the erosion effect `e(ρ, σ)` of the rock at its centre. The
@@ -15,7 +15,9 @@
 use glam::{Vec2, Vec3};
 
 use super::{Ground, LandformError, effect, point};
-use crate::analysis::relief::stream_power;
+use crate::analysis::flow::{NEIGHBOURS, drainage_area, fill_depressions};
+use crate::analysis::relief::slope;
+use crate::dem::Heightfield;
 use crate::field::ISO;
 use crate::scene::NodeSpec;
 use crate::scene::landform::CanyonSpec;
@@ -51,7 +53,7 @@ impl CanyonSpec {
     pub fn stress(&self, ground: &Ground) -> Vec<Stress> {
         let top = &ground.top;
         let (nx, ny) = (top.nx(), top.ny());
-        let sp = stream_power(top);
+        let sp = self.river_power(top);
         let z = top.samples();
         let t = self.threshold.0;
         let cell = top.cell();
@@ -85,6 +87,49 @@ impl CanyonSpec {
             }
         }
         out
+    }
+
+    /// The stream power of the river at each sample of `top`: `A^½·s` where the drainage
+    /// area reaches `min_area` (0 elsewhere), then carried down the river — each sample
+    /// passes its power on to its steepest receiver on the depression-filled grid, which
+    /// keeps the larger — so a gorge once cut runs on down its river through the flatter
+    /// reaches, where the local power would fall under the threshold and leave the gorge
+    /// as closed bowls.
+    fn river_power(&self, top: &Heightfield) -> Vec<f32> {
+        let filled = fill_depressions(top);
+        let area = drainage_area(&filled);
+        let mut power: Vec<f32> = slope(top)
+            .iter()
+            .zip(&area)
+            .map(|(s, a)| {
+                if *a >= self.min_area.0 {
+                    a.sqrt() * s
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let (nx, ny) = (top.nx(), top.ny());
+        let f = filled.samples();
+        let mut order: Vec<usize> = (0..nx * ny).filter(|&k| f[k].is_finite()).collect();
+        order.sort_by(|&a, &b| f[b].total_cmp(&f[a]).then(a.cmp(&b)));
+        for k in order {
+            let (i, j) = ((k % nx) as isize, (k / nx) as isize);
+            let receiver = NEIGHBOURS
+                .iter()
+                .filter_map(|&(di, dj)| {
+                    let (a, b) = (i + di, j + dj);
+                    let inside = a >= 0 && b >= 0 && (a as usize) < nx && (b as usize) < ny;
+                    let n = inside.then(|| a as usize + nx * b as usize)?;
+                    let drop = (f[k] - f[n]) / ((di * di + dj * dj) as f32).sqrt();
+                    (drop > 0.0).then_some((n, drop))
+                })
+                .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)));
+            if let Some((n, _)) = receiver {
+                power[n] = power[n].max(power[k]);
+            }
+        }
+        power
     }
 
     /// The river's stress at `z` over a sample stressed by `s`: the bed's strength over

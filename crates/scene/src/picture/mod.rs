@@ -50,7 +50,11 @@ pub fn materials_in(
         .and_then(|j| j.snow_line)
         .map(|z| SnowLine::at(z.0, &b));
     m.geology = scene.geology().map(Arc::new);
-    if scene.job.as_ref().is_some_and(|j| j.climate == Climate::Arid) {
+    if scene
+        .job
+        .as_ref()
+        .is_some_and(|j| j.climate == Climate::Arid)
+    {
         m.arid();
     }
     m

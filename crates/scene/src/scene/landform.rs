@@ -164,6 +164,11 @@ pub struct CanyonSpec {
     /// Samples with a smaller effect make no sphere.
     #[serde(default = "default_min_effect")]
     pub min_effect: Unit,
+    /// Drainage area below which no sample is riverbed, m² (default 0): a steep gully high
+    /// on a hillside has the stream power of a river and a fraction of its water, and
+    /// cuts no gorge.
+    #[serde(default)]
+    pub min_area: NonNegative,
 }
 
 fn hoodoo_default_lambda() -> Unit {
