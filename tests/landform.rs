@@ -462,6 +462,15 @@ fn top_at(tree: &Tree, xy: Vec2, lo: f32, hi: f32) -> Option<f32> {
     None
 }
 
+/// `trees/jacksboro_canyon.ron` compiled, and its base: the valley without the canyon.
+fn canyon_and_valley() -> (Tree, Tree) {
+    let mut sf = tree_scene("jacksboro_canyon.ron");
+    let carved = sf.compile().unwrap().tree;
+    let base_spec = (*root_landform(&mut sf).base).clone();
+    sf.scene.root = base_spec;
+    (carved, sf.compile().unwrap().tree)
+}
+
 #[test]
 fn the_jacksboro_canyon_deepens_the_thalweg_and_leaves_the_hills() {
     // trees/jacksboro_canyon.ron: the canyon generator on a valley of the Jacksboro DEM.
@@ -469,11 +478,7 @@ fn the_jacksboro_canyon_deepens_the_thalweg_and_leaves_the_hills() {
     // between x = 5450 and 5850) is lowered by at least 50 m into the gorge (61–70 m when
     // written), and high on the slopes
     // (150 m above the thalweg) the field is the DEM's, bit for bit.
-    let mut sf = tree_scene("jacksboro_canyon.ron");
-    let carved = sf.compile().unwrap().tree;
-    let base_spec = (*root_landform(&mut sf).base).clone();
-    sf.scene.root = base_spec;
-    let base = sf.compile().unwrap().tree;
+    let (carved, base) = canyon_and_valley();
     let (lo, hi) = (250.0, 1000.0);
     let mut away = 0;
     for y in [6350.0, 6400.0, 6450.0, 6500.0, 6550.0] {
@@ -518,11 +523,7 @@ fn the_jacksboro_canyon_runs_unbroken_down_its_river() {
     // when written): the gorge runs on through the flatter reaches
     // (where the local stream power falls under the threshold, it stopped in closed
     // bowls before the river's power was carried downstream).
-    let mut sf = tree_scene("jacksboro_canyon.ron");
-    let carved = sf.compile().unwrap().tree;
-    let base_spec = (*root_landform(&mut sf).base).clone();
-    sf.scene.root = base_spec;
-    let base = sf.compile().unwrap().tree;
+    let (carved, base) = canyon_and_valley();
     let (lo, hi) = (250.0, 1000.0);
     for k in 0..=32 {
         let y = 5700.0 + 50.0 * k as f32;
