@@ -97,14 +97,32 @@ fn a_sea_cliff_rebuilds_the_coast_as_joint_blocks_with_a_platform_and_stacks() {
                 sl.center + c.grid.to_world(f * sl.half)
             })
             .collect();
-        // The platform itself: its median top (its roughness is 0.35 m, its fall 2°;
-        // boulders lie on it).
+        // The platform itself, clear of the blocks (a piece, off its lattice, reaches a
+        // little under the cliff's foot) and of the boulders on it (as large as a piece):
+        // its median top (its roughness is 0.35 m, its fall 2°).
+        let under_block = |xy: Vec2| {
+            c.blocks.iter().any(|b| {
+                c.grid
+                    .to_frame(xy - b.center)
+                    .abs()
+                    .cmplt(b.half + Vec2::splat(2.0))
+                    .all()
+            })
+        };
         let mut tops: Vec<f32> = points
             .iter()
+            .filter(|&&xy| {
+                !under_block(xy)
+                    && c.fallen
+                        .iter()
+                        .all(|f| f.center.truncate().distance(xy) > f.half.max_element() + 0.5)
+            })
             .map(|&xy| top_at(&tree, xy, sea - 14.0, sea + 40.0).unwrap_or(sea - 14.0))
             .collect();
         tops.sort_by(f32::total_cmp);
-        medians.push(tops[12]);
+        if tops.len() >= 5 {
+            medians.push(tops[tops.len() / 2]);
+        }
         for xy in points {
             let p = xy.extend(sea + 5.0);
             let stack = stacks.iter().any(|b| {

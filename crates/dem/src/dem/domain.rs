@@ -194,7 +194,7 @@ impl Mask {
 
 /// Squared Euclidean distance from each node to the nearest `feature` node, with node
 /// spacing `(sx, sy)` (Felzenszwalb & Huttenlocher 2012, separable lower envelopes).
-fn edt(feature: &[bool], nx: usize, ny: usize, sx: f64, sy: f64) -> Vec<f64> {
+pub fn edt(feature: &[bool], nx: usize, ny: usize, sx: f64, sy: f64) -> Vec<f64> {
     const INF: f64 = 1e300;
     let mut d: Vec<f64> = feature.iter().map(|&f| if f { 0.0 } else { INF }).collect();
     let n = nx.max(ny);

@@ -37,6 +37,7 @@ pub mod pyramid;
 use std::path::Path;
 
 pub use detail::{Detail, DetailParams};
+pub use domain::edt;
 pub use error::DemError;
 pub use georef::{Crs, Georef, RasterType};
 pub use grid::{Heightfield, Interpolation};

@@ -693,39 +693,16 @@ impl SeaCliffSpec {
 }
 
 /// Each sample's distance from the shore (the nearest sample of `ground` whose top stands
-/// over `sea`), metres: a two-pass chamfer over the analysis grid (steps of a cell and
-/// of a diagonal), 0 on land.
+/// over `sea`), metres, 0 on land: the exact Euclidean distance transform the DEM's
+/// domain uses ([`crate::dem::edt`]).
 fn shore_distance(ground: &Ground, sea: f32) -> Vec<f32> {
     let top = &ground.top;
-    let (nx, ny) = (top.nx(), top.ny());
     let c = top.cell();
-    let diagonal = c.length();
-    let z = top.samples();
-    let mut d: Vec<f32> = z
-        .iter()
-        .map(|&h| if h > sea { 0.0 } else { f32::INFINITY })
-        .collect();
-    let steps = [
-        (-1, 0, c.x),
-        (0, -1, c.y),
-        (-1, -1, diagonal),
-        (1, -1, diagonal),
-    ];
-    let mut pass = |order: &mut dyn Iterator<Item = usize>, sign: isize| {
-        for k in order {
-            let (i, j) = ((k % nx) as isize, (k / nx) as isize);
-            for &(di, dj, w) in &steps {
-                let (a, b) = (i + sign * di, j + sign * dj);
-                if a >= 0 && b >= 0 && (a as usize) < nx && (b as usize) < ny {
-                    let n = a as usize + nx * b as usize;
-                    d[k] = d[k].min(d[n] + w);
-                }
-            }
-        }
-    };
-    pass(&mut (0..nx * ny), 1);
-    pass(&mut (0..nx * ny).rev(), -1);
-    d
+    let land: Vec<bool> = top.samples().iter().map(|&h| h > sea).collect();
+    crate::dem::edt(&land, top.nx(), top.ny(), f64::from(c.x), f64::from(c.y))
+        .into_iter()
+        .map(|d2| d2.sqrt() as f32)
+        .collect()
 }
 
 /// The cleared box of cell `(i, j)`, joint to joint and a falloff beyond, over `z`.
