@@ -618,7 +618,19 @@ fn arch() -> (
     Tree,
     karstic::geology::Geology,
 ) {
-    let file = scene_file(ARCH_SCENE);
+    arch_in(ARCH_SCENE)
+}
+
+/// The arch of a scene of one `Arch` landform over the ground of [`ARCH_SCENE`]: its
+/// shape, the compiled tree and the geology.
+fn arch_in(
+    scene: &str,
+) -> (
+    karstic::landform::ArchShape,
+    Tree,
+    karstic::geology::Geology,
+) {
+    let file = scene_file(scene);
     let geology = file.scene.geology().unwrap();
     let NodeSpec::Landform(l) = &file.scene.root else {
         panic!("a landform")
@@ -634,7 +646,8 @@ fn arch() -> (
     .unwrap()
     .tree;
     let rho = |p: Vec3| geology.resistance(p);
-    let region = Aabb::new(Vec3::new(-80.0, -60.0, -30.0), Vec3::new(80.0, 60.0, 30.0));
+    let r = l.region.expect("the arch gives its region");
+    let region = Aabb::new(r.min.0, r.max.0);
     let ground = Ground::new(&base, region, 2.0, &rho, l.full_seed(3)).unwrap();
     let shape = spec.shape(&ground).unwrap();
     let tree = file.compile().unwrap().tree;
@@ -725,6 +738,57 @@ fn an_arch_varies_along_its_span_and_stands_on_rooted_abutments() {
     }
     // The same file gives the same arch.
     assert_eq!(arch().0, s);
+}
+
+/// `fins: 3` stands three fins of the same joint set on the arch's left, each clear of the
+/// last by a slot, rooted in the ground and rock up to most of its height, none across the
+/// sight line through the opening (the sky shows through it).
+#[test]
+fn fins_beside_an_arch_stand_clear_of_its_opening() {
+    let scene = ARCH_SCENE
+        .replace(
+            "(min: (-80, -60, -30), max: (80, 60, 30))",
+            "(min: (-130, -60, -30), max: (130, 100, 30))",
+        )
+        .replace("to: (20, 0))", "to: (20, 0), fins: 3)");
+    let (s, t, _) = arch_in(&scene);
+    assert_eq!(s.fins.len(), 3, "{} fins", s.fins.len());
+    let side = |b: &[karstic::landform::FinBlock]| {
+        b.iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), k| {
+                (lo.min(k.y.x), hi.max(k.y.y))
+            })
+    };
+    let mut edge = side(&s.blocks).1;
+    for f in &s.fins {
+        let (lo, hi) = side(&f.blocks);
+        let width = f.blocks.iter().map(|b| b.y.y - b.y.x).fold(0.0, f32::max);
+        assert!(
+            lo > edge + 0.3 * width,
+            "a fin at y ≥ {lo} crowds the last, which ends at {edge}"
+        );
+        edge = hi;
+        let height = f.crest - f.ground;
+        assert!(height > 10.0, "a fin {height} m high");
+        for k in 0..=20 {
+            let p = f
+                .center
+                .extend(f.ground - 2.0 + k as f32 * (0.7 * height + 2.0) / 20.0);
+            assert!(t.value(p) > ISO, "a fin is broken at {p}");
+        }
+    }
+    // Straight through the opening, from well before the arch's fin to well behind the
+    // last fin, at the middle of the opening's height: all air.
+    let z = 0.5 * (s.ground + s.ceiling);
+    for y in (-100..=180).map(|k| 0.5 * k as f32) {
+        for x in [-4.0f32, 0.0, 4.0] {
+            let p = Vec3::new(x, y, z);
+            assert!(
+                t.value(p) < ISO,
+                "rock across the opening's sight line at {p}"
+            );
+        }
+    }
 }
 
 /// On a 25° slope an arch's fin runs down past its lower foot: its root must reach below

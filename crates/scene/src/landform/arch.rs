@@ -27,6 +27,7 @@
 
 use glam::{Vec2, Vec3};
 
+use super::joints::boulder;
 use super::{Ground, LandformError, noise, p3, round3, solid};
 use crate::field::skeleton::Size3;
 use crate::field::{NoiseSpec, SkeletonSpec};
@@ -40,6 +41,20 @@ use crate::value::{Dir3, Finite, NonNegative, Positive};
 /// Spans the generator accepts, metres: a metre-wide window is a pothole, not an arch,
 /// and no known arch spans more than about 120 m.
 const SPANS: (f32, f32) = (4.0, 300.0);
+
+/// How far from the arch's middle the fins beside it begin, as a fraction of its fin's
+/// half length: the fins stand en échelon off its ends, so the sky shows through its
+/// opening from either side.
+const OPEN: f32 = 0.45;
+
+/// How far the blocks' tops step down toward a fin's ends, as a fraction of its height:
+/// a fin's end breaks back block by block along its joints, so its crest comes down in
+/// steps (a dome alone drew one smooth half-lens, every fin alike).
+const STEP_DOWN: f32 = 0.6;
+
+/// Height of the dome that rounds a fin's crest at its ends, as a fraction of the fin's
+/// height: it takes the stepped blocks' outer corners off.
+const DOME_END: f32 = 0.35;
 
 /// How far below the lowest ground under the fin it is rooted, as a fraction of its
 /// height above that ground.
@@ -63,8 +78,26 @@ pub struct ArchShape {
     pub crest: f32,
     /// The fin's joint blocks in the arch's frame, from `from`'s side to `to`'s.
     pub blocks: Vec<Block>,
-    /// Fallen blocks on the ground beside the fin, in the arch's frame.
+    /// Fallen blocks on the ground beside the fins, in the arch's frame.
     pub talus: Vec<Talus>,
+    /// Bottom of the fin.
+    pub root: f32,
+    /// The fins of the same joint set beside the arch's, in the arch's frame.
+    pub fins: Vec<Fin>,
+}
+
+/// A fin beside the arch's, without an opening: its joint blocks (in the arch's frame),
+/// the middle of its footprint, the ground there, its crest and its root.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fin {
+    /// Joint blocks, from one end to the other.
+    pub blocks: Vec<Block>,
+    /// Middle of the footprint, arch frame.
+    pub center: Vec2,
+    /// Ground height at its middle.
+    pub ground: f32,
+    /// Height of its crest.
+    pub crest: f32,
     /// Bottom of the fin.
     pub root: f32,
 }
@@ -89,8 +122,6 @@ pub struct Talus {
     pub center: Vec3,
     /// Half extents.
     pub half: Vec3,
-    /// Turn about +z, degrees.
-    pub yaw: f32,
 }
 
 impl ArchSpec {
@@ -126,13 +157,26 @@ impl ArchSpec {
         let mut rng = Rng::new(ground.seed ^ 0xa5c4_0ac4);
         // Where the lintel has weathered thinnest: a waist somewhere over the opening.
         let waist = span * (rng.unit() - 0.5) * 0.5;
-        let blocks = blocks(&mut rng, half, width, crest, (waist, 0.2 * span));
+        let blocks = blocks(
+            &mut rng,
+            half,
+            width,
+            (crest, rise + lintel),
+            (waist, 0.2 * span),
+        );
         let frame = |p: Vec2| center + axis * p.x + axis.perp() * p.y;
+        let fins = fins(&mut rng, self.fins, (half, width, crest - g), &|p| {
+            ground.height(frame(p))
+        });
+        let on_ground = |p: Vec2| {
+            let xy = frame(p);
+            ground.surface_near(xy, ground.height(xy), 0.5 * width)
+        };
         let talus = match self.talus {
-            true => talus(&mut rng, &blocks, width, |p| {
-                let xy = frame(p);
-                ground.surface_near(xy, ground.height(xy), 0.5 * width)
-            }),
+            true => std::iter::once(&blocks)
+                .chain(fins.iter().map(|f| &f.blocks))
+                .flat_map(|b| talus(&mut rng, b, width, on_ground))
+                .collect(),
             false => Vec::new(),
         };
         Ok(ArchShape {
@@ -145,6 +189,7 @@ impl ArchSpec {
             blocks,
             talus,
             root: low - ROOT * (crest - low),
+            fins,
         })
     }
 
@@ -171,6 +216,55 @@ fn lowest_ground(ground: &Ground, center: Vec2, axis: Vec2, half: f32, width: f3
         .fold(f32::INFINITY, f32::min)
 }
 
+/// `n` fins beside the arch's (of half length, width and height `arch`), on its left
+/// (+y, looking from `from` to `to`), so the arch's fin stands in front of the field seen
+/// from its right: each a joint spacing from the last — its own width plus a slot of 0.6
+/// to 1.6 widths weathered open along the joint between them — from 35% to 80% of the
+/// arch fin's length, off its ends by turns (from [`OPEN`] of its half length out), 70% to
+/// 120% as wide, waisted as the arch's fin is, from 80% to 130% as high above its own
+/// ground (`height` at a point of the arch's frame), rooted as the arch's fin is; a fin
+/// whose ends or middle are off the region's ground is left out.
+fn fins(rng: &mut Rng, n: u32, arch: (f32, f32, f32), height: &dyn Fn(Vec2) -> f32) -> Vec<Fin> {
+    let (half, width, rise) = arch;
+    let mut edge = 0.5 * width;
+    (0..n)
+        .filter_map(|k| {
+            let w = width * (0.7 + 0.5 * rng.unit());
+            let across = edge + width * (0.6 + rng.unit()) + 0.5 * w;
+            edge = across + 0.5 * w;
+            let h = half * (0.35 + 0.45 * rng.unit());
+            let end = [-1.0, 1.0][k as usize % 2];
+            let along = end * (OPEN * half + h);
+            let center = Vec2::new(along, across);
+            let ground = height(center);
+            let lowest = [-h, 0.0, h]
+                .map(|x| height(center + Vec2::new(x, 0.0)))
+                .into_iter()
+                .fold(ground, f32::min);
+            if !lowest.is_finite() {
+                return None;
+            }
+            let crest = ground + rise * (0.8 + 0.5 * rng.unit());
+            let waist = (h * (rng.unit() - 0.5), 0.3 * h);
+            let blocks = blocks(rng, h, w, (crest, crest - ground), waist)
+                .into_iter()
+                .map(|b| Block {
+                    x: b.x + Vec2::splat(center.x),
+                    y: b.y + Vec2::splat(center.y),
+                    ..b
+                })
+                .collect();
+            Some(Fin {
+                blocks,
+                center,
+                ground,
+                crest,
+                root: lowest - ROOT * (crest - lowest),
+            })
+        })
+        .collect()
+}
+
 /// The ceiling's height above `g` at `xy`: where, between 30% and 70% of the span above
 /// the ground, the resistance rises most steeply going up (a soft bed under a hard one);
 /// 45% of the span when the rock is the same all the way up.
@@ -186,7 +280,14 @@ fn hard_bed(ground: &Ground, xy: Vec2, g: f32, span: f32) -> f32 {
 /// and reach along the span), where the lintel weathered thinnest; tops from a sixth of a
 /// width below the crest to half a width above it (the dome trims them), so the crest
 /// steps at some joints.
-fn blocks(rng: &mut Rng, half: f32, width: f32, crest: f32, waist: (f32, f32)) -> Vec<Block> {
+fn blocks(
+    rng: &mut Rng,
+    half: f32,
+    width: f32,
+    crest: (f32, f32),
+    waist: (f32, f32),
+) -> Vec<Block> {
+    let (crest, height) = crest;
     let mut joints = vec![-half];
     while let Some(&x) = joints.last()
         && x < half
@@ -215,7 +316,8 @@ fn blocks(rng: &mut Rng, half: f32, width: f32, crest: f32, waist: (f32, f32)) -
             Block {
                 x: Vec2::new(j[0], j[1]),
                 y: Vec2::new(-sides.0, sides.1),
-                top: crest + width * (-1.0 / 6.0 + (2.0 / 3.0) * rng.unit()),
+                top: crest - STEP_DOWN * height * (mid / half).abs().powf(2.5)
+                    + width * (-1.0 / 6.0 + (2.0 / 3.0) * rng.unit()),
             }
         })
         .collect()
@@ -225,9 +327,8 @@ fn blocks(rng: &mut Rng, half: f32, width: f32, crest: f32, waist: (f32, f32)) -
 /// at a point of the arch's frame, `None` where it cannot be found): about three every
 /// width along each face, many small and few large (a cubed draw: from a twelfth to half
 /// the width across), most near the foot and a few rolled farther (up to five of their
-/// sizes off the face), sunk into the ground by a fifth to four fifths of their height,
-/// turned at random (the ellipsoid that stands for a block is axis-aligned: the turn sets
-/// its radii along x and y). An even scatter of like blocks read as "pebbles in a neat
+/// sizes off the face), sunk into the ground by a tenth to a third of their height, turned
+/// and tilted at random ([`boulder`]). An even scatter of like blocks read as "pebbles in a neat
 /// line".
 fn talus(
     rng: &mut Rng,
@@ -261,43 +362,46 @@ fn talus(
                     0.6 + 0.6 * rng.unit(),
                     0.55 + 0.5 * rng.unit(),
                 );
-            // Sunk by a fifth to four fifths of its height: a block resting on a slope
-            // settles into it, and one only touching the ground would leave slivers of air
-            // under its edge.
-            let sunk = 0.2 + 0.6 * rng.unit();
+            // Sunk by a tenth to a third of its height: a block resting on a slope settles
+            // into it, and one only touching the ground would leave slivers of air under
+            // its tilted edge.
+            let sunk = 0.1 + 0.25 * rng.unit();
             out.push(Talus {
                 center: xy.extend(h + half.z * (1.0 - 2.0 * sunk)),
                 half,
-                yaw: 360.0 * rng.unit(),
             });
         }
     }
     out
 }
 
+/// The mean width of a fin of `blocks`.
+fn mean_width(blocks: &[Block]) -> f32 {
+    blocks.iter().map(|b| b.y.y - b.y.x).sum::<f32>() / blocks.len().max(1) as f32
+}
+
 fn primitive(shape: SkeletonSpec, falloff: f32, noise: Option<NoiseSpec>) -> NodeSpec {
     solid(shape, round3(falloff).max(0.01), noise)
 }
 
-impl ArchShape {
-    /// The fin's mean width.
-    fn width(&self) -> f32 {
-        let n = self.blocks.len().max(1) as f32;
-        self.blocks.iter().map(|b| b.y.y - b.y.x).sum::<f32>() / n
-    }
-
-    /// The plain node: the fin less its opening, placed on the span, weathered by an
-    /// erosion node of strength `weathering` over its box (none at 0).
-    pub fn node(&self, weathering: f32) -> NodeSpec {
-        let w = self.width();
-        let half = self.blocks.last().map_or(0.0, |b| b.x.y);
-        let falloff = (0.25 * w).clamp(1.0, 4.0);
-        // The blocks stand from the root to their tops; the dome trims them.
+impl Fin {
+    /// The fin's rock: its blocks, standing from the root to their tops, trimmed by a
+    /// dome — an ellipsoid centred at the root, its top at the crest mid-fin and a fifth
+    /// of the fin's height above the middle's ground at the ends, so it trims the crest,
+    /// never the root (a downhill end stays in the ground). `k` picks its noises.
+    fn node(&self, falloff: f32, k: u32) -> NodeSpec {
+        let w = mean_width(&self.blocks);
+        let half = 0.5
+            * self
+                .blocks
+                .last()
+                .zip(self.blocks.first())
+                .map_or(0.0, |(b, a)| b.x.y - a.x.x);
         let blocks = self
             .blocks
             .iter()
             .enumerate()
-            .map(|(k, b)| {
+            .map(|(i, b)| {
                 let (lo, hi) = (self.root, b.top);
                 primitive(
                     SkeletonSpec::Box {
@@ -317,25 +421,56 @@ impl ArchShape {
                         yaw: Finite(0.0),
                     },
                     falloff,
-                    noise(0.12 * w, 0.8 * w, 4, 71 + k as u32),
+                    noise(0.12 * w, 0.8 * w, 4, 71 + 97 * k + i as u32),
                 )
             })
             .collect();
-        // The dome: an ellipsoid centred at the root, its top at `crest` mid-span and a
-        // fifth of the fin's height above the middle's ground at the ends: it trims the
-        // crest, never the root (the fin's downhill end stays in the ground).
         let height = self.crest - self.ground;
         let rz = self.crest - self.root;
-        let end = (self.ground + 0.2 * height - self.root) / rz;
+        let end = (self.ground + DOME_END * height - self.root) / rz;
         let rx = half / (1.0 - end * end).sqrt();
         let dome = primitive(
             SkeletonSpec::Ellipsoid {
-                center: p3(Vec3::new(0.0, 0.0, self.root)),
+                center: p3(self.center.extend(self.root)),
                 radii: Size3(Vec3::new(rx, 4.0 * w, rz).map(round3)),
             },
             falloff,
-            noise(0.06 * height, 0.5 * height, 3, 61),
+            noise(0.06 * height, 0.5 * height, 3, 61 + 97 * k),
         );
+        NodeSpec::Intersection(Nary {
+            name: None,
+            children: vec![
+                NodeSpec::Union(Nary {
+                    name: None,
+                    children: blocks,
+                }),
+                dome,
+            ],
+        })
+    }
+}
+
+impl ArchShape {
+    /// The fin's mean width.
+    fn width(&self) -> f32 {
+        mean_width(&self.blocks)
+    }
+
+    /// The plain node: the fin less its opening, and the fins beside it, placed on the
+    /// span, weathered by an erosion node of strength `weathering` over their box (none
+    /// at 0).
+    pub fn node(&self, weathering: f32) -> NodeSpec {
+        let w = self.width();
+        let half = self.blocks.last().map_or(0.0, |b| b.x.y);
+        let falloff = (0.25 * w).clamp(1.0, 4.0);
+        let arch_fin = Fin {
+            blocks: self.blocks.clone(),
+            center: Vec2::ZERO,
+            ground: self.ground,
+            crest: self.crest,
+            root: self.root,
+        };
+        let fin = arch_fin.node(falloff, 0);
         // The opening: an upright ellipsoid whose section at the ground spans the feet,
         // cut level at the ceiling.
         let rise = self.ceiling - self.ground;
@@ -359,16 +494,6 @@ impl ArchShape {
             0.5 * falloff,
             noise(0.02 * self.span, 0.15 * self.span, 3, 63),
         );
-        let fin = NodeSpec::Intersection(Nary {
-            name: None,
-            children: vec![
-                NodeSpec::Union(Nary {
-                    name: None,
-                    children: blocks,
-                }),
-                dome,
-            ],
-        });
         let arch = NodeSpec::Difference(DifferenceSpec {
             name: None,
             base: Box::new(fin),
@@ -377,23 +502,13 @@ impl ArchShape {
                 children: vec![vault, bed],
             })],
         });
-        // Boulders: the blocks' corners broken off, as weathering rounds fallen rock.
-        let fallen = self.talus.iter().enumerate().map(|(k, t)| {
-            let size = 2.0 * t.half.max_element();
-            let turn = Vec2::from_angle(t.yaw.to_radians());
-            let radii = (turn * t.half.x).abs() + (turn.perp() * t.half.y).abs();
-            primitive(
-                SkeletonSpec::Ellipsoid {
-                    center: p3(t.center),
-                    radii: Size3(radii.extend(t.half.z).map(round3)),
-                },
-                (0.3 * size).max(0.2),
-                noise(0.12 * size, 0.8 * size, 2, 101 + k as u32),
-            )
-        });
+        // Boulders: blocks fallen from the fins, their corners broken off.
+        let fallen =
+            (self.talus.iter().enumerate()).map(|(k, t)| boulder(t.center, t.half, k as u32));
+        let others = (self.fins.iter().enumerate()).map(|(k, f)| f.node(falloff, 1 + k as u32));
         let arch = NodeSpec::Union(Nary {
             name: None,
-            children: std::iter::once(arch).chain(fallen).collect(),
+            children: std::iter::once(arch).chain(others).chain(fallen).collect(),
         });
         let placed = NodeSpec::Transform(TransformSpec {
             name: None,
@@ -408,15 +523,18 @@ impl ArchShape {
         if weathering <= 0.0 {
             return placed;
         }
-        // The fin's footprint turned onto the tree frame, with room for its talus.
-        let reach = Vec2::splat(half + 2.5 * w);
+        // The fins' footprint turned onto the tree frame, with room for their talus.
+        let extent = (self.fins.iter().flat_map(|f| &f.blocks))
+            .map(|b| b.x.abs().max(b.y.abs()).max_element())
+            .fold(half, f32::max);
+        let reach = Vec2::splat(extent + 2.5 * w);
         let (lo, hi) = (self.center - reach, self.center + reach);
         NodeSpec::Erode(ErodeSpec {
             name: None,
             strength: NonNegative(weathering),
             region: BoxSpec {
                 min: p3(lo.extend(self.root)),
-                max: p3(hi.extend(self.crest + w)),
+                max: p3(hi.extend(self.fins.iter().fold(self.crest, |c, f| c.max(f.crest)) + w)),
             },
             blend: Some(Positive(round3(0.5 * w).max(0.5))),
             child: Box::new(placed),

@@ -41,7 +41,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::joints::{JointGrid, block_falloff, boxed, fallen_half, quarter_turn};
+use super::joints::{JointGrid, block_falloff, boulder, boxed, fallen_half};
 use super::{Ground, LandformError, noise, p3, round3, solid};
 use crate::field::SkeletonSpec;
 use crate::field::skeleton::Size3;
@@ -114,9 +114,8 @@ fn reach(spacing: f32) -> f32 {
 /// The length of face one piece of a recess follows, metres.
 const PIECE: f32 = 6.0;
 
-/// A block fallen from the face: centre and half extents along the joint frame's axes
-/// (fallen blocks keep their joint faces; the GPU tape encodes boxes turned by quarter
-/// turns only, and a quarter turn of a box is a swap of its extents).
+/// A block fallen from the face: centre and half extents before [`boulder`] turns and
+/// tilts it as it came to rest.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Fallen {
     /// Centre, half sunk into the ground.
@@ -698,12 +697,12 @@ fn lying(line: &CliffLine, ground: &Ground, rng: &mut Rng, xy: Vec2, size: f32) 
         return None;
     }
     let half = fallen_half(rng, size);
-    // Sunk by a third to two thirds of its height: fallen rock settles into the slope's
-    // debris, some deeper than others.
-    let sunk = 0.3 + 0.7 * rng.unit();
+    // Sunk by a sixth to a half of its half height: fallen rock settles into the slope's
+    // debris, some deeper than others (deeper, a block's top stands as a slab in the grass).
+    let sunk = 0.15 + 0.35 * rng.unit();
     Some(Fallen {
         center: xy.extend(h - sunk * half.z),
-        half: quarter_turn(rng, half),
+        half,
     })
 }
 
@@ -826,20 +825,10 @@ impl CliffLine {
 }
 
 impl Fallen {
-    /// Fallen block `k` weathered round (an ellipsoid of the block's extents along the
-    /// tree's axes, roughened: boxes lying within a few metres of the ground take its
-    /// grass on their flat tops), to stand outside the blocks' warp, which would lift a
-    /// block of a few metres off the ground it lies on.
+    /// Fallen block `k`, its corners broken off ([`boulder`]), to stand outside the
+    /// blocks' warp, which would lift a block of a few metres off the ground it lies on.
     pub(super) fn rock(&self, k: usize) -> NodeSpec {
-        let size = 2.0 * self.half.max_element();
-        solid(
-            SkeletonSpec::Ellipsoid {
-                center: p3(self.center),
-                radii: Size3(self.half.map(round3)),
-            },
-            round3((0.2 * size).max(0.2)),
-            noise(0.15 * size, 0.5 * size, 3, 100 + k as u32),
-        )
+        boulder(self.center, self.half, k as u32)
     }
 }
 

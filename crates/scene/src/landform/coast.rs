@@ -36,7 +36,7 @@
 use glam::{Vec2, Vec3};
 
 use super::caprock::{Fallen, Recess, Window};
-use super::joints::{JointGrid, block_falloff, boxed, fallen_half, quarter_turn};
+use super::joints::{JointGrid, block_falloff, boxed, fallen_half};
 use super::sea::section;
 use super::{Generated, Ground, Joining, LandformError, effect, hard_bed_base, noise, p3, solid};
 use crate::analysis::relief::coastal_accessibility;
@@ -577,7 +577,7 @@ impl SeaCliffSpec {
             let sunk = 0.2 + 0.5 * rng.unit();
             fallen.push(Fallen {
                 center: xy.extend(base - sunk * half.z),
-                half: quarter_turn(rng, half),
+                half,
             });
         };
         for b in &blocks {

@@ -5,12 +5,13 @@
 
 use glam::{Vec2, Vec3};
 
-use super::{LandformError, p3, round3, solid};
+use super::{LandformError, noise, p3, round3, solid};
 use crate::field::skeleton::Size3;
 use crate::field::{Aabb, NoiseSpec, SkeletonSpec};
 use crate::rng::Rng;
 use crate::scene::NodeSpec;
-use crate::value::Finite;
+use crate::scene::spec::{Nary, Rotation, TransformSpec};
+use crate::value::{Dir3, Finite};
 
 /// At most this many joint blocks: beyond, the joints are too close for the region.
 pub const MAX_BLOCKS: usize = 20_000;
@@ -177,10 +178,56 @@ pub fn fallen_half(rng: &mut Rng, size: f32) -> Vec3 {
         )
 }
 
-/// `half` turned by a quarter turn about the vertical, or not, at random.
-pub fn quarter_turn(rng: &mut Rng, half: Vec3) -> Vec3 {
-    match rng.unit() < 0.5 {
-        true => half,
-        false => Vec3::new(half.y, half.x, half.z),
-    }
+/// How far a boulder's corners reach past its box, as a multiple of its half extents: the
+/// box is cut by an ellipsoid this much larger, which takes its corners and edges off and
+/// leaves its faces.
+const CORNERS: f32 = 1.15;
+
+/// Fallen block `k`: a joint block of half extents `half` about `center`, its corners and
+/// edges broken off (a box cut by an ellipsoid [`CORNERS`] times its extents, both
+/// roughened, the ellipsoid more), lying at a turn and a tilt drawn from `k`. Blocks fallen
+/// from a bedded face keep their joint and bedding faces and lose their corners first
+/// (spheroidal weathering rounds the corners, which weather from three sides, fastest);
+/// a rounded ellipsoid with the same noise reads as a sponge.
+pub fn boulder(center: Vec3, half: Vec3, k: u32) -> NodeSpec {
+    let size = 2.0 * half.max_element();
+    let mut rng = Rng::new(0xb01d_e125 ^ u64::from(k));
+    let block = solid(
+        SkeletonSpec::Box {
+            center: p3(Vec3::ZERO),
+            half_size: Size3(half.map(round3)),
+            yaw: Finite(0.0),
+        },
+        round3((0.08 * size).max(0.1)),
+        noise(0.03 * size, 0.6 * size, 2, 100 + k),
+    );
+    let corners = solid(
+        SkeletonSpec::Ellipsoid {
+            center: p3(Vec3::ZERO),
+            radii: Size3((CORNERS * half).map(round3)),
+        },
+        round3((0.08 * size).max(0.1)),
+        noise(0.06 * size, 0.35 * size, 2, 200 + k),
+    );
+    // A turn about an axis up to 9° off the vertical: the block turned any way about the
+    // vertical and tilted by up to twice that, as it came to rest.
+    let (tilt, azimuth) = (0.15 * rng.unit(), std::f32::consts::TAU * rng.unit());
+    let axis = Vec3::new(
+        tilt.sin() * azimuth.cos(),
+        tilt.sin() * azimuth.sin(),
+        tilt.cos(),
+    );
+    NodeSpec::Transform(TransformSpec {
+        name: None,
+        translate: p3(center),
+        rotate: Some(Rotation {
+            axis: Dir3(axis.map(round3).normalize()),
+            degrees: Finite(round3(360.0 * rng.unit())),
+        }),
+        scale: Default::default(),
+        child: Box::new(NodeSpec::Intersection(Nary {
+            name: None,
+            children: vec![block, corners],
+        })),
+    })
 }

@@ -27,7 +27,7 @@ use std::collections::HashMap;
 use glam::{IVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
-pub use arch::ArchShape;
+pub use arch::{ArchShape, Block as FinBlock, Fin};
 pub use caprock::{Apron, CliffLine, Fallen, JointBlock, REPOSE, Recess, Window};
 pub use coast::{Bed, Clear, CoastBlock, Notch, SeaCliff, Slab};
 pub use hoodoo::{Hoodoo, Terminal};

@@ -48,6 +48,15 @@ pub struct ArchSpec {
     /// Whether blocks fallen from the fin lie on the ground beside it (default true).
     #[serde(default = "arch_default_talus")]
     pub talus: bool,
+    /// Fins of the same joint set beside the arch's, without an opening, on its left
+    /// looking from `from` to `to` (default 0: the arch's fin alone): a fin field, as the
+    /// parallel joints of a sandstone leave one.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub fins: u32,
+}
+
+fn is_zero(n: &u32) -> bool {
+    *n == 0
 }
 
 fn caprock_default_joints() -> Positive {
