@@ -421,6 +421,20 @@ fn hoodoos_stand_on_their_axioms_within_the_grammar_depth() {
         })
         .collect();
     assert_eq!(profiles.len(), hoodoos.len(), "hoodoos sharing a profile");
+    // Each rises from a skirt of its debris: half a metre over the ground at its foot the
+    // rock reaches a third again as far from its axis as at two fifths of its height.
+    let skirted = hoodoos
+        .iter()
+        .filter(|h| {
+            let foot = ground.height(h.axiom.truncate()) + 0.5;
+            radius(h, foot) > 1.3 * radius(h, h.axiom.z + 0.4 * h.height())
+        })
+        .count();
+    assert!(
+        skirted * 10 >= hoodoos.len() * 9,
+        "{skirted} of {} hoodoos rise from a skirt",
+        hoodoos.len()
+    );
 }
 
 /// A scene of `trees/`, loaded.

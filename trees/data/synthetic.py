@@ -6,6 +6,9 @@ sea_cliff.asc     a 35 m coastal plateau on a wavy coastline with two headlands,
 karst_plateau.asc a 60 m limestone plateau ending in a cliff on its south side, with
                   five closed dolines 3-6 m deep where water sinks in
                   (trees/karst_network.ron).
+badlands.asc      a 50 m plateau whose rim breaks into a concave badland slope, 36° under
+                  the rim and flattening to a pediment 110 m out, cut by V-shaped gullies
+                  about 28 m apart with sharp ridges between them (trees/hoodoo_field.ron).
 
 `python3 trees/data/synthetic.py --big` also writes big_plateau.asc (not committed): a 5.2 km
 plateau of 20 m cells with 120 dolines, the Fig. 17-scale karst of BENCHMARKS.md.
@@ -56,8 +59,25 @@ def plateau(x, y):
     return 0.03 * y + top * smoothstep(edge - 6, edge + 6, y)
 
 
+def badlands(x, y):
+    rim = 150 + 8 * math.sin(x / 50.0) + 3 * math.sin(x / 13.0)
+    top = 50 + 1.5 * math.sin(x / 40.0) * math.cos(y / 35.0) + 0.01 * (y - rim)
+    d = rim - y
+    if d <= 0:
+        return top
+    length = 110.0
+    z = top * max(0.0, 1 - d / length) ** 1.6 + 0.02 * max(0.0, y)
+    # Gullies: V-shaped cuts about 28 m apart, wandering down the slope, deepest at
+    # mid-slope, dying out at the rim and on the pediment.
+    phase = x / 28.0 + 0.35 * math.sin(y / 31.0) + 0.15 * math.sin(y / 9.0 + x / 17.0)
+    u = abs(phase - math.floor(phase) - 0.5) * 28.0
+    depth = 9.0 * smoothstep(0, 20, d) * (1 - smoothstep(length - 30, length + 5, d))
+    return z - depth * max(0.0, 1 - u / 13.0) ** 1.3
+
+
 write("sea_cliff.asc", 128, 128, 2, cliff)
 write("karst_plateau.asc", 100, 100, 4, plateau)
+write("badlands.asc", 160, 110, 2, badlands)
 
 
 def big_plateau():

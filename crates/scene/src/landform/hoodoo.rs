@@ -24,6 +24,7 @@
 
 use glam::{Vec2, Vec3};
 
+use super::joints::boulder;
 use super::{Ground, LandformError, Poisson, smoothstep, solid};
 use crate::analysis::flow::{drainage_area, fill_depressions};
 use crate::analysis::relief::slope;
@@ -51,6 +52,20 @@ const SLICE: f32 = 1.0;
 
 /// The fluting warp over the hoodoos: its amplitude and wavelength in symbol sizes.
 const FLUTING: (f32, f32) = (0.07, 0.8);
+
+/// A body slice's radius is `BULGE.0 + BULGE.1·ρ` times the column's width: hard beds
+/// stand out by about half again what soft ones do. Twice that swing drew every column as
+/// a stack of beads.
+const BULGE: (f32, f32) = (0.65, 0.7);
+
+/// A slice's half height as a multiple of the slices' spacing: more than half, so the
+/// slices run into one another and the column's sides are continuous, not beaded.
+const SLICE_OVERLAP: f32 = 1.1;
+
+/// The skirt at a hoodoo's foot: its radius as a multiple of the column's width and its
+/// height as a fraction of the hoodoo's. A hoodoo rises out of the slope of its own debris,
+/// a pediment of the soft rock worn back around it, not straight out of the ground.
+const SKIRT: (f32, f32) = (2.4, 0.3);
 
 /// At most this many slices in a body.
 const SLICES: usize = 12;
@@ -236,6 +251,31 @@ impl HoodooSpec {
             // Each column is its own width.
             let girth = 0.8 + 0.4 * rng.unit();
             let seed = 1 + (k % 64) as u32;
+            // The skirt of debris and worn soft rock the column rises from.
+            let foot = h.symbols.first().map_or(1.0, |&(_, _, s, _, rho)| {
+                girth * s * (0.22 + 0.16 * rho)
+            });
+            // A cone about its foot, its base under the lowest ground it spans (on a
+            // slope a base at the axis's ground stood out downhill as a plate) and its apex
+            // over the ground at the axis.
+            let (xy, reach) = (h.axiom.truncate(), SKIRT.0 * foot);
+            let at = |d: Vec2| ground.height(xy + reach * d);
+            let floor = at(Vec2::ZERO);
+            let floor = if floor.is_finite() { floor } else { h.axiom.z };
+            let lowest = (0..8)
+                .map(|i| at(Vec2::from_angle(i as f32 * std::f32::consts::FRAC_PI_4)))
+                .filter(|z| z.is_finite())
+                .fold(floor, f32::min);
+            let apex = floor.min(h.axiom.z + height) + (SKIRT.1 * height).max(falloff);
+            out.push(solid(
+                SkeletonSpec::Cone {
+                    base: P3(xy.extend(lowest - falloff)),
+                    apex: P3(xy.extend(apex)),
+                    radius: Positive(reach),
+                },
+                falloff,
+                Some(weathering(0.5 * foot, seed)),
+            ));
             for &(t, p, s, elongation, rho) in &h.symbols {
                 // Symbols stack up the vertical through the axiom.
                 let up = |z: f32| (z - h.axiom.z) / height;
@@ -245,7 +285,7 @@ impl HoodooSpec {
                     // A body keeps its width; a spire (a column that lost its cap) narrows
                     // to a third of it, to a blunt tip.
                     Terminal::Body | Terminal::Cone => {
-                        let narrows = if t == Terminal::Cone { 0.65 } else { 0.0 };
+                        let narrows = if t == Terminal::Cone { 0.45 } else { 0.0 };
                         let n = (s / SLICE).ceil().clamp(1.0, SLICES as f32) as usize;
                         let dz = s / n as f32;
                         for i in 0..n {
@@ -254,7 +294,7 @@ impl HoodooSpec {
                             let bed = (ground.resistance)(p.with_z(z));
                             // Hard beds bulge, soft ones pinch; the column tapers upward.
                             let r = width
-                                * (0.45 + 1.1 * bed)
+                                * (BULGE.0 + BULGE.1 * bed)
                                 * (1.0 - 0.3 * up(z))
                                 * (1.0 - narrows * f);
                             // Joints and uneven wear: each slice sits off the axis and is
@@ -269,7 +309,7 @@ impl HoodooSpec {
                                     radii: Size3(Vec3::new(
                                         r * ex * squeeze,
                                         r * ey / squeeze,
-                                        0.8 * dz,
+                                        SLICE_OVERLAP * dz,
                                     )),
                                 },
                                 falloff,
@@ -277,17 +317,16 @@ impl HoodooSpec {
                             ));
                         }
                     }
-                    // A slab of the hard bed, a little wider than the column, its edges
-                    // broken by the weathering.
+                    // A slab of the hard bed, a little wider than the column: a joint block
+                    // with its corners broken off, tilted as it settled on the soft rock.
                     Terminal::Cap => {
                         let r = width * (1.2 + 0.4 * rng.unit());
-                        out.push(solid(
-                            SkeletonSpec::Ellipsoid {
-                                center: P3(p + 0.5 * CAP * s * Vec3::Z),
-                                radii: Size3(Vec3::new(r * ex, r * ey, 0.6 * CAP * s)),
-                            },
-                            falloff,
-                            Some(weathering(0.8 * r, seed)),
+                        // Set a fifth of its thickness into the column, which it grips, and
+                        // standing a tenth over it (its roughness takes up to that off).
+                        out.push(boulder(
+                            p + 0.45 * CAP * s * Vec3::Z,
+                            Vec3::new(r * ex, r * ey, 0.65 * CAP * s),
+                            seed,
                         ));
                     }
                 }
