@@ -8,9 +8,11 @@
 //! spheres overlap (several per radius) and their energies are scaled by the lattice's
 //! density, so together they sum to a smooth carving field `2e` with no scallops of single
 //! spheres: the rock goes where `2e` exceeds what holds it, which happens farther from the
-//! stream in soft rock than in hard. Walls recede with height above the floor (`retreat`),
-//! so the gorge opens upwards in steps: each hard bed stands out as a ledge over a soft
-//! bed eaten back beneath it.
+//! stream in soft rock than in hard. Walls step back going up, by `2·retreat·(1 − ρ)²`
+//! metres per metre of height, so the gorge opens upwards in steps: cliffs in the hard
+//! beds, talus slopes in the soft ones (the profile of the Grand Canyon's walls), and the
+//! effect all the way up a column is that of the softest rock the river cut through there,
+//! so no bed overhangs the one beneath.
 
 use glam::{Vec2, Vec3};
 
@@ -25,6 +27,10 @@ use crate::scene::landform::CanyonSpec;
 /// `∫ g(|x|) dx` over the unit ball for Wyvill's `g(x) = (1 − x²)³`: `4π · 16/315`. A
 /// lattice of pitch `s` of such spheres of radius `R` sums to about this times `(R/s)³`.
 const WYVILL_VOLUME: f32 = 4.0 * std::f32::consts::PI * 16.0 / 315.0;
+
+/// How far from its bed a river's stress is mapped, in `banks`: as far as its walls can
+/// step back going up.
+const WALL_REACH: f32 = 2.0;
 
 /// What the river does at one sample of the top grid.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -57,8 +63,10 @@ impl CanyonSpec {
         let z = top.samples();
         let t = self.threshold.0;
         let cell = top.cell();
-        let reach = (self.banks.0 / cell.x.min(cell.y)).ceil() as isize;
-        let lateral = |s: &Stress| s.strength * (1.0 - s.distance / self.banks.0).max(0.0);
+        // Out to twice the banks: the walls step back past them as they rise.
+        let far = WALL_REACH * self.banks.0;
+        let reach = (far / cell.x.min(cell.y)).ceil() as isize;
+        let lateral = |s: &Stress| s.strength * (1.0 - s.distance / far).max(0.0);
         let mut out = vec![Stress::NONE; nx * ny];
         for k in 0..nx * ny {
             if sp[k] <= t || z[k].is_nan() {
@@ -132,12 +140,20 @@ impl CanyonSpec {
         power
     }
 
-    /// The river's stress at `z` over a sample stressed by `s`: the bed's strength over
-    /// the inner half of the banks, falling linearly to 0 across the outer half, measured
-    /// from a wall that recedes by `retreat` metres per metre above the floor.
-    fn sigma(&self, s: &Stress, floor: f32, z: f32) -> f32 {
-        let d = (s.distance - self.retreat.0 * (z - floor).max(0.0)).max(0.0);
+    /// The river's stress over a sample stressed by `s`, at a height where the wall has
+    /// stepped back `recession` metres from where it stands at the floor: the bed's
+    /// strength over the inner half of the banks, falling linearly to 0 across the outer
+    /// half.
+    fn sigma(&self, s: &Stress, recession: f32) -> f32 {
+        let d = (s.distance - recession).max(0.0);
         s.strength * (2.0 * (1.0 - d / self.banks.0)).clamp(0.0, 1.0)
+    }
+
+    /// How far a wall steps back per metre of height in rock of resistance `rho`:
+    /// `2·retreat·(1 − ρ)²` — a talus slope in the soft beds (about 35° at `retreat` 1
+    /// in the softest), a cliff in the hard ones (a fiftieth of that at ρ = 0.9).
+    fn step_back(&self, rho: f32) -> f32 {
+        2.0 * self.retreat.0 * (1.0 - rho.clamp(0.0, 1.0)).powi(2)
     }
 
     /// The sphere centres and their weighted effects: a regular lattice of pitch
@@ -153,6 +169,7 @@ impl CanyonSpec {
         let size = top.cell() * Vec2::new((nx - 1) as f32, (ny - 1) as f32);
         let (mx, my) = ((size.x / h) as usize + 1, (size.y / h) as usize + 1);
         let mut out = Vec::new();
+        let mut rocks = Vec::new();
         for j in 0..my {
             for i in 0..mx {
                 let xy = top.origin() + Vec2::new(i as f32, j as f32) * h;
@@ -166,14 +183,34 @@ impl CanyonSpec {
                 }
                 let floor = s.bed - self.depth.0 * s.strength;
                 let (lo, hi) = ((floor / h).floor() as i32, (surface / h).ceil() as i32);
+                // The rock up the column from the floor, a metre at a time. The wall steps
+                // back going up (cliffs in hard beds, slopes in soft ones), less up the
+                // weaker tributaries; the effect all the way up is that of the softest
+                // rock the river cut through there. Neither lets a bed overhang the one
+                // below it: a soft bed under a hard one is a slope the cliff above stands
+                // back from, as the talus shed from the cliff keeps it.
+                rocks.clear();
+                let mut z = floor;
+                while z < surface {
+                    let dz = (surface - z).min(1.0);
+                    rocks.push((dz, (ground.resistance)(xy.extend(z + 0.5 * dz))));
+                    z += dz;
+                }
+                let softest = rocks.iter().fold(1.0f32, |m, r| m.min(r.1));
+                let (mut z, mut recession, mut next) = (floor, 0.0f32, rocks.iter());
                 for l in lo..=hi {
                     let p = xy.extend(l as f32 * h);
+                    while z < p.z
+                        && let Some(&(dz, rho)) = next.next()
+                    {
+                        recession += s.strength * self.step_back(rho) * dz;
+                        z += dz;
+                    }
                     let weight = ((p.z + 0.5 * h - floor) / h).clamp(0.0, 1.0);
                     if !ground.region.contains(p) {
                         continue;
                     }
-                    let rho = (ground.resistance)(p);
-                    let e = weight * effect(rho, self.sigma(&s, floor, p.z), self.beta.0);
+                    let e = weight * effect(softest, self.sigma(&s, recession), self.beta.0);
                     if e >= self.min_effect.0 {
                         out.push((p, e));
                     }

@@ -252,9 +252,10 @@ impl HoodooSpec {
             let girth = 0.8 + 0.4 * rng.unit();
             let seed = 1 + (k % 64) as u32;
             // The skirt of debris and worn soft rock the column rises from.
-            let foot = h.symbols.first().map_or(1.0, |&(_, _, s, _, rho)| {
-                girth * s * (0.22 + 0.16 * rho)
-            });
+            let foot = h
+                .symbols
+                .first()
+                .map_or(1.0, |&(_, _, s, _, rho)| girth * s * (0.22 + 0.16 * rho));
             // A cone about its foot, its base under the lowest ground it spans (on a
             // slope a base at the axis's ground stood out downhill as a plate) and its apex
             // over the ground at the axis.

@@ -167,7 +167,9 @@ pub struct CanyonSpec {
     /// β of the erosion effect (the effect on the hardest rock).
     #[serde(default = "canyon_default_beta")]
     pub beta: Unit,
-    /// How far the walls recede per metre of height above the floor (0: vertical walls).
+    /// How far the walls step back per metre of height, times `2(1 − ρ)²` (default 0.5; 0:
+    /// vertical walls): at 1 a slope of about 35° in the softest beds, cliffs in the hard
+    /// ones.
     #[serde(default = "canyon_default_retreat")]
     pub retreat: Unit,
     /// Samples with a smaller effect make no sphere.
