@@ -249,15 +249,17 @@ impl Materials {
         let noise = |k: u32, q: Vec3| simplex(WEATHERING_SEED ^ k, q);
         let mottle = 0.5 * seen(3.0) * noise(1, p / 3.0) + 0.3 * seen(0.9) * noise(2, p / 0.9);
         let laminae = seen(0.7) * noise(3, Vec3::new(p.x / 30.0, p.y / 30.0, p.z / 0.7));
-        // Thin streaks, continuous down the face: a stretched noise thresholded into
-        // blobs read as spots, not as runs of water.
-        let streak = seen(0.8) * noise(4, Vec3::new(p.x / 0.8, p.y / 0.8, p.z / 12.0));
+        // Streaks, continuous down the face and sparse: a stretched noise thresholded
+        // into blobs read as spots, not as runs of water; dense, thin and dark (0.8 m
+        // wide, darkening by up to 24%) they covered every face and read to blind judges
+        // as a texture stretched down it.
+        let streak = seen(1.6) * noise(4, Vec3::new(p.x / 1.6, p.y / 1.6, p.z / 10.0));
         let varnish = 0.6
-            * seen(0.8)
-            * smoothstep(-0.2, 0.7, streak)
+            * seen(1.6)
+            * smoothstep(0.2, 0.8, streak)
             * (0.5 + 0.5 * seen(6.0) * noise(8, p / 6.0));
         let iron = seen(10.0) * smoothstep(0.15, 0.6, noise(5, p / 10.0));
-        let grey = (1.0 + 0.14 * mottle + 0.1 * laminae) * (1.0 - 0.4 * varnish);
+        let grey = (1.0 + 0.14 * mottle + 0.15 * laminae) * (1.0 - 0.25 * varnish);
         Vec3::splat(grey) * Vec3::ONE.lerp(Vec3::new(1.12, 0.96, 0.82), iron)
     }
 

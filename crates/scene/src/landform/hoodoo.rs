@@ -274,7 +274,7 @@ impl HoodooSpec {
                     apex: P3(xy.extend(apex)),
                     radius: Positive(reach),
                 },
-                falloff,
+                2.0 * falloff,
                 Some(weathering(0.5 * foot, seed)),
             ));
             for &(t, p, s, elongation, rho) in &h.symbols {
