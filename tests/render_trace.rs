@@ -235,6 +235,89 @@ fn shadows_fall_where_the_sun_is_blocked() {
     assert!(!shadowed(on + sun * 1e-3));
 }
 
+/// Adaptive supersampling touches the edge pixels alone, and softens them: a ball against
+/// the sky, with and without it. Away from the edges the two pictures are the same pixel
+/// for pixel; on the silhouette, pixels take levels between the sky's and the ball's
+/// that the single-sample picture does not have (its silhouette steps from one to the
+/// other); and the picture is the same on one thread and on many.
+#[test]
+fn antialiasing_softens_edges_and_leaves_the_rest() {
+    let ball = SigmaSphere {
+        center: Vec3::ZERO,
+        radius: 4.0,
+        falloff: 1.0,
+    };
+    let cam = Camera::frame(&ball.support(), 35.0, 64, 48).unwrap();
+    let plain = RenderSettings::for_scene(&ball.support(), &cam, Method::Segment);
+    let smooth = RenderSettings {
+        antialias: true,
+        ..plain.clone()
+    };
+    let a = render(&ball, &cam, &plain, &ProgressBar::hidden());
+    let b = render(&ball, &cam, &smooth, &ProgressBar::hidden());
+    let (w, h) = (64usize, 48usize);
+    let hit = |k: usize| a.depth[k].is_finite();
+    let silhouette = |k: usize| {
+        let (i, j) = (k % w, k / w);
+        [(1i32, 0i32), (-1, 0), (0, 1), (0, -1)]
+            .iter()
+            .any(|&(di, dj)| {
+                let (x, y) = (i as i32 + di, j as i32 + dj);
+                x >= 0
+                    && y >= 0
+                    && (x as usize) < w
+                    && (y as usize) < h
+                    && hit(x as usize + w * y as usize) != hit(k)
+            })
+    };
+    let edges: Vec<usize> = (0..w * h).filter(|&k| silhouette(k)).collect();
+    assert!(edges.len() > 40, "{} silhouette pixels", edges.len());
+    let changed = edges
+        .iter()
+        .filter(|&&k| a.rgba[4 * k..4 * k + 3] != b.rgba[4 * k..4 * k + 3])
+        .count();
+    // (On the sky's side of the silhouette a pixel's sub-samples may all miss too.)
+    assert!(
+        changed * 3 > edges.len(),
+        "{changed} of {} silhouette pixels softened",
+        edges.len()
+    );
+    // Far from every edge (two pixels from any pixel that differs from a neighbour by the
+    // edge contrast), nothing changed.
+    let differs = |k: usize, m: usize| {
+        hit(k) != hit(m)
+            || (0..3).any(|c| a.rgba[4 * k + c].abs_diff(a.rgba[4 * m + c]) > cpu::EDGE_CONTRAST)
+    };
+    let near_edge = |k: usize| {
+        let (i, j) = ((k % w) as i32, (k / w) as i32);
+        (-2..=2).any(|dj| {
+            (-2..=2).any(|di| {
+                let (x, y) = (i + di, j + dj);
+                x >= 1 && y >= 1 && (x as usize) < w - 1 && (y as usize) < h - 1 && {
+                    let m = x as usize + w * y as usize;
+                    [m + 1, m - 1, m + w, m - w].iter().any(|&n| differs(m, n))
+                }
+            })
+        })
+    };
+    for k in (0..w * h).filter(|&k| !near_edge(k)) {
+        assert_eq!(
+            a.rgba[4 * k..4 * k + 4],
+            b.rgba[4 * k..4 * k + 4],
+            "pixel {k} changed away from the edges"
+        );
+        assert_eq!(a.depth[k].to_bits(), b.depth[k].to_bits());
+    }
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    assert_eq!(
+        one.install(|| render(&ball, &cam, &smooth, &ProgressBar::hidden())),
+        b
+    );
+}
+
 #[test]
 fn rays_starting_inside_find_the_way_out() {
     let s = SigmaSphere {

@@ -355,6 +355,11 @@ pub fn to_srgb8(c: Vec3) -> [u8; 4] {
     [e(c.x), e(c.y), e(c.z), 255]
 }
 
+/// An 8-bit level of [`to_srgb8`] back in linear light, `[0, 1]` (its curve inverted).
+pub fn from_srgb8(v: u8) -> f32 {
+    (v as f32 / 255.0).powf(2.2)
+}
+
 /// The unit normal of water's surface at `at`, `tw` from the eye: tilted by the slope of
 /// two octaves of noise ([`WAVE_LENGTH`] and [`WAVE_SHORT`] of it, the shorter at
 /// [`WAVE_SHORT`] × 0.4 of the longer's height), by finite differences; calm beyond the
