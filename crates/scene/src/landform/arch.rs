@@ -165,9 +165,14 @@ impl ArchSpec {
             (waist, 0.2 * span),
         );
         let frame = |p: Vec2| center + axis * p.x + axis.perp() * p.y;
-        let fins = fins(&mut rng, self.fins, (half, width, crest - g), &|p| {
-            ground.height(frame(p))
-        });
+        let fins = fins(
+            &mut rng,
+            self.fins,
+            (half, width, crest - g),
+            ground,
+            &frame,
+            axis,
+        );
         let on_ground = |p: Vec2| {
             let xy = frame(p);
             ground.surface_near(xy, ground.height(xy), 0.5 * width)
@@ -222,9 +227,17 @@ fn lowest_ground(ground: &Ground, center: Vec2, axis: Vec2, half: f32, width: f3
 /// to 1.6 widths weathered open along the joint between them — from 35% to 80% of the
 /// arch fin's length, off its ends by turns (from [`OPEN`] of its half length out), 70% to
 /// 120% as wide, waisted as the arch's fin is, from 80% to 130% as high above its own
-/// ground (`height` at a point of the arch's frame), rooted as the arch's fin is; a fin
-/// whose ends or middle are off the region's ground is left out.
-fn fins(rng: &mut Rng, n: u32, arch: (f32, f32, f32), height: &dyn Fn(Vec2) -> f32) -> Vec<Fin> {
+/// ground, rooted as the arch's fin is ([`lowest_ground`]); a fin whose ends or middle are
+/// off the region's ground is left out. `frame` takes a point of the arch's frame to the
+/// tree's, whose x runs along `axis`.
+fn fins(
+    rng: &mut Rng,
+    n: u32,
+    arch: (f32, f32, f32),
+    ground: &Ground,
+    frame: &dyn Fn(Vec2) -> Vec2,
+    axis: Vec2,
+) -> Vec<Fin> {
     let (half, width, rise) = arch;
     let mut edge = 0.5 * width;
     (0..n)
@@ -236,17 +249,14 @@ fn fins(rng: &mut Rng, n: u32, arch: (f32, f32, f32), height: &dyn Fn(Vec2) -> f
             let end = [-1.0, 1.0][k as usize % 2];
             let along = end * (OPEN * half + h);
             let center = Vec2::new(along, across);
-            let ground = height(center);
-            let lowest = [-h, 0.0, h]
-                .map(|x| height(center + Vec2::new(x, 0.0)))
-                .into_iter()
-                .fold(ground, f32::min);
-            if !lowest.is_finite() {
+            let [a, middle, b] = [-h, 0.0, h].map(|x| ground.height(frame(center + Vec2::X * x)));
+            if !(a.is_finite() && middle.is_finite() && b.is_finite()) {
                 return None;
             }
-            let crest = ground + rise * (0.8 + 0.5 * rng.unit());
+            let lowest = lowest_ground(ground, frame(center), axis, h, w).min(middle);
+            let crest = middle + rise * (0.8 + 0.5 * rng.unit());
             let waist = (h * (rng.unit() - 0.5), 0.3 * h);
-            let blocks = blocks(rng, h, w, (crest, crest - ground), waist)
+            let blocks = blocks(rng, h, w, (crest, crest - middle), waist)
                 .into_iter()
                 .map(|b| Block {
                     x: b.x + Vec2::splat(center.x),
@@ -257,7 +267,7 @@ fn fins(rng: &mut Rng, n: u32, arch: (f32, f32, f32), height: &dyn Fn(Vec2) -> f
             Some(Fin {
                 blocks,
                 center,
-                ground,
+                ground: middle,
                 crest,
                 root: lowest - ROOT * (crest - lowest),
             })
@@ -278,8 +288,9 @@ fn hard_bed(ground: &Ground, xy: Vec2, g: f32, span: f32) -> f32 {
 /// or (two times in five) flush with its neighbour, so not every joint shows on both
 /// faces; narrowing to 60% at both ends and by up to 40% at the `waist` (its position
 /// and reach along the span), where the lintel weathered thinnest; tops from a sixth of a
-/// width below the crest to half a width above it (the dome trims them), so the crest
-/// steps at some joints.
+/// width below the crest to half a width above it, less [`STEP_DOWN`] of the fin's
+/// `height` (`crest` is the crest and that height) toward the ends, so the crest steps at
+/// the joints and comes down block by block to the ends (the dome trims the corners).
 fn blocks(
     rng: &mut Rng,
     half: f32,
@@ -386,9 +397,10 @@ fn primitive(shape: SkeletonSpec, falloff: f32, noise: Option<NoiseSpec>) -> Nod
 
 impl Fin {
     /// The fin's rock: its blocks, standing from the root to their tops, trimmed by a
-    /// dome — an ellipsoid centred at the root, its top at the crest mid-fin and a fifth
-    /// of the fin's height above the middle's ground at the ends, so it trims the crest,
-    /// never the root (a downhill end stays in the ground). `k` picks its noises.
+    /// dome — an ellipsoid centred at the root, its top at the crest mid-fin and
+    /// [`DOME_END`] of the fin's height above the middle's ground at the ends, so it
+    /// rounds the crest's outer corners, never the root (a downhill end stays in the
+    /// ground). `k` picks its noises.
     fn node(&self, falloff: f32, k: u32) -> NodeSpec {
         let w = mean_width(&self.blocks);
         let half = 0.5

@@ -703,13 +703,7 @@ fn lying(line: &CliffLine, ground: &Ground, rng: &mut Rng, xy: Vec2, size: f32) 
     // On a slope, low enough that its downhill edge is in the ground too: its bottom a
     // fifth of its half height under the lowest ground within its reach (it lies at any
     // turn), else it hangs over the slope below it.
-    let reach = half.truncate().length();
-    let lowest = (0..8)
-        .map(|k| {
-            ground.height(xy + reach * Vec2::from_angle(k as f32 * std::f32::consts::FRAC_PI_4))
-        })
-        .filter(|z| z.is_finite())
-        .fold(h, f32::min);
+    let lowest = ground.lowest_around(xy, half.truncate().length());
     Some(Fallen {
         center: xy.extend((h - sunk * half.z).min(lowest + 0.8 * half.z)),
         half,

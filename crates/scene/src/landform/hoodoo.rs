@@ -252,21 +252,19 @@ impl HoodooSpec {
             let girth = 0.8 + 0.4 * rng.unit();
             let seed = 1 + (k % 64) as u32;
             // The skirt of debris and worn soft rock the column rises from.
+            // A symbol's width: softer rock, slimmer bodies.
+            let width_of = |s: f32, rho: f32| girth * s * (0.22 + 0.16 * rho);
             let foot = h
                 .symbols
                 .first()
-                .map_or(1.0, |&(_, _, s, _, rho)| girth * s * (0.22 + 0.16 * rho));
+                .map_or(1.0, |&(_, _, s, _, rho)| width_of(s, rho));
             // A cone about its foot, its base under the lowest ground it spans (on a
             // slope a base at the axis's ground stood out downhill as a plate) and its apex
             // over the ground at the axis.
             let (xy, reach) = (h.axiom.truncate(), SKIRT.0 * foot);
-            let at = |d: Vec2| ground.height(xy + reach * d);
-            let floor = at(Vec2::ZERO);
+            let floor = ground.height(xy);
             let floor = if floor.is_finite() { floor } else { h.axiom.z };
-            let lowest = (0..8)
-                .map(|i| at(Vec2::from_angle(i as f32 * std::f32::consts::FRAC_PI_4)))
-                .filter(|z| z.is_finite())
-                .fold(floor, f32::min);
+            let lowest = ground.lowest_around(xy, reach).min(floor);
             let apex = floor.min(h.axiom.z + height) + (SKIRT.1 * height).max(falloff);
             out.push(solid(
                 SkeletonSpec::Cone {
@@ -280,7 +278,7 @@ impl HoodooSpec {
             for &(t, p, s, elongation, rho) in &h.symbols {
                 // Symbols stack up the vertical through the axiom.
                 let up = |z: f32| (z - h.axiom.z) / height;
-                let width = girth * s * (0.22 + 0.16 * rho);
+                let width = width_of(s, rho);
                 let (ex, ey) = (elongation.sqrt(), 1.0 / elongation.sqrt());
                 match t {
                     // A body keeps its width; a spire (a column that lost its cap) narrows

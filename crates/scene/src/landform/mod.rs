@@ -169,6 +169,18 @@ impl<'a> Ground<'a> {
             .min_element()
     }
 
+    /// The lowest of the ground's heights at `xy` and at eight points `reach` around it
+    /// (points off the region's ground are skipped; NaN when all are): what a rock of that
+    /// reach must go under to lie in a slope without its downhill edge in the air.
+    pub fn lowest_around(&self, xy: Vec2, reach: f32) -> f32 {
+        (0..8)
+            .map(|k| xy + reach * Vec2::from_angle(k as f32 * std::f32::consts::FRAC_PI_4))
+            .chain([xy])
+            .map(|q| self.height(q))
+            .filter(|z| z.is_finite())
+            .fold(f32::NAN, f32::min)
+    }
+
     /// The tree-frame position of sample `k` of [`Ground::top`], at its height.
     pub fn sample_point(&self, k: usize) -> Vec3 {
         let nx = self.top.nx();
