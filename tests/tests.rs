@@ -51,3 +51,4 @@ mod tin;
 mod tree_core;
 mod tree_files;
 mod trees_build;
+mod vegetation;

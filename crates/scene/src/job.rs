@@ -265,6 +265,7 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
             let look = |camera: &Camera| RenderSettings {
                 trace: settings.trace.with_pixel_angle(camera.pixel_angle()),
                 guides: guides.clone(),
+                vegetation: picture::clear_sight(settings.vegetation.as_deref(), camera),
                 ..settings.clone()
             };
             let draw = |camera: &Camera, what: &str| {

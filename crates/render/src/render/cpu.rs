@@ -15,6 +15,7 @@ use super::shade::{
     from_srgb8, to_srgb8,
 };
 use super::trace::{Method, Trace, TraceParams, Tracer, outward};
+use super::vegetation::{PlantHit, Vegetation};
 use glam::Vec3;
 
 use std::sync::Arc;
@@ -40,6 +41,8 @@ pub struct RenderSettings {
     /// shadow edges and material boundaries. Off by default; the pictures' setup turns
     /// it on (the GPU path and the editor's progressive preview do not supersample).
     pub antialias: bool,
+    /// Trees and shrubs drawn beside the field ([`Vegetation`]); `None`: bare ground.
+    pub vegetation: Option<Arc<Vegetation>>,
 }
 
 impl RenderSettings {
@@ -53,6 +56,7 @@ impl RenderSettings {
             materials: Materials::for_scene(support, None),
             guides: Vec::new(),
             antialias: false,
+            vegetation: None,
         }
     }
 }
@@ -307,22 +311,39 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
     let f = primary.as_deref().unwrap_or(field);
     let start = beam_start(f, rays, &s.trace);
     let mut tracer = Tracer::new(f).with_guides(&s.guides);
-    // Primary hits with their normals, sky occlusion and shadow rays.
-    let hits: Vec<(Trace, Vec3, f32, Option<Segment>)> = rays
+    // Primary hits with their normals, sky occlusion and shadow rays; a plant in front of
+    // the field's surface stands for it.
+    let plants = s.vegetation.as_deref().filter(|v| !v.is_empty());
+    let hits: Vec<(Trace, Vec3, f32, Option<Segment>, Option<PlantHit>)> = rays
         .iter()
         .map(|&(ref ray, span, (i, j))| {
-            let Some(span) = span.filter(|sp| start <= sp.1) else {
-                return (miss, Vec3::ZERO, 1.0, None);
+            let Some(span) = span else {
+                return (miss, Vec3::ZERO, 1.0, None, None);
             };
-            let tr = tracer.trace(ray, (span.0.max(start), span.1), &s.trace);
-            if !tr.hit() {
-                return (tr, Vec3::ZERO, 1.0, None);
-            }
-            let p = ray.at(tr.t);
-            let g = tracer.gradient(ray, tr.t);
-            let n = outward(g);
-            let ao = occlusion(f, p, n, g.length(), sh)
-                * cave_light(field, p, n, s.materials.feature(p), sh);
+            let plant = plants.and_then(|v| v.hit(ray, span.1, s.trace.cone));
+            let end = plant.map_or(span.1, |h| h.t);
+            let mut tr = match start <= end {
+                true => tracer.trace(ray, (span.0.max(start), end), &s.trace),
+                false => miss,
+            };
+            let plant = plant.filter(|_| !tr.hit());
+            let (p, n, ao) = match plant {
+                Some(h) => {
+                    tr.t = h.t;
+                    (ray.at(h.t), h.n, h.ao)
+                }
+                None if tr.hit() => {
+                    let p = ray.at(tr.t);
+                    let g = tracer.gradient(ray, tr.t);
+                    let n = outward(g);
+                    let under = plants.map_or(1.0, |v| v.canopy(p));
+                    let ao = occlusion(f, p, n, g.length(), sh)
+                        * cave_light(field, p, n, s.materials.feature(p), sh)
+                        * under;
+                    (p, n, ao)
+                }
+                None => return (tr, Vec3::ZERO, 1.0, None, None),
+            };
             let shadow = (sh.shadows && n.dot(sh.sun) > 0.0)
                 .then(|| {
                     let tol = s.trace.epsilon + s.trace.cone * tr.t;
@@ -333,21 +354,21 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
                     shadow.clip(support).map(|span| (shadow, span))
                 })
                 .flatten();
-            (tr, n, ao, shadow)
+            (tr, n, ao, shadow, plant)
         })
         .collect();
     let shadow_field = pruned(
         field,
         segments_box(
             hits.iter()
-                .filter_map(|(_, _, _, sr)| sr.as_ref().map(|(r, sp)| (r, *sp))),
+                .filter_map(|(_, _, _, sr, _)| sr.as_ref().map(|(r, sp)| (r, *sp))),
         ),
     );
     let fs = shadow_field.as_deref().unwrap_or(field);
     let mut shadows = Tracer::new(fs).with_guides(&s.guides);
     rays.iter()
         .zip(hits)
-        .map(|((ray, _, _), (tr, n, ao, shadow))| {
+        .map(|((ray, _, _), (tr, n, ao, shadow, plant))| {
             if !tr.hit() {
                 let c = sh.seen(ray.origin, ray.dir, tr.t, Vec3::ZERO);
                 return Pixel {
@@ -356,13 +377,19 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
                 };
             }
             let lit = match shadow {
-                Some((r, span)) if shadows.occluded(&r, span, &shadow_params(&s.trace, tr.t)) => {
+                Some((r, span))
+                    if plants.is_some_and(|v| v.occludes(&r, span.1))
+                        || shadows.occluded(&r, span, &shadow_params(&s.trace, tr.t)) =>
+                {
                     0.0
                 }
                 _ => 1.0,
             };
             let p = ray.at(tr.t);
-            let albedo = s.materials.albedo_seen(p, n, s.trace.cone * tr.t);
+            let albedo = match plant {
+                Some(h) => h.albedo,
+                None => s.materials.albedo_seen(p, n, s.trace.cone * tr.t),
+            };
             let c = sh.seen(ray.origin, ray.dir, tr.t, albedo * sh.light(n, lit, ao));
             Pixel {
                 rgba: to_srgb8(sh.display(c)),

@@ -13,6 +13,7 @@
 //! * [`views`]: the box where the surface lies (automatic framing), and a close-up
 //!   camera per feature.
 //! * [`material`]: surface materials shared with the exported meshes.
+//! * [`vegetation`]: trees and shrubs traced beside the field, for the pictures' scale.
 //! * [`fallback`]: the GPU when it can, the CPU otherwise ([`Renderable`]).
 
 pub mod camera;
@@ -25,6 +26,7 @@ pub mod material;
 pub mod raycast;
 pub mod shade;
 pub mod trace;
+pub mod vegetation;
 pub mod views;
 
 pub use camera::{Camera, Ray};
@@ -34,6 +36,7 @@ pub use image::Frame;
 pub use material::{Cover, Materials};
 pub use shade::{Shading, Water};
 pub use trace::{Method, Trace, TraceParams, Tracer};
+pub use vegetation::{Flora, Vegetation};
 
 /// Errors of the renderer.
 #[derive(Debug, thiserror::Error)]

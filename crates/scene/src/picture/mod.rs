@@ -20,7 +20,7 @@ use crate::render::camera::DEFAULT_FOV;
 use crate::render::material::SnowLine;
 use crate::render::shade::Water;
 use crate::render::views::frame_surface;
-use crate::render::{Camera, Materials, Method, RenderError, RenderSettings};
+use crate::render::{Camera, Materials, Method, RenderError, RenderSettings, Vegetation};
 use crate::scene::Scene;
 use crate::scene::spec::Climate;
 
@@ -97,7 +97,76 @@ pub fn settings_with(
     if let Some(sun) = scene.job.as_ref().and_then(|j| j.sun) {
         s.shading.sun = sun.direction();
     }
+    let plants = vegetation(scene, tree, &s, camera);
+    s.vegetation = clear_sight(Some(&plants).filter(|v| !v.is_empty()), camera);
     s
+}
+
+/// `vegetation` clear of the sight line of `camera` to its target
+/// ([`Vegetation::clear_sight`], a cone a third of the field of view wide).
+pub fn clear_sight(vegetation: Option<&Vegetation>, camera: &Camera) -> Option<Arc<Vegetation>> {
+    let spread = (camera.fov_y.to_radians() / 6.0).tan();
+    vegetation.map(|v| Arc::new(v.clear_sight(camera.eye, camera.target, spread)))
+}
+
+/// A crown this wide (metres) spans a pixel where plants stop: farther, the haze and the
+/// pixel's width leave nothing of them to see.
+pub const FARTHEST_CROWN: f32 = 3.0;
+
+/// Plants grow this far (metres) about the job's region whatever the camera, for the
+/// feature views' cameras, which stand about it.
+pub const NEAR_REGION: f32 = 300.0;
+
+/// The trees and shrubs of a tree file's pictures: its job's climate's flora covering its
+/// job's `vegetation` share (else the climate's) of the fit ground over the water, in
+/// [`NEAR_REGION`] about [`scene_box`] (where the feature views look) and where `camera`
+/// sees within the distance at which a crown [`FARTHEST_CROWN`] wide spans a pixel (a
+/// job's region ends in the middle of its picture; the plants do not). A tree without a
+/// job has none: its scale is not a landscape's (a spire, an arch alone).
+pub fn vegetation(
+    scene: &Scene,
+    tree: &Tree,
+    settings: &RenderSettings,
+    camera: &Camera,
+) -> Vegetation {
+    let Some(job) = scene.job.as_ref() else {
+        return Vegetation::default();
+    };
+    let (flora, cover) = job.climate.vegetation();
+    let cover = job.vegetation.map_or(cover, |c| c.get());
+    let region = scene_box(scene, tree);
+    let support = tree.support();
+    let far = FARTHEST_CROWN / camera.pixel_angle().max(1e-6);
+    let eye = camera.eye.truncate();
+    let seen = Aabb::new(
+        (eye - glam::Vec2::splat(far)).extend(support.min.z),
+        (eye + glam::Vec2::splat(far)).extend(support.max.z),
+    );
+    let grown = region
+        .dilate(NEAR_REGION)
+        .union(seen)
+        .intersection(support);
+    let ahead = (camera.target - camera.eye).truncate();
+    let level = ahead.length() > 0.3 * (camera.target - camera.eye).length();
+    let aspect = camera.width as f32 / camera.height as f32;
+    let half = ((camera.fov_y.to_radians() * 0.5).tan() * aspect).atan() + 0.2;
+    let (forward, cos) = (ahead.normalize_or_zero(), half.min(3.0).cos());
+    let near = region.dilate(NEAR_REGION);
+    let within = |xy: glam::Vec2| {
+        let d = xy - eye;
+        let l = d.length();
+        (near.min.x..=near.max.x).contains(&xy.x) && (near.min.y..=near.max.y).contains(&xy.y)
+            || l < far && (!level || l < 50.0 || d.dot(forward) >= l * cos)
+    };
+    Vegetation::grow(
+        tree,
+        &settings.materials,
+        &grown,
+        &within,
+        flora,
+        cover,
+        settings.shading.water.map(|w| w.level),
+    )
 }
 
 /// The camera of a tree file's preview: looking from `look`'s eye at its target when

@@ -9,7 +9,7 @@ use super::landform::{
 use crate::elevation::ElevationSpec;
 use crate::field::{NoiseSpec, PrimitiveSpec};
 use crate::scene::HeightfieldSpec;
-use crate::value::{BoxSpec, Dir3, Finite, NonNegative, P2, P3, Positive, Region, Scale3};
+use crate::value::{BoxSpec, Dir3, Finite, NonNegative, P2, P3, Positive, Region, Scale3, Unit};
 use crate::voxel::FeatureVolumeSpec;
 
 /// The tree-file format version this build reads and writes.
@@ -239,6 +239,11 @@ pub struct JobSpec {
     /// (default `Temperate`: grass, patches of dry grass, soil on the slopes).
     #[serde(default, skip_serializing_if = "Climate::is_temperate")]
     pub climate: Climate,
+    /// How much of the ground fit for plants the pictures' trees and shrubs cover, in
+    /// `[0, 1]` (default: the climate's, [`Climate::vegetation`]; 0: bare ground). They
+    /// grow on soil and grass, not on rock, scree or features, in stands with clearings.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vegetation: Option<Unit>,
 }
 
 /// The ground cover of a scene: what grows, or does not, between the rocks.
@@ -256,6 +261,15 @@ pub enum Climate {
 impl Climate {
     fn is_temperate(&self) -> bool {
         *self == Climate::Temperate
+    }
+
+    /// The plants of the climate and the share of the fit ground they cover by default:
+    /// a woodland of stands and clearings (0.55), or scattered desert scrub (0.2).
+    pub fn vegetation(self) -> (crate::render::Flora, f32) {
+        match self {
+            Climate::Temperate => (crate::render::Flora::Woodland, 0.55),
+            Climate::Arid => (crate::render::Flora::Scrub, 0.2),
+        }
     }
 }
 

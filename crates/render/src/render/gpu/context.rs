@@ -393,6 +393,11 @@ impl GpuContext {
                 "the shader has no geology trees, which colour this scene's rock".into(),
             ));
         }
+        if settings.vegetation.as_ref().is_some_and(|v| !v.is_empty()) {
+            return Err(GpuError::Unsuitable(
+                "the shader draws no plants, which stand in this scene's pictures (set the job's `vegetation: 0` for bare ground)".into(),
+            ));
+        }
         let (w, h) = (camera.width, camera.height);
         let n = w as u64 * h as u64;
         self.check_size("the image", 4 * n)?;
