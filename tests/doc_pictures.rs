@@ -76,10 +76,10 @@ karstic masks trees/jacksboro_caves.ron -o masks --cell 5 --box 3300 4840 480 48
 karstic render trees/jacksboro_caves.ron -o heightmap_tree.png --camera 4258 4925 662 4281 5012 642 --fov 40 --quiet
 karstic heightmap trees/jacksboro_caves.ron -o top.tif --cell 2.5 --region 4100 4800 4500 5200
 karstic render trees/heightmap_top.ron -o heightmap_top.png --camera 4258 4925 662 4281 5012 642 --fov 40 --quiet
-karstic render trees/jacksboro_bare.ron -o detail_on.png --camera 3920 5150 790 3560 5120 880 --fov 50 --quiet
-karstic render trees/jacksboro_smooth.ron -o detail_off.png --camera 3920 5150 790 3560 5120 880 --fov 50 --quiet
-karstic render trees/jacksboro_bare.ron -o amplify_on.png --camera 4150 5000 1100 3650 5050 860 --fov 50 --size 640 360 --quiet
-karstic render trees/jacksboro_unamplified.ron -o amplify_off.png --camera 4150 5000 1100 3650 5050 860 --fov 50 --size 640 360 --quiet
+karstic render trees/jacksboro_bare.ron -o detail_on.png --camera 3920 5150 790 3560 5120 880 --fov 50 --bare --quiet
+karstic render trees/jacksboro_smooth.ron -o detail_off.png --camera 3920 5150 790 3560 5120 880 --fov 50 --bare --quiet
+karstic render trees/jacksboro_bare.ron -o amplify_on.png --camera 4150 5000 1100 3650 5050 860 --fov 50 --size 640 360 --bare --quiet
+karstic render trees/jacksboro_unamplified.ron -o amplify_off.png --camera 4150 5000 1100 3650 5050 860 --fov 50 --size 640 360 --bare --quiet
 karstic render trees/eroded_range.ron -o eroded_range.png --camera 600 380 300 660 700 200 --fov 50 --quiet
 karstic render trees/strata_cliff.ron -o strata_cliff.png --quiet
 karstic render trees/strata_islands.ron -o strata_islands.png --quiet

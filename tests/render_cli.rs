@@ -327,3 +327,38 @@ fn the_gpu_fallback_follows_the_jobs_mesh() {
     assert!(ok && err.contains("rendered on the CPU instead"), "{err}");
     assert!(err.contains("guided by the job's mesh"), "{err}");
 }
+
+/// `--bare` leaves out the trees a job's pictures grow: on the bluff's hillside the
+/// picture changes (and lightens: crowns are darker than the ground) where it draws them.
+#[test]
+fn render_bare_leaves_out_the_trees() {
+    let dir = tempfile::tempdir().unwrap();
+    let tree = trees().join("jacksboro_bluff.ron");
+    let draw = |name: &str, extra: &[&str]| {
+        let png = dir.path().join(name);
+        let mut args = vec![
+            "render",
+            tree.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+        ];
+        args.extend(["--size", "96", "54", "--quiet"]);
+        args.extend(extra);
+        let (ok, err) = karstic(&args);
+        assert!(ok, "{err}");
+        image::open(&png).unwrap().to_luma8().into_raw()
+    };
+    let (wooded, bare) = (draw("w.png", &[]), draw("b.png", &["--bare"]));
+    let changed = wooded
+        .iter()
+        .zip(&bare)
+        .filter(|(a, b)| a.abs_diff(**b) > 8)
+        .count();
+    assert!(
+        changed * 5 > wooded.len(),
+        "{changed} of {} pixels",
+        wooded.len()
+    );
+    let mean = |v: &[u8]| v.iter().map(|&x| x as f32).sum::<f32>() / v.len() as f32;
+    assert!(mean(&bare) > mean(&wooded) + 5.0);
+}

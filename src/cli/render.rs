@@ -10,7 +10,8 @@ use super::Budget;
 use clap::builder::TypedValueParser;
 use karstic::field::Tree;
 use karstic::io::progress;
-use karstic::render::{Device, Frame, Method, Renderable, cpu};
+use karstic::render::gpu::unsupported;
+use karstic::render::{Device, Fallback, Frame, Method, Renderable, cpu};
 
 /// Arguments of `karstic render`.
 #[derive(clap::Args, Debug)]
@@ -48,6 +49,9 @@ pub(super) struct RenderArgs {
     /// Skip the shadow rays.
     #[arg(long)]
     no_shadows: bool,
+    /// Draw bare ground: no trees or shrubs (the job's `vegetation`).
+    #[arg(long)]
+    bare: bool,
     /// Trace the whole field without first meshing the job's region to guide the rays
     /// (several times slower; draws solid thinner than the guides' cells, which the
     /// job's mesh and pictures leave out).
@@ -89,9 +93,15 @@ pub(super) fn run(args: RenderArgs) -> anyhow::Result<()> {
     let mut settings =
         karstic::picture::settings(&file.scene, tree, compiled.ground, &camera, args.method);
     settings.shading.shadows = !args.no_shadows;
+    if args.bare {
+        settings.vegetation = None;
+    }
     let mut subject = Renderable::from_tree(compiled.tree, args.gpu);
     subject.allow_software = args.software_gpu;
-    let gpu = subject.gpu();
+    let gpu = match subject.gpu() {
+        Some(Ok(_)) if let Some(e) = unsupported(&settings) => Some(Err(Fallback::Failed(e))),
+        gpu => gpu,
+    };
     let start = Instant::now();
     // On the CPU (asked for, or the GPU's fallback) the tracer follows a mesh of the job's
     // region, as `karstic run`'s pictures do: meshing it costs a fraction of the march it
@@ -181,6 +191,7 @@ mod tests {
             "--gpu",
             "--software-gpu",
             "--no-guide",
+            "--bare",
             "--quiet",
             "--cost",
             "c.png",
@@ -190,7 +201,7 @@ mod tests {
         assert_eq!(a.size, vec![64, 48]);
         assert_eq!(a.method, Method::Sphere);
         assert_eq!(a.camera, Some(vec![-10.0, 5.0, 3.5, 0.0, 0.0, -1.0]));
-        assert!(a.gpu && a.software_gpu && a.no_guide && a.quiet && a.cost.is_some());
+        assert!(a.gpu && a.software_gpu && a.no_guide && a.bare && a.quiet && a.cost.is_some());
         assert_eq!(a.fov, Some(30.0));
         assert_eq!(a.budget.max_memory, 1 << 30);
         let d = args(&[]);

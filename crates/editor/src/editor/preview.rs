@@ -28,7 +28,7 @@ use rayon::prelude::*;
 
 use super::points::{Handle, handles};
 use crate::compile::{Compiled, compile_scene};
-use crate::render::cpu::{Bands, render_bands};
+use crate::render::cpu::{Bands, antialias, render_bands};
 use crate::render::gpu::GpuContext;
 use crate::render::trace::normal;
 use crate::render::{Camera, Frame, Method, RenderSettings, cpu};
@@ -440,7 +440,11 @@ impl Server {
         let Some(Ok(tape)) = &r.tape else {
             return Err(None);
         };
-        let s = settings(scene, &r.compiled, camera, Quality::Full);
+        // The wgpu tracer draws no plants: its viewport shows the ground bare.
+        let s = RenderSettings {
+            vegetation: None,
+            ..settings(scene, &r.compiled, camera, Quality::Full)
+        };
         ctx.render(tape, camera, &s)
             .map(|f| (f, format!("GPU ({})", ctx.adapter)))
             .map_err(|e| Some(crate::io::chain(&e)))
@@ -550,7 +554,8 @@ impl Server {
 
 /// The editor's refinement of a view on the CPU: `fast` (its fast pass) enlarged to
 /// `camera`'s size, then the full image traced over it band by band, shaded as
-/// `karstic render` shades it; `band_done(frame, rows)` after each band. `None` when
+/// `karstic render` shades it, its edges supersampled last; `band_done(frame, rows)` after
+/// each band and after the supersampling. `None` when
 /// `stop` said so before the end.
 pub fn refine(
     scene: &Scene,
@@ -567,15 +572,22 @@ pub fn refine(
         progress: &ProgressBar::hidden(),
         stop,
     };
-    render_bands(
+    if !render_bands(
         &compiled.tree,
         camera,
         &settings,
         &mut frame,
         &bands,
         band_done,
-    )
-    .then_some(frame)
+    ) {
+        return None;
+    }
+    // Its edges supersampled last, as `karstic render` draws them: the same picture.
+    if settings.antialias {
+        antialias(&compiled.tree, camera, &settings, &mut frame);
+        band_done(&frame, camera.height);
+    }
+    Some(frame)
 }
 
 /// `frame` enlarged to `width × height` by repeating its pixels.

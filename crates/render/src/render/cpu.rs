@@ -39,7 +39,8 @@ pub struct RenderSettings {
     pub guides: Vec<Arc<Guide>>,
     /// Whether [`render`] supersamples the pixels at edges ([`antialias`]): silhouettes,
     /// shadow edges and material boundaries. Off by default; the pictures' setup turns
-    /// it on (the GPU path and the editor's progressive preview do not supersample).
+    /// it on (the GPU path does not supersample; the editor supersamples its refined
+    /// image last).
     pub antialias: bool,
     /// Trees and shrubs drawn beside the field ([`Vegetation`]); `None`: bare ground.
     pub vegetation: Option<Arc<Vegetation>>,
@@ -291,6 +292,10 @@ fn pruned<'f>(field: &'f dyn Field, region: Option<Aabb>) -> Option<Box<dyn Fiel
 /// A ray and the span of it to trace.
 type Segment = (Ray, (f32, f32));
 
+/// What a primary ray met: its trace (the plant's distance when it met one), the outward
+/// normal, the sky's share, its shadow ray, and the plant it met first if any.
+type Hit = (Trace, Vec3, f32, Option<Segment>, Option<PlantHit>);
+
 /// A primary ray, its span in the support, and its pixel.
 type PixelRay = (Ray, Option<(f32, f32)>, (u32, u32));
 
@@ -314,7 +319,7 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
     // Primary hits with their normals, sky occlusion and shadow rays; a plant in front of
     // the field's surface stands for it.
     let plants = s.vegetation.as_deref().filter(|v| !v.is_empty());
-    let hits: Vec<(Trace, Vec3, f32, Option<Segment>, Option<PlantHit>)> = rays
+    let hits: Vec<Hit> = rays
         .iter()
         .map(|&(ref ray, span, (i, j))| {
             let Some(span) = span else {
@@ -378,7 +383,7 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
             }
             let lit = match shadow {
                 Some((r, span))
-                    if plants.is_some_and(|v| v.occludes(&r, span.1))
+                    if plants.is_some_and(|v| v.occludes(&r, span.1, s.trace.cone * tr.t))
                         || shadows.occluded(&r, span, &shadow_params(&s.trace, tr.t)) =>
                 {
                     0.0

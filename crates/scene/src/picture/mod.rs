@@ -142,10 +142,7 @@ pub fn vegetation(
         (eye - glam::Vec2::splat(far)).extend(support.min.z),
         (eye + glam::Vec2::splat(far)).extend(support.max.z),
     );
-    let grown = region
-        .dilate(NEAR_REGION)
-        .union(seen)
-        .intersection(support);
+    let grown = region.dilate(NEAR_REGION).union(seen).intersection(support);
     let ahead = (camera.target - camera.eye).truncate();
     let level = ahead.length() > 0.3 * (camera.target - camera.eye).length();
     let aspect = camera.width as f32 / camera.height as f32;

@@ -388,15 +388,8 @@ impl GpuContext {
         settings: &RenderSettings,
         evals_per_pass: u32,
     ) -> Result<Frame, GpuError> {
-        if settings.materials.geology.is_some() {
-            return Err(GpuError::Unsuitable(
-                "the shader has no geology trees, which colour this scene's rock".into(),
-            ));
-        }
-        if settings.vegetation.as_ref().is_some_and(|v| !v.is_empty()) {
-            return Err(GpuError::Unsuitable(
-                "the shader draws no plants, which stand in this scene's pictures (set the job's `vegetation: 0` for bare ground)".into(),
-            ));
+        if let Some(e) = unsupported(settings) {
+            return Err(e);
         }
         let (w, h) = (camera.width, camera.height);
         let n = w as u64 * h as u64;
@@ -556,4 +549,21 @@ fn pipeline(
 /// Opens a device and renders one frame (see [`GpuContext::render`]).
 pub fn render(tape: &Tape, camera: &Camera, settings: &RenderSettings) -> Result<Frame, GpuError> {
     GpuContext::new()?.render(tape, camera, settings)
+}
+
+/// Why the GPU tracer cannot draw a picture with `settings`, if it cannot: rock coloured
+/// by a geology tree, or plants (the shader has neither). Asked before any work, so the
+/// CPU that draws instead can be given its guides.
+pub fn unsupported(settings: &RenderSettings) -> Option<GpuError> {
+    if settings.materials.geology.is_some() {
+        return Some(GpuError::Unsuitable(
+            "the shader has no geology trees, which colour this scene's rock".into(),
+        ));
+    }
+    if settings.vegetation.as_ref().is_some_and(|v| !v.is_empty()) {
+        return Some(GpuError::Unsuitable(
+            "the shader draws no plants, which stand in this scene's pictures (`--bare` leaves them out)".into(),
+        ));
+    }
+    None
 }

@@ -12,7 +12,7 @@
 pub mod context;
 pub mod header;
 
-pub use context::{GpuContext, render};
+pub use context::{GpuContext, render, unsupported};
 pub use header::wgsl_header;
 
 use crate::tape::TapeError;
