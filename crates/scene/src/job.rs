@@ -261,11 +261,12 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         None => None,
         Some((camera, settings)) => {
             let t = Instant::now();
-            // Each view traces at its own pixel's cone, along the guides meshed above.
+            // Each view traces at its own pixel's cone, along the guides meshed above, among
+            // plants grown for its own camera.
             let look = |camera: &Camera| RenderSettings {
                 trace: settings.trace.with_pixel_angle(camera.pixel_angle()),
                 guides: guides.clone(),
-                vegetation: picture::clear_sight(settings.vegetation.as_deref(), camera),
+                vegetation: picture::plants(&file.scene, &tree, &settings, camera),
                 ..settings.clone()
             };
             let draw = |camera: &Camera, what: &str| {

@@ -97,9 +97,22 @@ pub fn settings_with(
     if let Some(sun) = scene.job.as_ref().and_then(|j| j.sun) {
         s.shading.sun = sun.direction();
     }
-    let plants = vegetation(scene, tree, &s, camera);
-    s.vegetation = clear_sight(Some(&plants).filter(|v| !v.is_empty()), camera);
+    s.vegetation = plants(scene, tree, &s, camera);
     s
+}
+
+/// The plants of a picture of `tree`'s scene through `camera` with `settings` (their
+/// materials and water): [`vegetation`] grown for that camera, clear of its sight line;
+/// `None` where none grow. Each of a job's views grows its own: they look where the
+/// preview's camera does not.
+pub fn plants(
+    scene: &Scene,
+    tree: &Tree,
+    settings: &RenderSettings,
+    camera: &Camera,
+) -> Option<Arc<Vegetation>> {
+    let grown = vegetation(scene, tree, settings, camera);
+    clear_sight(Some(&grown).filter(|v| !v.is_empty()), camera)
 }
 
 /// `vegetation` clear of the sight line of `camera` to its target
