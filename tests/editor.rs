@@ -28,10 +28,7 @@ const TREE: &str = r#"(
         cell: 10,
         image: (320, 180),
         camera: (eye: (5200, 3900, 1300), target: (4000, 5200, 600)),
-        fov: 40,
-        // Bare ground: the viewport is compared with the tracer's image through egui's
-        // texture sampling, which blurs a wood's pixel-sized crowns by a few levels.
-        vegetation: 0,
+        fov: 40, vegetation: 0, // bare: egui's texture sampling blurs pixel-sized crowns
     ),
     root: Difference(
         name: "root",

@@ -220,3 +220,40 @@ fn trees_show_in_the_picture_and_cast_shadows() {
         "{shaded} of {tried} trees cast a shadow"
     );
 }
+
+/// Plants stand on the world's lattice, not their region's: two pictures whose regions
+/// overlap (a preview and a close-up, a view and the next) grow the same plants there.
+#[test]
+fn overlapping_regions_grow_the_same_plants() {
+    let (_, compiled, _, settings) = job("jacksboro_bluff", 64, 36);
+    let everywhere = |_: glam::Vec2| true;
+    let grow = |min: Vec3, max: Vec3| {
+        let region = karstic::field::Aabb::new(min, max);
+        Vegetation::grow(
+            &compiled.tree,
+            &settings.materials,
+            &region,
+            &everywhere,
+            karstic::render::Flora::Woodland,
+            0.55,
+            None,
+        )
+    };
+    let a = grow(
+        Vec3::new(3400.0, 4900.0, 700.0),
+        Vec3::new(3600.0, 5100.0, 1100.0),
+    );
+    let b = grow(
+        Vec3::new(3513.7, 4961.3, 700.0),
+        Vec3::new(3713.7, 5161.3, 1100.0),
+    );
+    let within = |p: &&karstic::render::vegetation::Plant| {
+        (3513.7..3600.0).contains(&p.base.x) && (4961.3..5100.0).contains(&p.base.y)
+    };
+    let (sa, sb): (Vec<_>, Vec<_>) = (
+        a.plants().iter().filter(within).collect(),
+        b.plants().iter().filter(within).collect(),
+    );
+    assert!(sa.len() > 40, "{} plants in the overlap", sa.len());
+    assert!(sa == sb, "{} against {} plants", sa.len(), sb.len());
+}

@@ -15,7 +15,7 @@
 //! scree, snow or features, less on channel gravel — times a low-frequency noise of
 //! stands and clearings (a woodland is not a plantation), and only where the scene's
 //! field has solid ground under the foot and under the crown's rim (no tree leans out
-//! over a cliff's edge) and air where the crown stands (not in a canyon carved under the
+//! over a cliff's edge) and air where the crown and each of its clumps stand (not in a canyon carved under the
 //! DEM, not inside a rock that stands over it), and above the water; a quarter as many
 //! within two crowns' reach of a cliff's edge or a rock face (the ground there more than
 //! 45° above or below, or rock standing on it).
@@ -24,7 +24,7 @@
 //! **How they look.** A crown is shaded by its lobe's normal bent by a leafy noise
 //! (fading to the mean where a pixel is wider than a leaf cluster), darker inside and
 //! below (the crown's own shade), lit through the same sun, shadow rays and sky as the
-//! ground. Ground under a crown keeps a third of its sky light: a wood's floor is dark.
+//! ground. Ground under a crown keeps half its sky light: a wood's floor is dark.
 //! Plants cast shadows on the ground and on each other.
 
 use glam::{Vec2, Vec3};
@@ -66,8 +66,12 @@ pub const LEAF_GAP: f32 = 0.6;
 /// Seed of the placement hashes and noises.
 pub const SEED: u32 = 0x7ee5_0b1d;
 
+/// Height (metres) over a plant's foot up to which the ground about it is its wood's
+/// floor ([`Vegetation::canopy`]): a boulder's top above it is not darkened.
+pub const FLOOR: f32 = 1.5;
+
 /// The sky light left to ground under a crown.
-pub const UNDER_CANOPY: f32 = 0.35;
+pub const UNDER_CANOPY: f32 = 0.5;
 
 /// What grows between the rocks.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -382,9 +386,12 @@ impl Vegetation {
             None => MAX_TRACED,
         };
         let spacing = flora.spacing().max((area / most as f32).sqrt());
+        // The candidates' lattice is the world's, not the region's: two pictures whose
+        // regions overlap grow the same plants there.
+        let first = (region.min.truncate() / spacing).floor();
         let (cx, cy) = (
-            (size.x / spacing).ceil().max(1.0) as u32,
-            (size.y / spacing).ceil().max(1.0) as u32,
+            ((region.max.x / spacing).ceil() - first.x).max(1.0) as u32,
+            ((region.max.y / spacing).ceil() - first.y).max(1.0) as u32,
         );
         let params = TraceParams::for_scene(Method::Segment, 2.0 * region.radius());
         // The field's first surface down from `from` to the altitude `to`, with its normal.
@@ -421,12 +428,16 @@ impl Vegetation {
         let plants: Vec<Plant> = (0..cx * cy)
             .into_par_iter()
             .filter_map(|k| {
-                let (i, j) = (k % cx, k / cx);
-                let h = mix32(i ^ mix32(j ^ mix32(SEED)));
+                let (i, j) = (
+                    first.x as i64 + (k % cx) as i64,
+                    first.y as i64 + (k / cx) as i64,
+                );
+                let h = mix32(i as u32 ^ mix32(j as u32 ^ mix32(SEED)));
                 let u = |s: u32| (mix32(h ^ s) & 0xffff) as f32 / 65536.0;
-                let xy =
-                    region.min.truncate() + Vec2::new(i as f32 + u(1), j as f32 + u(2)) * spacing;
-                if !within(xy) {
+                let xy = Vec2::new(i as f32 + u(1), j as f32 + u(2)) * spacing;
+                let inside = (region.min.x..region.max.x).contains(&xy.x)
+                    && (region.min.y..region.max.y).contains(&xy.y);
+                if !inside || !within(xy) {
                     return None;
                 }
                 let (p, n) = surface(xy)?;
@@ -458,6 +469,7 @@ impl Vegetation {
                 let fits = field.value(p - Vec3::Z * FOOT) >= ISO
                     && field.value(p + Vec3::Z * 0.5) < ISO
                     && field.value(p.truncate().extend(mid)) < ISO
+                    && plant.lobes.iter().all(|l| field.value(l.c) < ISO)
                     && rim
                         .iter()
                         .all(|&d| field.value(p + d.extend(-plant.reach - FOOT)) >= ISO);
@@ -675,15 +687,22 @@ impl Vegetation {
         let lobe = &plant.lobes[l];
         let n0 = lobe.normal(p);
         // Leaf clusters: a noise bends the normal and shades the hollows between them.
-        let seen = 1.0 - smoothstep(0.2, 0.6, footprint);
-        let q = p / 0.7;
-        let bend = Vec3::new(
-            simplex(SEED ^ 1, q),
-            simplex(SEED ^ 2, q),
-            simplex(SEED ^ 3, q),
-        );
-        let n = (n0 + 0.5 * seen * bend).normalize_or(n0);
-        let clusters = 1.0 + 0.3 * seen * simplex(SEED ^ 4, p / 0.45);
+        // Leaf clusters, then leaves: two octaves of noise bend the normal (so the lit
+        // side breaks into sprays and the terminator is ragged, not a ball's), and the
+        // hollows between clusters are dark. Each fades where a pixel is wider than it.
+        let seen = |scale: f32| 1.0 - smoothstep(0.3 * scale, scale, footprint);
+        let bend = |k: u32, scale: f32| {
+            let q = p / scale;
+            Vec3::new(
+                simplex(SEED ^ k, q),
+                simplex(SEED ^ (k + 1), q),
+                simplex(SEED ^ (k + 2), q),
+            ) * seen(scale)
+        };
+        let n = (n0 + 0.7 * bend(1, 0.9) + 0.45 * bend(11, 0.3)).normalize_or(n0);
+        let hollows = simplex(SEED ^ 4, p / 0.9) * seen(0.9);
+        let clusters = (1.0 + 0.3 * seen(0.45) * simplex(SEED ^ 5, p / 0.45))
+            * (1.0 - 0.45 * smoothstep(-0.1, -0.6, hollows));
         // The crown's own shade: its inside and its underside see less sky.
         let height = ((p.z - plant.crown_bottom()) / (plant.top - plant.crown_bottom()).max(1e-3))
             .clamp(0.0, 1.0);
@@ -721,7 +740,7 @@ impl Vegetation {
         let shade = list
             .iter()
             .map(|&k| &self.plants[k as usize])
-            .filter(|q| p.z < q.top && p.z > q.base.z - q.reach)
+            .filter(|q| p.z < q.base.z + FLOOR && p.z > q.base.z - q.reach)
             .map(|q| smoothstep(1.1, 0.3, p.truncate().distance(q.base.truncate()) / q.reach))
             .fold(0.0, f32::max);
         1.0 - (1.0 - UNDER_CANOPY) * shade
