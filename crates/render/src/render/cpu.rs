@@ -383,7 +383,7 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
             }
             let lit = match shadow {
                 Some((r, span))
-                    if plants.is_some_and(|v| v.occludes(&r, span.1, s.trace.cone * tr.t))
+                    if plants.is_some_and(|v| v.occludes(&r, span.1))
                         || shadows.occluded(&r, span, &shadow_params(&s.trace, tr.t)) =>
                 {
                     0.0

@@ -133,7 +133,7 @@ impl Lobe {
     /// its pixel `footprint` metres wide there: gaps open where the ray grazes the lobe
     /// (a crown's rim is ragged, its leaves against the sky) and where a pixel resolves
     /// the leaf clusters ([`LEAF_GAP`]); none where a pixel is wider, so a far crown is
-    /// whole rather than speckled, and shadows are dappled.
+    /// whole rather than speckled.
     #[inline]
     fn gap(&self, ray: &Ray, t: f32, footprint: f32) -> bool {
         let seen = 1.0 - smoothstep(0.25 * LEAF_GAP, LEAF_GAP, footprint);
@@ -280,13 +280,6 @@ impl Plant {
     #[inline]
     fn hit(&self, ray: &Ray, t_max: f32, cone: f32) -> Option<(f32, Option<usize>)> {
         self.hit_by(ray, t_max, |t| cone * t)
-    }
-
-    /// [`Self::hit`] with the foliage's gaps as seen `footprint` metres a pixel wherever
-    /// the ray meets it (a shadow ray: its origin's pixel).
-    #[inline]
-    fn hit_seen(&self, ray: &Ray, t_max: f32, footprint: f32) -> Option<(f32, Option<usize>)> {
-        self.hit_by(ray, t_max, |_| footprint)
     }
 
     #[inline]
@@ -715,15 +708,15 @@ impl Vegetation {
         })
     }
 
-    /// Whether a plant stands in the way of `ray` before `t_max` (a shadow ray from a
-    /// point seen `footprint` metres a pixel: the foliage's gaps show where they are
-    /// wider than that, [`Lobe::gap`]).
-    pub fn occludes(&self, ray: &Ray, t_max: f32, footprint: f32) -> bool {
+    /// Whether a plant stands in the way of `ray` before `t_max` (a shadow ray): whole
+    /// crowns, without the foliage's gaps ([`Lobe::gap`]), which one shadow ray a pixel
+    /// drew as dotted shadows.
+    pub fn occludes(&self, ray: &Ray, t_max: f32) -> bool {
         let mut hit = false;
         self.walk(ray, t_max, |list, _, _| {
             hit = list.iter().any(|&k| {
                 let plant = &self.plants[k as usize];
-                plant.hit_seen(ray, t_max, footprint).is_some()
+                plant.hit_by(ray, t_max, |_| f32::INFINITY).is_some()
             });
             hit
         });
@@ -804,7 +797,11 @@ mod tests {
                 .fold(f32::INFINITY, f32::min);
             let walked = v.first(&ray, 1e4, 0.0).map_or(f32::INFINITY, |h| h.0);
             assert_eq!(brute, walked, "ray {k}");
-            assert_eq!(v.occludes(&ray, 1e4, 0.0), brute.is_finite());
+            let whole = v
+                .plants
+                .iter()
+                .any(|p| p.hit_by(&ray, 1e4, |_| f32::INFINITY).is_some());
+            assert_eq!(v.occludes(&ray, 1e4), whole);
             hits += brute.is_finite() as u32;
         }
         assert!(hits > 400, "{hits} hits");
