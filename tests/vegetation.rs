@@ -210,7 +210,6 @@ fn trees_show_in_the_picture_and_cast_shadows() {
                         dir: sun,
                     },
                     200.0,
-                    0.0,
                 )
         })
         .count();
