@@ -255,6 +255,21 @@ fn software_adapters_give_way_to_the_cpu_quietly() {
     }
 }
 
+/// `karstic render TREE -o PNG --size 96 54 EXTRA…`, which must succeed; its stderr.
+fn render_small(tree: &Path, png: &Path, extra: &[&str]) -> String {
+    let mut args = vec![
+        "render",
+        tree.to_str().unwrap(),
+        "-o",
+        png.to_str().unwrap(),
+    ];
+    args.extend(["--size", "96", "54"]);
+    args.extend(extra);
+    let (ok, err) = karstic(&args);
+    assert!(ok, "{err}");
+    err
+}
+
 /// On a tree whose job has a region, `karstic render` meshes what its camera sees of the
 /// region and follows the mesh (as `karstic run`'s pictures do): on the main job the
 /// picture is the one `--no-guide` traces from the whole field on all but a few grazed
@@ -265,18 +280,7 @@ fn render_follows_the_jobs_mesh_unless_told_not_to() {
     let tree = trees().join("jacksboro_caves.ron");
     let render = |name: &str, extra: &[&str]| {
         let png = dir.path().join(name);
-        let mut args = vec![
-            "render",
-            tree.to_str().unwrap(),
-            "-o",
-            png.to_str().unwrap(),
-            "--size",
-            "96",
-            "54",
-        ];
-        args.extend_from_slice(extra);
-        let (ok, err) = karstic(&args);
-        assert!(ok, "{err}");
+        let err = render_small(&tree, &png, extra);
         let steps: f64 = err
             .split(" steps per ray")
             .next()
@@ -336,19 +340,13 @@ fn render_bare_leaves_out_the_trees() {
     let tree = trees().join("jacksboro_bluff.ron");
     let draw = |name: &str, extra: &[&str]| {
         let png = dir.path().join(name);
-        let mut args = vec![
-            "render",
-            tree.to_str().unwrap(),
-            "-o",
-            png.to_str().unwrap(),
-        ];
-        args.extend(["--size", "96", "54", "--quiet"]);
-        args.extend(extra);
-        let (ok, err) = karstic(&args);
-        assert!(ok, "{err}");
+        render_small(&tree, &png, extra);
         image::open(&png).unwrap().to_luma8().into_raw()
     };
-    let (wooded, bare) = (draw("w.png", &[]), draw("b.png", &["--bare"]));
+    let (wooded, bare) = (
+        draw("w.png", &["--quiet"]),
+        draw("b.png", &["--quiet", "--bare"]),
+    );
     let changed = wooded
         .iter()
         .zip(&bare)
