@@ -47,7 +47,9 @@ fn ground_under(field: &dyn Field, p: Vec3) -> Option<f32> {
 /// Every plant's foot lies on `field`'s surface (within `tol` metres: neither floating
 /// nor buried), on ground no steeper than a rock face, with air over it.
 fn stand_on_the_ground(name: &str, field: &dyn Field, v: &Vegetation, tol: f32) {
+    let (mut sampled, mut sloped) = (0, 0);
     for (k, p) in v.plants().iter().enumerate().step_by(5) {
+        sampled += 1;
         let z = ground_under(field, p.base);
         assert!(
             z.is_some_and(|z| (z - p.base.z).abs() < tol),
@@ -61,6 +63,7 @@ fn stand_on_the_ground(name: &str, field: &dyn Field, v: &Vegetation, tol: f32) 
         {
             let n = Vec3::new(w - e, s - n, 2.0).normalize();
             assert!(n.z > 0.5, "{name}: plant {k} at {} on a face ({n})", p.base);
+            sloped += 1;
         }
         let crown = p.base + Vec3::Z * 0.6 * (p.top - p.base.z);
         assert!(
@@ -68,6 +71,11 @@ fn stand_on_the_ground(name: &str, field: &dyn Field, v: &Vegetation, tol: f32) 
             "{name}: plant {k}'s crown is in the rock"
         );
     }
+    // The slope is measured about nearly every foot, not skipped where it is hard.
+    assert!(
+        sloped * 10 >= sampled * 9,
+        "{name}: slope of {sloped} of {sampled}"
+    );
 }
 
 /// The bluff's hillside (a real DEM) is wooded: thousands of trees 2.5 to 32 m high,

@@ -10,8 +10,7 @@ use super::Budget;
 use clap::builder::TypedValueParser;
 use karstic::field::Tree;
 use karstic::io::progress;
-use karstic::render::gpu::unsupported;
-use karstic::render::{Device, Fallback, Frame, Method, Renderable, cpu};
+use karstic::render::{Device, Frame, Method, Renderable, cpu};
 
 /// Arguments of `karstic render`.
 #[derive(clap::Args, Debug)]
@@ -98,10 +97,7 @@ pub(super) fn run(args: RenderArgs) -> anyhow::Result<()> {
     }
     let mut subject = Renderable::from_tree(compiled.tree, args.gpu);
     subject.allow_software = args.software_gpu;
-    let gpu = match subject.gpu() {
-        Some(Ok(_)) if let Some(e) = unsupported(&settings) => Some(Err(Fallback::Failed(e))),
-        gpu => gpu,
-    };
+    let gpu = subject.gpu(&settings);
     let start = Instant::now();
     // On the CPU (asked for, or the GPU's fallback) the tracer follows a mesh of the job's
     // region, as `karstic run`'s pictures do: meshing it costs a fraction of the march it

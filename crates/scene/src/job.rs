@@ -262,11 +262,15 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         Some((camera, settings)) => {
             let t = Instant::now();
             // Each view traces at its own pixel's cone, along the guides meshed above, among
-            // plants grown for its own camera.
+            // plants grown for its own camera (the preview's grew with its settings).
+            let preview = camera;
             let look = |camera: &Camera| RenderSettings {
                 trace: settings.trace.with_pixel_angle(camera.pixel_angle()),
                 guides: guides.clone(),
-                vegetation: picture::plants(&file.scene, &tree, &settings, camera),
+                vegetation: match camera == &preview {
+                    true => settings.vegetation.clone(),
+                    false => picture::plants(&file.scene, &tree, &settings, camera),
+                },
                 ..settings.clone()
             };
             let draw = |camera: &Camera, what: &str| {

@@ -5,7 +5,7 @@ use indicatif::ProgressBar;
 
 use super::camera::Camera;
 use super::cpu::{self, RenderSettings};
-use super::gpu::{GpuContext, GpuError};
+use super::gpu::{GpuContext, GpuError, unsupported};
 use super::image::Frame;
 use crate::field::{Field, Tree};
 use crate::tape::{Tape, tape_from_tree};
@@ -80,19 +80,23 @@ impl Renderable {
         }
     }
 
-    /// The device this renders on, decided before anything is drawn: `None` for the CPU
-    /// when the GPU was not wanted, else the GPU's context, or why the CPU renders
-    /// instead (no encoding, no adapter, a software adapter not allowed). A caller that
+    /// The device this renders a picture with `settings` on, decided before anything is
+    /// drawn: `None` for the CPU when the GPU was not wanted, else the GPU's context, or
+    /// why the CPU renders instead (no encoding, what the shader cannot draw —
+    /// [`unsupported`] —, no adapter, a software adapter not allowed). A caller that
     /// prepares the CPU's help (the mesh guides) asks this first.
-    pub fn gpu(&self) -> Option<Result<GpuContext, Fallback<'_>>> {
+    pub fn gpu(&self, settings: &RenderSettings) -> Option<Result<GpuContext, Fallback<'_>>> {
         Some(match self.tape.as_ref()? {
             Err(e) => Err(Fallback::NoTape(e)),
-            Ok(_) => match GpuContext::new() {
-                Ok(ctx) if ctx.software && !self.allow_software => {
-                    Err(Fallback::Software(ctx.adapter.clone()))
-                }
-                Ok(ctx) => Ok(ctx),
-                Err(e) => Err(Fallback::Failed(e)),
+            Ok(_) => match unsupported(settings) {
+                Some(e) => Err(Fallback::Failed(e)),
+                None => match GpuContext::new() {
+                    Ok(ctx) if ctx.software && !self.allow_software => {
+                        Err(Fallback::Software(ctx.adapter.clone()))
+                    }
+                    Ok(ctx) => Ok(ctx),
+                    Err(e) => Err(Fallback::Failed(e)),
+                },
             },
         })
     }
@@ -106,7 +110,7 @@ impl Renderable {
         settings: &RenderSettings,
         progress: &ProgressBar,
     ) -> (Frame, Device<'_>) {
-        self.render_on(self.gpu(), camera, settings, progress)
+        self.render_on(self.gpu(settings), camera, settings, progress)
     }
 
     /// [`Self::render_with_fallback`] on the device [`Self::gpu`] chose.

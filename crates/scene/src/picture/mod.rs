@@ -155,13 +155,13 @@ pub fn vegetation(
         (eye - glam::Vec2::splat(far)).extend(support.min.z),
         (eye + glam::Vec2::splat(far)).extend(support.max.z),
     );
-    let grown = region.dilate(NEAR_REGION).union(seen).intersection(support);
+    let near = region.dilate(NEAR_REGION);
+    let grown = near.union(seen).intersection(support);
     let ahead = (camera.target - camera.eye).truncate();
     let level = ahead.length() > 0.3 * (camera.target - camera.eye).length();
     let aspect = camera.width as f32 / camera.height as f32;
     let half = ((camera.fov_y.to_radians() * 0.5).tan() * aspect).atan() + 0.2;
     let (forward, cos) = (ahead.normalize_or_zero(), half.min(3.0).cos());
-    let near = region.dilate(NEAR_REGION);
     let within = |xy: glam::Vec2| {
         let d = xy - eye;
         let l = d.length();
