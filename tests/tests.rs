@@ -48,6 +48,7 @@ mod tape_conformance;
 mod tape_header;
 mod tiles;
 mod tin;
+mod top_cover;
 mod tree_core;
 mod tree_files;
 mod trees_build;

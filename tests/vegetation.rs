@@ -121,6 +121,14 @@ fn scrub_grows_on_a_fields_surface_and_nothing_under_water() {
     assert!(v.plants().len() > 50, "{} shrubs", v.plants().len());
     stand_on_the_ground("fin_arch", &compiled.tree, &v, 0.6);
     assert!(v.plants().iter().all(|p| p.top - p.base.z < 6.0));
+    // None on the arch's lintel or over a hollow: the rock is solid 12 m under each.
+    for p in v.plants() {
+        assert!(
+            (1..=12).all(|d| compiled.tree.value(p.base - Vec3::Z * d as f32) >= ISO),
+            "fin_arch: a shrub at {} stands over a hollow",
+            p.base
+        );
+    }
     let (file, compiled, _, settings) = job("sea_stacks", 160, 90);
     let level = file.scene.job.unwrap().water_level.unwrap().0;
     let v = settings.vegetation.unwrap();

@@ -391,11 +391,19 @@ fn tile(field: &dyn Field, support: &Aabb, rays: &[PixelRay], s: &RenderSettings
                 _ => 1.0,
             };
             let p = ray.at(tr.t);
-            let albedo = match plant {
-                Some(h) => h.albedo,
-                None => s.materials.albedo_seen(p, n, s.trace.cone * tr.t),
+            let surface = match plant {
+                Some(h) => h.albedo * sh.light(n, lit, ao),
+                None => {
+                    let look = s.materials.seen(p, n, s.trace.cone * tr.t);
+                    let bed = sh.wetted(p, look.albedo) * sh.light(look.normal, lit, ao);
+                    if look.stream > 0.0 {
+                        bed.lerp(sh.stream(p, ray.dir, tr.t, bed), look.stream)
+                    } else {
+                        bed
+                    }
+                }
             };
-            let c = sh.seen(ray.origin, ray.dir, tr.t, albedo * sh.light(n, lit, ao));
+            let c = sh.seen(ray.origin, ray.dir, tr.t, surface);
             Pixel {
                 rgba: to_srgb8(sh.display(c)),
                 trace: tr,

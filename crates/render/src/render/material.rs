@@ -18,6 +18,12 @@
 //! cover the ground too: scree where talus gathered, gravel along the channels and sand on
 //! the deposits, so the drainage the erosion carved reads in colour as well as in relief.
 //!
+//! Where rock above a surface rises steeper than a cliff's apron reaches, the surface
+//! lies on talus ([`TopCover`]): it is scree, rubble of blocks and stones in the colour
+//! of the hard rock that shed it, on a feature's surface too (a canyon's floor). Where the
+//! top surface's drainage gathers, a stream runs on a bed of gravel ([`Cover::stream`]:
+//! the pictures draw its water).
+//!
 //! Colours are linear RGB albedos in `[0, 1]`. The GPU shader (`crates/render/shaders/trace.wgsl`)
 //! mirrors [`Materials::cover`] and [`Materials::albedo`]; keep the two in step. It has no
 //! geology trees: a scene whose rock is coloured by one renders on the CPU.
@@ -26,6 +32,7 @@ use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
+use super::top_cover::{OnTop, TopCover, rubble};
 use crate::dem::{HeightfieldField, Trace};
 use crate::field::Aabb;
 use crate::field::noise::simplex;
@@ -54,10 +61,25 @@ pub struct Cover {
     pub dry: f32,
     /// Snow over soil and grass above the snow line (0 without one).
     pub snow: f32,
-    /// Scree: the talus an eroded amplification shed below steep ground (0 without one).
+    /// Scree: the talus an eroded amplification shed below steep ground, or a cliff's
+    /// apron ([`TopCover`]).
     pub scree: f32,
-    /// Damp gravel of the channels an eroded amplification carved.
+    /// Damp gravel of the channels an eroded amplification carved, and of streams' beds.
     pub gravel: f32,
+    /// A stream's water over its bed ([`TopCover`]); not a colour of the albedo: the
+    /// pictures draw the water ([`crate::render::Shading::stream`]), the meshes the bed.
+    pub stream: f32,
+}
+
+/// How a surface point looks in a picture ([`Materials::seen`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Look {
+    /// Its albedo.
+    pub albedo: Vec3,
+    /// The normal it is lit by.
+    pub normal: Vec3,
+    /// How much a stream's water covers it, in `[0, 1]`.
+    pub stream: f32,
 }
 
 /// Altitude snow, when a tree asks for it.
@@ -117,6 +139,8 @@ pub struct Materials {
     pub variation_wavelength: f32,
     /// The scene's terrain, whose surface tells features from ground.
     pub ground: Option<Arc<HeightfieldField>>,
+    /// The talus and streams on the scene's top surface, when found ([`TopCover`]).
+    pub top: Option<Arc<TopCover>>,
 }
 
 impl Materials {
@@ -148,6 +172,7 @@ impl Materials {
             variation: 0.08,
             variation_wavelength: 0.07 * r,
             ground,
+            top: None,
         }
     }
 
@@ -193,15 +218,29 @@ impl Materials {
         );
         let feature = self.feature(p);
         let (scree, gravel, sand, gully) = self.traces(p, wander);
+        // Talus buries what lies under it, a carved floor too; its edge frays. A stream
+        // runs on level ground only, on a bed of gravel a little wider than its water.
+        let on = self.top.as_ref().map_or(OnTop::default(), |t| t.at(p));
+        let talus = smoothstep(0.15, 0.85, on.talus * (1.0 + 0.6 * wander)) * repose(n.z);
+        let level = smoothstep(0.8, 0.9, n.z);
+        let bed = smoothstep(0.1, 0.4, on.stream) * level;
+        // A carved valley's level floor holds what the water left: it is ground, not rock
+        // (a cave's floor under the top surface stays rock).
+        let floor = if self.off_ground(p) < 0.0 {
+            smoothstep(0.85, 0.95, nz) * on.top
+        } else {
+            0.0
+        };
         Cover {
-            rock: (1.0 - flat).max(feature),
+            rock: (1.0 - flat).max(feature * (1.0 - talus.max(bed).max(floor))),
             // A gully's walls are grown over, as a humid slope's are; bare, their lit
             // side reads as a ledge of rock standing out of the slope.
             soil: (soil * (1.0 - 0.8 * gully)).max(sand),
             dry: smoothstep(-0.2, 0.5, patches),
             snow,
-            scree: scree * (1.0 - feature),
-            gravel: gravel * (1.0 - feature),
+            scree: (scree * (1.0 - feature)).max(talus),
+            gravel: (gravel * (1.0 - feature)).max(bed),
+            stream: smoothstep(0.4, 0.6, on.stream) * level,
         }
     }
 
@@ -283,14 +322,45 @@ impl Materials {
     /// Albedo at `p` with outward unit normal `n` seen `footprint` metres a pixel: the
     /// pictures' colour, with the rock's [`Materials::weathering`] at that scale.
     pub fn albedo_seen(&self, p: Vec3, n: Vec3, footprint: f32) -> Vec3 {
+        self.seen(p, n, footprint).albedo
+    }
+
+    /// How `p` with outward unit normal `n` looks seen `footprint` metres a pixel: its
+    /// [`Materials::albedo_seen`], `n` tilted by the facets of a talus apron's blocks
+    /// where one lies ([`rubble`]), and the stream over it ([`Cover::stream`]).
+    pub fn seen(&self, p: Vec3, n: Vec3, footprint: f32) -> Look {
         let c = self.cover(p, n);
         let rock = if c.rock > 0.0 {
             self.rock_at(p) * self.weathering(p, footprint)
         } else {
             self.rock
         };
-        self.albedo_of(&c, rock)
+        let albedo = self.albedo_of(&c, rock);
+        let stream = c.stream;
+        if c.scree > 0.0 && self.top.is_some() {
+            let (f, tilt) = rubble(p, footprint);
+            let normal = (n + c.scree * tilt.extend(0.0)).normalize_or(n);
+            let albedo = albedo * (1.0 + c.scree * (f - 1.0));
+            Look {
+                albedo,
+                normal,
+                stream,
+            }
+        } else {
+            Look {
+                albedo,
+                normal: n,
+                stream,
+            }
+        }
     }
+}
+
+/// How much scree a slope whose normal has vertical component `nz` holds: all up to the
+/// angle of repose of angular debris (about 35°), none past 42°, where it slides off and
+/// the face below shows.
+pub fn repose(nz: f32) -> f32 {
+    smoothstep(42f32.to_radians().cos(), 35f32.to_radians().cos(), nz)
 }
 
 /// Hermite step from 0 at `a` to 1 at `b` (`a > b` steps down).

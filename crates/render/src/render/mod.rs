@@ -13,6 +13,8 @@
 //! * [`views`]: the box where the surface lies (automatic framing), and a close-up
 //!   camera per feature.
 //! * [`material`]: surface materials shared with the exported meshes.
+//! * [`top_cover`]: talus at cliffs' feet and streams along the drainage, on the top
+//!   surface, which the materials cover with scree and water.
 //! * [`vegetation`]: trees and shrubs traced beside the field, for the pictures' scale.
 //! * [`fallback`]: the GPU when it can, the CPU otherwise ([`Renderable`]).
 
@@ -25,6 +27,7 @@ pub mod image;
 pub mod material;
 pub mod raycast;
 pub mod shade;
+pub mod top_cover;
 pub mod trace;
 pub mod vegetation;
 pub mod views;
@@ -35,6 +38,7 @@ pub use fallback::{Device, Fallback, Renderable};
 pub use image::Frame;
 pub use material::{Cover, Materials};
 pub use shade::{Shading, Water};
+pub use top_cover::TopCover;
 pub use trace::{Method, Trace, TraceParams, Tracer};
 pub use vegetation::{Flora, Vegetation};
 

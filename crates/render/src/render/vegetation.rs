@@ -53,6 +53,11 @@ pub const EDGE_KEEP: f32 = 0.25;
 /// Depth (metres) under a plant's foot where the field must be solid.
 const FOOT: f32 = 0.8;
 
+/// How deep (metres) the rock under a plant's foot must be solid where its ground is
+/// traced, not a terrain's: no shrub on an arch's lintel or a ledge over a hollow, whose
+/// roots would hang in the air under it.
+const ROOTED: f32 = 12.0;
+
 /// Side of the grid's columns, in units of the flora's spacing.
 const COLUMN: f32 = 2.5;
 
@@ -459,7 +464,10 @@ impl Vegetation {
                 let mid = (plant.crown_bottom() + plant.top) * 0.5;
                 // Ground under the crown's rim too: no tree leans out over a cliff's edge.
                 let rim = [Vec2::X, Vec2::Y, -Vec2::X, -Vec2::Y].map(|d| d * plant.reach);
-                let fits = field.value(p - Vec3::Z * FOOT) >= ISO
+                let rooted = ground.is_some()
+                    || (1..=4).all(|k| field.value(p - Vec3::Z * (ROOTED * k as f32 / 4.0)) >= ISO);
+                let fits = rooted
+                    && field.value(p - Vec3::Z * FOOT) >= ISO
                     && field.value(p + Vec3::Z * 0.5) < ISO
                     && field.value(p.truncate().extend(mid)) < ISO
                     && plant.lobes.iter().all(|l| field.value(l.c) < ISO)

@@ -13,14 +13,17 @@ pub mod guides;
 use std::sync::Arc;
 
 use glam::Vec3;
+use rayon::prelude::*;
 
+use crate::analysis::flow::{self, FlowGraph};
 use crate::dem::HeightfieldField;
 use crate::field::{Aabb, Field, Tree};
+use crate::heightmap::{Columns, TopOptions};
 use crate::render::camera::DEFAULT_FOV;
 use crate::render::material::SnowLine;
 use crate::render::shade::Water;
 use crate::render::views::frame_surface;
-use crate::render::{Camera, Materials, Method, RenderError, RenderSettings, Vegetation};
+use crate::render::{Camera, Materials, Method, RenderError, RenderSettings, TopCover, Vegetation};
 use crate::scene::Scene;
 use crate::scene::spec::Climate;
 
@@ -28,10 +31,62 @@ pub use guides::view_guides;
 
 /// The materials of a tree file's scene: at the scale of [`scene_box`], over the compiled
 /// scene's terrain, with the job's snow line, rock coloured by the scene's geology when it
-/// has one. The preview, the feature views, the mesh colours and the texture masks all
-/// take theirs from here.
+/// has one, talus and streams on the top surface of its job's region ([`top_cover`]). The
+/// preview, the feature views, the mesh colours and the texture masks all take theirs from
+/// here.
 pub fn materials(scene: &Scene, tree: &Tree, ground: Option<Arc<HeightfieldField>>) -> Materials {
-    materials_in(scene, tree.support(), ground)
+    let mut m = materials_in(scene, tree.support(), ground);
+    m.top = top_cover(scene, tree).map(Arc::new);
+    m
+}
+
+/// The most column tops the raster of [`top_cover`] samples: its cell grows past
+/// [`TOP_CELL`] to keep within it.
+pub const TOP_COLUMNS: f32 = 160_000.0;
+
+/// The finest cell (metres) of the raster of [`top_cover`]: a fallen block's size.
+pub const TOP_CELL: f32 = 2.0;
+
+/// The talus and streams on the top surface of a tree file's job region ([`TopCover`]):
+/// the tops of `tree`'s columns over it, their drainage routed down the steepest descent
+/// after the depressions are filled (Priority-Flood + ε, [`crate::analysis::flow`]), so a
+/// stream crosses a carved floor's hollows as water spilling through them does. `None`
+/// without a job (a tree without one has no landscape's scale, as for [`vegetation`]) or
+/// where the region holds too few columns.
+pub fn top_cover(scene: &Scene, tree: &Tree) -> Option<TopCover> {
+    scene.job.as_ref()?;
+    let region = scene_box(scene, tree).intersection(tree.support());
+    let size = region.size().truncate();
+    if !(size.x > 0.0 && size.y > 0.0) {
+        return None;
+    }
+    let cell = TOP_CELL.max((size.x * size.y / TOP_COLUMNS).sqrt());
+    let (nx, ny) = (
+        (size.x / cell).floor() as usize + 1,
+        (size.y / cell).floor() as usize + 1,
+    );
+    let origin = region.min.truncate();
+    let opts = TopOptions {
+        tolerance: 0.1 * cell,
+        direct: true,
+    };
+    let mut top = vec![f32::NAN; nx * ny];
+    top.par_chunks_mut(nx).enumerate().for_each_init(
+        || Columns::new(tree, &opts),
+        |columns, (j, row)| {
+            for (i, out) in row.iter_mut().enumerate() {
+                let xy = origin + glam::Vec2::new(i as f32, j as f32) * cell;
+                *out = columns.top(xy).unwrap_or(f32::NAN);
+            }
+        },
+    );
+    let mut filled = top.clone();
+    flow::fill_in_place(&mut filled, nx, ny);
+    let mut graph = FlowGraph::new();
+    graph.update(&filled, nx, ny, cell, cell);
+    let mut area = Vec::new();
+    graph.accumulate(cell * cell, &mut area);
+    TopCover::new(origin, cell, (nx, ny), top, &area)
 }
 
 /// [`materials`] with `support` standing for the tree's support: the scale of a scene
@@ -50,6 +105,11 @@ pub fn materials_in(
         .and_then(|j| j.snow_line)
         .map(|z| SnowLine::at(z.0, &b));
     m.geology = scene.geology().map(Arc::new);
+    if m.geology.is_some() {
+        // Talus is the hard beds' blocks (the soft ones weather to fines): their colour,
+        // greyed by broken faces.
+        m.scree = m.strata_rock.1.lerp(m.scree, 0.35);
+    }
     if scene
         .job
         .as_ref()

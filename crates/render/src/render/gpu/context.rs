@@ -552,12 +552,18 @@ pub fn render(tape: &Tape, camera: &Camera, settings: &RenderSettings) -> Result
 }
 
 /// Why the GPU tracer cannot draw a picture with `settings`, if it cannot: rock coloured
-/// by a geology tree, or plants (the shader has neither). Asked before any work, so the
+/// by a geology tree, talus and streams, or plants (the shader has none of them). Asked before any work, so the
 /// CPU that draws instead can be given its guides.
 pub fn unsupported(settings: &RenderSettings) -> Option<GpuError> {
     if settings.materials.geology.is_some() {
         return Some(GpuError::Unsuitable(
             "the shader has no geology trees, which colour this scene's rock".into(),
+        ));
+    }
+    if settings.materials.top.is_some() {
+        return Some(GpuError::Unsuitable(
+            "the shader has no raster of talus and streams, which lie on this scene's ground"
+                .into(),
         ));
     }
     if settings.vegetation.as_ref().is_some_and(|v| !v.is_empty()) {
