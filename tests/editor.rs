@@ -346,11 +346,8 @@ fn editor_refines_the_viewport_on_the_gpu_when_asked() {
     );
     let file = karstic::scene::load(&paths[0]).unwrap();
     let compiled = file.compile().unwrap();
-    // The GPU's viewport draws the ground bare (the shader has no plants).
-    let bare = karstic::render::RenderSettings {
-        vegetation: None,
-        ..karstic::editor::preview::settings(&file.scene, &compiled, &shown.camera, Quality::Full)
-    };
+    // The GPU's viewport draws the ground bare (the shader has no plants, no talus).
+    let bare = karstic::editor::preview::gpu_settings(&file.scene, &compiled, &shown.camera);
     let cpu = karstic::render::render(
         &compiled.tree,
         &shown.camera,

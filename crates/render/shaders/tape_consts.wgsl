@@ -28,6 +28,13 @@ const WAVE_SHORT: f32 = 0.3;
 const WAVE_SLOPE: f32 = 0.06;
 const SURF_DEPTH: f32 = 0.8;
 const WAVE_SEED: u32 = 14974u;
+
+// The ground's grain (the renderer's material.rs ground_grain): wavelengths, amplitudes.
+const GRAIN_LONG: f32 = 2.5;
+const GRAIN_LONG_AMP: f32 = 0.22;
+const GRAIN_SHORT: f32 = 0.7;
+const GRAIN_SHORT_AMP: f32 = 0.16;
+const GRAIN_SEED: u32 = 1780289111u;
 const CAVE_DIRS: u32 = 5u;
 const CAVE_STEPS: u32 = 6u;
 

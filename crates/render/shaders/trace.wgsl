@@ -246,8 +246,20 @@ fn feature_of(p: vec3<f32>) -> f32 {
     return smooth_step(u.feature.x, u.feature.y, abs(off_ground(p)));
 }
 
-// material.rs Materials::albedo (cover, then albedo_of), with `feature_of(p)`.
-fn albedo(p: vec3<f32>, n: vec3<f32>, feature: f32) -> vec3<f32> {
+// material.rs resolved.
+fn resolved(wavelength: f32, footprint: f32) -> f32 {
+    return 1.0 - smooth_step(0.25 * wavelength, 0.5 * wavelength, footprint);
+}
+
+// material.rs ground_grain.
+fn ground_grain(p: vec3<f32>, footprint: f32) -> f32 {
+    return GRAIN_LONG_AMP * resolved(GRAIN_LONG, footprint) * simplex(GRAIN_SEED ^ 1u, p / GRAIN_LONG)
+        + GRAIN_SHORT_AMP * resolved(GRAIN_SHORT, footprint) * simplex(GRAIN_SEED ^ 2u, p / GRAIN_SHORT);
+}
+
+// material.rs Materials::seen's albedo (cover, then albedo_of, then the ground's grain
+// at the pixel's `footprint`), with `feature_of(p)`.
+fn albedo(p: vec3<f32>, n: vec3<f32>, feature: f32, footprint: f32) -> vec3<f32> {
     let wander = simplex(u.consts.x, p / u.snow_line.w);
     let nz = n.z + u.snow_line.z * wander;
     let steep = 1.0 - smooth_step(u.rock.w, u.soil.w, nz);
@@ -261,7 +273,8 @@ fn albedo(p: vec3<f32>, n: vec3<f32>, feature: f32) -> vec3<f32> {
     let rock = max(steep, feature);
     let dry = smooth_step(-0.2, 0.5, simplex(u.consts.x ^ 1u, p / (u.feature.z * u.snow_line.w)));
     let grass = mix(u.grass.xyz, u.dry.xyz, dry);
-    return mix(mix(mix(grass, u.soil.xyz, soil), u.snow.xyz, snow), u.rock.xyz, rock);
+    return mix(mix(mix(grass, u.soil.xyz, soil), u.snow.xyz, snow), u.rock.xyz, rock)
+        * (1.0 + (1.0 - rock) * ground_grain(p, footprint));
 }
 
 // shade.rs Shading::light.
@@ -635,7 +648,8 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     if cave_first < 1.0 {
         ao *= mix(1.0, cave_sky(cave_first, cave_sum / f32(CAVE_DIRS)), feature);
     }
-    let c = seen(o, d, hit_t, albedo(p, n, feature) * light(n, lit, ao));
+    let footprint = u.box_max.w * hit_t;
+    let c = seen(o, d, hit_t, albedo(p, n, feature, footprint) * light(n, lit, ao));
     out_rgba[at] = srgb8(display(c));
 }
 

@@ -111,6 +111,41 @@ fn gradient(seed: u32, i: i32, j: i32, k: i32) -> Vec3 {
     Vec3::from_array(GRADIENTS[(h >> 28) as usize])
 }
 
+/// Seeded 2D cellular noise at `q` (Worley 1996; one jittered feature point a unit
+/// cell): the hash of the nearest feature point (which cell `q` belongs to) and how far
+/// `q` lies from the border with the next (`F2 − F1`, 0 on the border), and `q`'s offset
+/// from its own point.
+pub fn cellular(seed: u32, q: glam::Vec2) -> (u32, f32, glam::Vec2) {
+    let c = q.floor();
+    let (mut f1, mut f2, mut id) = (f32::INFINITY, f32::INFINITY, 0u32);
+    let mut offset = glam::Vec2::ZERO;
+    for dj in -1..=1 {
+        for di in -1..=1 {
+            let cell = c + glam::Vec2::new(di as f32, dj as f32);
+            let h = mix32(
+                (cell.x as i32 as u32).wrapping_mul(HASH_X)
+                    ^ (cell.y as i32 as u32).wrapping_mul(HASH_Y)
+                    ^ mix32(seed),
+            );
+            let u = |s: u32| (mix32(h ^ s) & 0xffff) as f32 / 65536.0;
+            let v = q - (cell + glam::Vec2::new(u(1), u(2)));
+            let d = v.length();
+            if d < f1 {
+                (f2, f1, id, offset) = (f1, d, h, v);
+            } else if d < f2 {
+                f2 = d;
+            }
+        }
+    }
+    (id, f2 - f1, offset)
+}
+
+/// A hash `h`'s share `s` as a number in `[0, 1)`.
+#[inline]
+pub fn unit(h: u32, s: u32) -> f32 {
+    (mix32(h ^ s) & 0xffff) as f32 / 65536.0
+}
+
 /// Seeded 3D simplex noise `n(p) ∈ [−1, 1]`, lattice spacing ≈ 1 (input in lattice units).
 #[inline]
 pub fn simplex(seed: u32, p: Vec3) -> f32 {

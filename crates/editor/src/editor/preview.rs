@@ -440,11 +440,7 @@ impl Server {
         let Some(Ok(tape)) = &r.tape else {
             return Err(None);
         };
-        // The wgpu tracer draws no plants: its viewport shows the ground bare.
-        let s = RenderSettings {
-            vegetation: None,
-            ..settings(scene, &r.compiled, camera, Quality::Full)
-        };
+        let s = gpu_settings(scene, &r.compiled, camera);
         ctx.render(tape, camera, &s)
             .map(|f| (f, format!("GPU ({})", ctx.adapter)))
             .map_err(|e| Some(crate::io::chain(&e)))
@@ -669,6 +665,16 @@ pub fn settings(
         s.shading.cave_reach = 0.0;
         s.trace.cone *= FAST_CONE;
     }
+    s
+}
+
+/// The settings of the GPU viewport: [`settings`] at full quality without what the
+/// shader does not draw — plants, talus and streams (`gpu::unsupported`) — so it shows
+/// the ground bare.
+pub fn gpu_settings(scene: &Scene, compiled: &Compiled, camera: &Camera) -> RenderSettings {
+    let mut s = settings(scene, compiled, camera, Quality::Full);
+    s.vegetation = None;
+    s.materials.top = None;
     s
 }
 

@@ -33,8 +33,8 @@
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::material::smoothstep;
-use crate::field::noise::mix32;
+use super::material::{resolved, smoothstep};
+use crate::field::noise::{cellular, unit};
 
 /// The angle (degrees) from an apron's toe to the top of the face that shed it.
 pub const REACH_ANGLE: f32 = 55.0;
@@ -52,6 +52,9 @@ pub const ON_TOP: (f32, f32) = (1.0, 3.0);
 
 /// Directions searched about each point.
 const DIRECTIONS: usize = 24;
+
+/// Seed of the rubble's cells ([`rubble`]).
+pub const RUBBLE_SEED: u32 = 0x7a1e_5000;
 
 /// The drainage areas (m², log10) over which a sample turns from dry ground to a
 /// stream's bed: from 10 ha to 30 ha.
@@ -147,6 +150,24 @@ impl TopCover {
         })
     }
 
+    /// The top surface's height over `xy` (bilinear between the samples), `None` off the
+    /// raster or where a column holds no solid.
+    pub fn height(&self, xy: Vec2) -> Option<f32> {
+        let g = (xy - self.origin) / self.cell;
+        if !(g.x >= 0.0 && g.y >= 0.0) {
+            return None;
+        }
+        let (i, j) = (g.x as usize, g.y as usize);
+        if i + 1 >= self.nx || j + 1 >= self.ny {
+            return None;
+        }
+        let f = g - Vec2::new(i as f32, j as f32);
+        let t = |di: usize, dj: usize| self.top[i + di + (j + dj) * self.nx];
+        let z = (t(0, 0) * (1.0 - f.x) + t(1, 0) * f.x) * (1.0 - f.y)
+            + (t(0, 1) * (1.0 - f.x) + t(1, 1) * f.x) * f.y;
+        z.is_finite().then_some(z)
+    }
+
     /// How much of `p` lies on a talus apron and in a stream's bed: the raster's weights
     /// there, faded off the top surface ([`ON_TOP`]); none off the raster.
     pub fn at(&self, p: Vec3) -> OnTop {
@@ -207,50 +228,28 @@ fn blur(v: &[f32], nx: usize, ny: usize) -> Vec<f32> {
 }
 
 /// The rubble of a talus apron at `p` seen `footprint` metres a pixel: a factor on its
-/// albedo about 1, and the tilt of its blocks' facets (to add to a near-level normal's
+/// albedo about 1, and the tilt of its stones' surfaces (to add to a near-level normal's
 /// `x` and `y`). Blocks about 1.6 m across and stones about 0.5 m (cellular noise after
 /// Worley 1996, in plan: an apron is gentle enough that plan cells do not stretch), each
-/// its own shade and facet, with thin shaded gaps between them; each scale fades to its
-/// mean and a level facet as a pixel grows past it.
+/// its own shade, rounded (its surface tilts away from its middle, so the sun lights one
+/// side and leaves the other in shade: flat facets, one tilt a block, read to blind
+/// judges as "a polygon pattern"), a little tipped, with shaded gaps between them; each
+/// scale fades to its mean and level as a pixel grows past it.
 pub fn rubble(p: Vec3, footprint: f32) -> (f32, Vec2) {
     let (mut f, mut tilt) = (1.0, Vec2::ZERO);
-    for (k, size, lean) in [(1u32, 1.6f32, 0.5f32), (2, 0.5, 0.3)] {
-        let seen = 1.0 - smoothstep(0.25 * size, 0.5 * size, footprint);
+    for (k, size, lean) in [(1u32, 1.6f32, 0.9f32), (2, 0.5, 0.6)] {
+        let seen = resolved(size, footprint);
         if seen <= 0.0 {
             continue;
         }
-        let (id, gap) = cells(k, p.truncate() / size);
-        let u = |s: u32| (mix32(id ^ s) & 0xffff) as f32 / 65536.0;
-        let stone = (0.75 + 0.5 * u(3)) * (0.7 + 0.3 * smoothstep(0.0, 0.08, gap));
-        f *= 1.0 + seen * (stone - 0.95);
-        tilt += seen * lean * u(4) * Vec2::from_angle(std::f32::consts::TAU * u(5));
+        let (id, gap, offset) = cellular(RUBBLE_SEED ^ k, p.truncate() / size);
+        let u = |s: u32| unit(id, s);
+        let stone = (0.8 + 0.4 * u(3)) * (0.8 + 0.2 * smoothstep(0.0, 0.1, gap));
+        f *= 1.0 + seen * (stone - 0.97);
+        let tip = 0.25 * u(4) * Vec2::from_angle(std::f32::consts::TAU * u(5));
+        tilt += seen * lean * (offset + tip);
     }
     (f, tilt)
-}
-
-/// Cellular noise at `q` (cells of unit size, seed `k`): the nearest feature point's
-/// hash and how far `q` lies from the border with the next (`F2 − F1`).
-fn cells(k: u32, q: Vec2) -> (u32, f32) {
-    let c = q.floor();
-    let (mut f1, mut f2, mut id) = (f32::INFINITY, f32::INFINITY, 0u32);
-    for dj in -1..=1 {
-        for di in -1..=1 {
-            let cell = c + Vec2::new(di as f32, dj as f32);
-            let h = mix32(
-                (cell.x as i32 as u32).wrapping_mul(0x8da6_b343)
-                    ^ (cell.y as i32 as u32).wrapping_mul(0xd816_3841)
-                    ^ k.wrapping_mul(0x9e37_79b9),
-            );
-            let u = |s: u32| (mix32(h ^ s) & 0xffff) as f32 / 65536.0;
-            let d = (cell + Vec2::new(u(1), u(2)) - q).length();
-            if d < f1 {
-                (f2, f1, id) = (f1, d, h);
-            } else if d < f2 {
-                f2 = d;
-            }
-        }
-    }
-    (id, f2 - f1)
 }
 
 #[cfg(test)]

@@ -10,13 +10,16 @@
 //!
 //! **Where they grow.** Candidates lie on a jittered grid over the picture's region
 //! ([`Flora::spacing`] apart), each on the terrain heightfield's surface (or, in a scene
-//! without one, on the field's first surface down). One is kept with a probability of the flora's cover times
-//! its habitat: the ground's cover there ([`Materials::cover`]) — nothing on bare rock,
-//! scree, snow or features, less on channel gravel — times a low-frequency noise of
+//! without one, on the field's first surface down; where the picture's top surface lies
+//! more than a few metres under the terrain's, a canyon carved under the DEM, on that
+//! floor). One is kept with a probability of the flora's cover times
+//! its habitat: the ground's cover there ([`Materials::cover`]) — nothing on bare rock
+//! (features' surfaces but a carved valley's level floor), scree or snow, less on channel
+//! gravel — times a low-frequency noise of
 //! stands and clearings (a woodland is not a plantation), and only where the scene's
 //! field has solid ground under the foot and under the crown's rim (no tree leans out
-//! over a cliff's edge) and air where the crown and each of its clumps stand (not in a canyon carved under the
-//! DEM, not inside a rock that stands over it), and above the water; a quarter as many
+//! over a cliff's edge) and air where the crown and each of its clumps stand (not inside
+//! a rock that stands over it), and above the water; a quarter as many
 //! within two crowns' reach of a cliff's edge or a rock face (the ground there more than
 //! 45° above or below, or rock standing on it).
 //! Placement hashes the candidate's cell: the same plants at any number of threads.
@@ -57,6 +60,14 @@ const FOOT: f32 = 0.8;
 /// traced, not a terrain's: no shrub on an arch's lintel or a ledge over a hollow, whose
 /// roots would hang in the air under it.
 const ROOTED: f32 = 12.0;
+
+/// How far (metres) the top surface must lie under the terrain's for plants to grow on it
+/// instead (a carved floor, [`crate::render::TopCover`]).
+const CARVED: f32 = 3.0;
+
+/// The share of its habitat a carved floor offers plants (a canyon's floor is open: it
+/// floods).
+const FLOOR_SHARE: f32 = 0.25;
 
 /// Side of the grid's columns, in units of the flora's spacing.
 const COLUMN: f32 = 2.5;
@@ -377,6 +388,7 @@ impl Vegetation {
             return Vegetation::default();
         }
         let ground = materials.ground.as_deref();
+        let top = materials.top.as_deref();
         let size = region.size().truncate();
         let area = (size.x * size.y).max(0.0);
         let most = match ground {
@@ -413,6 +425,13 @@ impl Vegetation {
                     if !z.is_finite() {
                         return None;
                     }
+                    // Where the terrain is carved (a canyon), the top surface lies below it:
+                    // plants grow on the carved floor.
+                    if let Some(t) = top.and_then(|t| t.height(xy))
+                        && t < z - CARVED
+                    {
+                        return down(xy.extend(t + CARVED), t - CARVED);
+                    }
                     let p = xy.extend(z);
                     let e = 1.0;
                     let h = |d: Vec2| g.base_height(xy + d);
@@ -448,7 +467,15 @@ impl Vegetation {
                     * (1.0 - c.scree)
                     * (1.0 - c.snow)
                     * (1.0 - 0.7 * c.gravel)
-                    * (1.0 - materials.feature(p));
+                    * (1.0 - c.stream);
+                // A carved floor's trees stand scattered along the stream, a woodland's
+                // canopy there hid the canyon's floor.
+                let carved = ground.is_some_and(|g| g.height(xy) - p.z > CARVED);
+                let habitat = if carved {
+                    FLOOR_SHARE * habitat
+                } else {
+                    habitat
+                };
                 let stands = smoothstep(-0.45, 0.3, simplex(SEED, p / flora.stands()));
                 let keep = (1.7 * cover * habitat * (0.1 + 0.9 * stands)).min(0.97);
                 if u(3) >= keep {

@@ -15,6 +15,7 @@ use glam::Vec3;
 
 use crate::field::falloff::{ISO, WYVILL_MAX_SLOPE, WYVILL_PEAK_X};
 use crate::field::noise::{F3, G3, GAIN, LACUNARITY, OCTAVE_SHIFT, R2, SIMPLEX_SCALE};
+use crate::render::material::{GRAIN_LONG, GRAIN_SEED, GRAIN_SHORT};
 use crate::render::shade::{
     CAVE_DIRS, CAVE_FLOOR, CAVE_RAMP, CAVE_STEPS, CAVE_TILT, SURF_DEPTH, WAVE_LENGTH, WAVE_SEED,
     WAVE_SHORT, WAVE_SLOPE, WET,
@@ -103,6 +104,17 @@ pub fn wgsl_header() -> String {
         ],
     );
     line(format!("const WAVE_SEED: u32 = {WAVE_SEED}u;"));
+    f32s(
+        &mut line,
+        "The ground's grain (the renderer's material.rs ground_grain): wavelengths, amplitudes.",
+        &[
+            ("GRAIN_LONG", GRAIN_LONG.0),
+            ("GRAIN_LONG_AMP", GRAIN_LONG.1),
+            ("GRAIN_SHORT", GRAIN_SHORT.0),
+            ("GRAIN_SHORT_AMP", GRAIN_SHORT.1),
+        ],
+    );
+    line(format!("const GRAIN_SEED: u32 = {GRAIN_SEED}u;"));
     line(format!("const CAVE_DIRS: u32 = {CAVE_DIRS}u;"));
     line(format!("const CAVE_STEPS: u32 = {CAVE_STEPS}u;"));
     line(
