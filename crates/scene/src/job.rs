@@ -161,7 +161,9 @@ pub fn run(path: &Path, opts: &JobOptions) -> anyhow::Result<JobReport> {
         _ => support,
     };
     // One material model for the mesh's colours, the masks and the pictures.
+    let t = Instant::now();
     let materials = picture::materials(&file.scene, &tree, ground.clone());
+    stages.push(("materials", t.elapsed()));
     let fine = job
         .as_ref()
         .map_or(support.size().max_element() / 256.0, |j| j.cell.0);
