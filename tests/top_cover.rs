@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use glam::Vec2;
+use glam::{Vec2, Vec3};
 use karstic::field::Field;
 use karstic::heightmap::{Columns, TopOptions};
 use karstic::render::Materials;
@@ -46,6 +46,26 @@ fn tops(compiled: &karstic::compile::Compiled, lo: Vec2, hi: Vec2, step: f32) ->
         .collect()
 }
 
+/// The points of `tops` (sampled every `step` metres from `lo`) on `compiled`'s surface:
+/// their sample's indices, the point and its outward normal.
+fn surface(
+    compiled: &karstic::compile::Compiled,
+    tops: &[Vec<f32>],
+    lo: Vec2,
+    step: f32,
+) -> Vec<(usize, usize, Vec3, Vec3)> {
+    let mut out = Vec::new();
+    for (j, row) in tops.iter().enumerate() {
+        for (i, &z) in row.iter().enumerate() {
+            if z.is_finite() {
+                let p = (lo + Vec2::new(i as f32, j as f32) * step).extend(z);
+                out.push((i, j, p, outward(compiled.tree.value_grad(p).1)));
+            }
+        }
+    }
+    out
+}
+
 /// The highest of `tops` within `radius` samples of `(i, j)`.
 fn highest_near(tops: &[Vec<f32>], i: usize, j: usize, radius: usize) -> f32 {
     let mut h = f32::NEG_INFINITY;
@@ -76,31 +96,24 @@ fn talus_lies_under_the_bluffs_cliff_at_its_angle_of_repose() {
     let (lo, hi) = (Vec2::new(3310.0, 4850.0), Vec2::new(3950.0, 5320.0));
     let tops = tops(&compiled, lo, hi, step);
     let (mut talus, mut open) = (0, 0);
-    for (j, row) in tops.iter().enumerate() {
-        for (i, &z) in row.iter().enumerate() {
-            if !z.is_finite() {
-                continue;
-            }
-            let p = (lo + Vec2::new(i as f32, j as f32) * step).extend(z);
-            let n = outward(compiled.tree.value_grad(p).1);
-            let scree = m.cover(p, n).scree;
-            let above = highest_near(&tops, i, j, 8) - z;
-            if scree > 0.5 {
-                talus += 1;
-                assert!(
-                    n.z >= 42f32.to_radians().cos(),
-                    "scree at {p} on a slope of {:.0}°",
-                    n.z.acos().to_degrees()
-                );
-                assert!(
-                    above > 10.0,
-                    "scree at {p} with only {above} m of rock above"
-                );
-            }
-            if above < 1.5 {
-                open += 1;
-                assert_eq!(scree, 0.0, "scree at {p} with nothing above it");
-            }
+    for (i, j, p, n) in surface(&compiled, &tops, lo, step) {
+        let scree = m.cover(p, n).scree;
+        let above = highest_near(&tops, i, j, 8) - p.z;
+        if scree > 0.5 {
+            talus += 1;
+            assert!(
+                n.z >= 42f32.to_radians().cos(),
+                "scree at {p} on a slope of {:.0}°",
+                n.z.acos().to_degrees()
+            );
+            assert!(
+                above > 10.0,
+                "scree at {p} with only {above} m of rock above"
+            );
+        }
+        if above < 1.5 {
+            open += 1;
+            assert_eq!(scree, 0.0, "scree at {p} with nothing above it");
         }
     }
     assert!(talus > 100, "{talus} samples of talus");
@@ -123,24 +136,18 @@ fn the_canyons_stream_runs_along_its_floor() {
         .map(|r| r.iter().map(|v| -v).collect())
         .collect();
     let mut water = 0;
-    for (j, row) in tops.iter().enumerate() {
-        for (i, &z) in row.iter().enumerate() {
-            if !z.is_finite() {
-                continue;
-            }
-            let p = (lo + Vec2::new(i as f32, j as f32) * step).extend(z);
-            let n = outward(compiled.tree.value_grad(p).1);
-            if m.cover(p, n).stream < 0.5 {
-                continue;
-            }
-            water += 1;
-            let lowest = -highest_near(&depths, i, j, 4);
-            assert!(
-                lowest > z - 5.0,
-                "a stream at {p} runs {} m above the ground beside it",
-                z - lowest
-            );
+    for (i, j, p, n) in surface(&compiled, &tops, lo, step) {
+        let z = p.z;
+        if m.cover(p, n).stream < 0.5 {
+            continue;
         }
+        water += 1;
+        let lowest = -highest_near(&depths, i, j, 4);
+        assert!(
+            lowest > z - 5.0,
+            "a stream at {p} runs {} m above the ground beside it",
+            z - lowest
+        );
     }
     assert!(water > 20, "{water} samples of the stream");
 }
