@@ -320,19 +320,14 @@ impl Materials {
     }
 
     /// Albedo at `p` with outward unit normal `n`, without the rock's weathering (the
-    /// exported meshes' colours).
+    /// exported meshes' colours): as seen by a pixel wider than every detail.
     pub fn albedo(&self, p: Vec3, n: Vec3) -> Vec3 {
-        self.albedo_seen(p, n, f32::INFINITY)
-    }
-
-    /// Albedo at `p` with outward unit normal `n` seen `footprint` metres a pixel: the
-    /// pictures' colour, with the rock's [`Materials::weathering`] at that scale.
-    pub fn albedo_seen(&self, p: Vec3, n: Vec3, footprint: f32) -> Vec3 {
-        self.seen(p, n, footprint).albedo
+        self.seen(p, n, f32::INFINITY).albedo
     }
 
     /// How `p` with outward unit normal `n` looks seen `footprint` metres a pixel: its
-    /// [`Materials::albedo_seen`], `n` tilted by the facets of a talus apron's blocks
+    /// albedo (the pictures' colour, with the rock's [`Materials::weathering`] and the
+    /// ground's grain at that scale), `n` tilted by the facets of a talus apron's blocks
     /// where one lies ([`rubble`]), and the stream over it ([`Cover::stream`]).
     pub fn seen(&self, p: Vec3, n: Vec3, footprint: f32) -> Look {
         let c = self.cover(p, n);
@@ -472,6 +467,6 @@ mod tests {
         assert!(spread.sqrt() > 0.05, "spread {}", spread.sqrt());
         assert!((0..400).all(|i| m.weathering(p(i), wall, 50.0) == Vec3::ONE));
         assert!((0..400).all(|i| plain.weathering(p(i), wall, 0.01) == Vec3::ONE));
-        assert!((0..400).all(|i| m.albedo(p(i), wall) == m.albedo_seen(p(i), wall, 1e9)));
+        assert!((0..400).all(|i| m.albedo(p(i), wall) == m.seen(p(i), wall, 1e9).albedo));
     }
 }

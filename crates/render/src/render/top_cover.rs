@@ -291,7 +291,9 @@ mod tests {
         assert!(d.at(Vec3::new(60.0, 20.0, z)).talus == 0.0);
     }
 
-    /// A stream runs where the drainage area passes its threshold, on the top surface only.
+    /// A stream runs where the drainage area passes its threshold, on the top surface only:
+    /// water (over a half) along a course one sample wide, smoothed over its neighbours,
+    /// none three samples away.
     #[test]
     fn streams_run_where_the_drainage_gathers() {
         let (nx, ny, cell) = (10, 10, 5.0);
@@ -299,7 +301,8 @@ mod tests {
             .map(|k| if k % nx == 5 { 1e6 } else { 50.0 })
             .collect();
         let d = TopCover::new(Vec2::ZERO, cell, (nx, ny), vec![0.0; nx * ny], &area).unwrap();
-        assert_eq!(d.at(Vec3::new(25.0, 20.0, 0.0)).stream, 1.0);
+        let centre = d.at(Vec3::new(25.0, 20.0, 0.0)).stream;
+        assert!(centre > 0.5, "{centre}");
         assert_eq!(d.at(Vec3::new(10.0, 20.0, 0.0)).stream, 0.0);
         assert_eq!(d.at(Vec3::new(25.0, 20.0, -5.0)).stream, 0.0);
         assert!(TopCover::new(Vec2::ZERO, cell, (nx, ny), vec![0.0; 4], &area).is_none());

@@ -13,12 +13,11 @@ pub mod guides;
 use std::sync::Arc;
 
 use glam::Vec3;
-use rayon::prelude::*;
 
 use crate::analysis::flow::{self, FlowGraph};
-use crate::dem::HeightfieldField;
+use crate::dem::{Georef, HeightfieldField};
 use crate::field::{Aabb, Field, Tree};
-use crate::heightmap::{Columns, TopOptions};
+use crate::heightmap::{HeightmapGrid, TopOptions, heightmap};
 use crate::render::camera::DEFAULT_FOV;
 use crate::render::material::SnowLine;
 use crate::render::shade::Water;
@@ -48,11 +47,12 @@ pub const TOP_COLUMNS: f32 = 160_000.0;
 pub const TOP_CELL: f32 = 2.0;
 
 /// The talus and streams on the top surface of a tree file's job region ([`TopCover`]):
-/// the tops of `tree`'s columns over it, their drainage routed down the steepest descent
-/// after the depressions are filled (Priority-Flood + ε, [`crate::analysis::flow`]), so a
-/// stream crosses a carved floor's hollows as water spilling through them does. `None`
-/// without a job (a tree without one has no landscape's scale, as for [`vegetation`]) or
-/// where the region holds too few columns.
+/// the tops of `tree`'s columns over it ([`heightmap`], as `karstic heightmap` finds
+/// them), their drainage routed down the steepest descent after the depressions are
+/// filled (Priority-Flood + ε, [`crate::analysis::flow`]), so a stream crosses a carved
+/// floor's hollows as water spilling through them does. `None` without a job (a tree
+/// without one has no landscape's scale, as for [`vegetation`]) or where the region holds
+/// too few columns.
 pub fn top_cover(scene: &Scene, tree: &Tree) -> Option<TopCover> {
     scene.job.as_ref()?;
     let region = scene_box(scene, tree).intersection(tree.support());
@@ -61,32 +61,28 @@ pub fn top_cover(scene: &Scene, tree: &Tree) -> Option<TopCover> {
         return None;
     }
     let cell = TOP_CELL.max((size.x * size.y / TOP_COLUMNS).sqrt());
-    let (nx, ny) = (
-        (size.x / cell).floor() as usize + 1,
-        (size.y / cell).floor() as usize + 1,
-    );
-    let origin = region.min.truncate();
+    let grid = HeightmapGrid {
+        origin: region.min.truncate(),
+        cell: [f64::from(cell); 2],
+        size: [
+            (size.x / cell).floor() as usize + 1,
+            (size.y / cell).floor() as usize + 1,
+        ],
+        georef: Georef::local(f64::from(cell), f64::from(cell)),
+    };
     let opts = TopOptions {
         tolerance: 0.1 * cell,
         direct: true,
     };
-    let mut top = vec![f32::NAN; nx * ny];
-    top.par_chunks_mut(nx).enumerate().for_each_init(
-        || Columns::new(tree, &opts),
-        |columns, (j, row)| {
-            for (i, out) in row.iter_mut().enumerate() {
-                let xy = origin + glam::Vec2::new(i as f32, j as f32) * cell;
-                *out = columns.top(xy).unwrap_or(f32::NAN);
-            }
-        },
-    );
-    let mut filled = top.clone();
-    flow::fill_in_place(&mut filled, nx, ny);
+    // At most `TOP_COLUMNS` samples: no budget to check.
+    let tops = heightmap(tree, &grid, &opts, u64::MAX).ok()?.heightfield;
+    let filled = flow::fill_depressions(&tops);
+    let (nx, ny) = (tops.nx(), tops.ny());
     let mut graph = FlowGraph::new();
-    graph.update(&filled, nx, ny, cell, cell);
+    graph.update(filled.samples(), nx, ny, cell, cell);
     let mut area = Vec::new();
     graph.accumulate(cell * cell, &mut area);
-    TopCover::new(origin, cell, (nx, ny), top, &area)
+    TopCover::new(grid.origin, cell, (nx, ny), tops.samples().to_vec(), &area)
 }
 
 /// [`materials`] with `support` standing for the tree's support: the scale of a scene
