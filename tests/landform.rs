@@ -333,6 +333,17 @@ fn hoodoos_stand_on_their_axioms_within_the_grammar_depth() {
             .count()
     };
     assert!(kinds(Terminal::Body) > 0 && kinds(Terminal::Cone) > 0 && kinds(Terminal::Cap) > 0);
+    // Most keep the caprock that stopped their wearing down (with the paper's `1 − ρ/2`
+    // about a third did here).
+    let capped = hoodoos
+        .iter()
+        .filter(|h| h.symbols.last().is_some_and(|s| s.0 == Terminal::Cap))
+        .count();
+    assert!(
+        capped * 2 > hoodoos.len(),
+        "{capped} of {} hoodoos capped",
+        hoodoos.len()
+    );
     // The expanded tree: the terrain and the hoodoos' union.
     let mut sf = scene_file(&format!("(version: 1, root: {PLATEAU})"));
     let rocks = spec.generate(&ground).unwrap();

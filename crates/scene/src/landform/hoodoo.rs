@@ -12,6 +12,8 @@
 //!         → d(p, s)                    1 − p_C(ρ)
 //! ```
 //!
+//! (`s` scales a symbol's height; its width is the column's first symbol's).
+//!
 //! with terminals `b` a body (a column of slices as wide as the rock at their height: hard
 //! beds bulge, soft ones pinch), `c` a spire (a body narrowing to a blunt tip) and `d` a caprock (a
 //! flattened ellipsoid wider than the column it crowns), stacked up the vertical through
@@ -38,7 +40,7 @@ use crate::scene::spec::{Nary, WarpSpec};
 use crate::value::{NonNegative, P2, P3, Positive};
 
 /// A caprock's thickness, as a fraction of its symbol's height: caps are flat slabs.
-pub const CAP: f32 = 0.4;
+pub const CAP: f32 = 0.5;
 
 /// How far a body's slice may sit off its column's axis, and be squeezed out of round, as
 /// a fraction of its radius.
@@ -198,7 +200,11 @@ impl HoodooSpec {
                     (Terminal::Body, Some(then))
                 }
                 Symbol::C => {
-                    let p_c = 1.0 - 0.5 * rho;
+                    // Most columns keep a cap (the hard bed that stopped their wearing
+                    // down: Bryce Canyon's are capped by dolomite); with the grammar's
+                    // `1 − ρ/2`, two in three ended as spires, and the field read to blind
+                    // judges as "termite mounds" and "stalagmites".
+                    let p_c = 0.55 - 0.5 * rho;
                     if last {
                         (
                             if u < 0.5 * p_c {
@@ -252,12 +258,15 @@ impl HoodooSpec {
             let girth = 0.8 + 0.4 * rng.unit();
             let seed = 1 + (k % 64) as u32;
             // The skirt of debris and worn soft rock the column rises from.
-            // A symbol's width: softer rock, slimmer bodies.
-            let width_of = |s: f32, rho: f32| girth * s * (0.22 + 0.16 * rho);
+            // A symbol's width: softer rock, slimmer bodies; the column's own scale is its
+            // first symbol's (the upper symbols are shorter, not thinner: scaled by λ
+            // each, a five-symbol column narrowed to a needle).
+            let base = h.symbols.first().map_or(self.size.0, |s| s.2);
+            let width_of = |rho: f32| girth * base * (0.22 + 0.16 * rho);
             let foot = h
                 .symbols
                 .first()
-                .map_or(1.0, |&(_, _, s, _, rho)| width_of(s, rho));
+                .map_or(1.0, |&(_, _, _, _, rho)| width_of(rho));
             // A cone about its foot, its base under the lowest ground it spans (on a
             // slope a base at the axis's ground stood out downhill as a plate) and its apex
             // over the ground at the axis.
@@ -278,7 +287,7 @@ impl HoodooSpec {
             for &(t, p, s, elongation, rho) in &h.symbols {
                 // Symbols stack up the vertical through the axiom.
                 let up = |z: f32| (z - h.axiom.z) / height;
-                let width = width_of(s, rho);
+                let width = width_of(rho);
                 let (ex, ey) = (elongation.sqrt(), 1.0 / elongation.sqrt());
                 match t {
                     // A body keeps its width; a spire (a column that lost its cap) narrows
@@ -319,7 +328,7 @@ impl HoodooSpec {
                     // A slab of the hard bed, a little wider than the column: a joint block
                     // with its corners broken off, tilted as it settled on the soft rock.
                     Terminal::Cap => {
-                        let r = width * (1.2 + 0.4 * rng.unit());
+                        let r = width * (0.9 + 0.3 * rng.unit());
                         // Set a fifth of its thickness into the column, which it grips, and
                         // standing a tenth over it (its roughness takes up to that off).
                         out.push(boulder(
