@@ -609,15 +609,20 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
             }
             corner += 1u;
         } else {
-            // cpu.rs occlusion.
+            // cpu.rs occlusion. The lowest value so far rides in cave_first (1 = 2T
+            // at the start), which the cave phase starts from 1 again.
             let k = corner - 4u;
+            cave_first = min(cave_first, ev.x);
             var open = 1.0;
             if slope > 0.0 {
-                open = (ISO - ev.x) / min(slope * ao_step(k), ISO);
+                open = (ISO - ev.x) / min(slope * ao_step(k), clamp(ISO - cave_first, 1e-3, ISO));
             }
             ao_sum += clamp(open, 0.0, 1.0) / f32(k + 1u);
             ao_norm += 1.0 / f32(k + 1u);
             corner += 1u;
+            if corner == ao_end {
+                cave_first = 1.0;
+            }
         }
     }
     if phase != PH_DONE {

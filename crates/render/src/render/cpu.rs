@@ -11,7 +11,7 @@ use super::guide::Guide;
 use super::image::Frame;
 use super::material::Materials;
 use super::shade::{
-    AO_SAMPLES, CAVE_DIRS, CAVE_STEPS, Shading, ambient_occlusion, cave_closed, cave_sky,
+    AO_SAMPLES, CAVE_DIRS, CAVE_STEPS, Shading, ambient_occlusion, ao_cap, cave_closed, cave_sky,
     from_srgb8, to_srgb8,
 };
 use super::trace::{Method, Trace, TraceParams, Tracer, outward};
@@ -486,15 +486,19 @@ fn shadow_params(primary: &TraceParams, t_hit: f32) -> TraceParams {
 /// The share of the sky seen from the surface point `p` with outward normal `n` and
 /// gradient norm `slope` ([`super::shade`]): at each sample `q = p + δ n`, the drop
 /// `T − f(q)` over the drop `slope·δ` open ground gives (1 there, less where a wall or a
-/// roof keeps the field high). Fields in `[0, 2T]` cannot drop by more than `T` in the
-/// air: the expected drop is capped there, so a field saturated within `δ` is open.
+/// roof keeps the field high). The expected drop is capped at the drop to the lowest
+/// value sampled so far ([`ao_cap`]): a field that levels off in the air is open there,
+/// one that rises again toward a wall is not.
 fn occlusion(field: &dyn Field, p: Vec3, n: Vec3, slope: f32, sh: &Shading) -> f32 {
     if sh.ao_radius <= 0.0 || !(slope > 0.0) {
         return 1.0;
     }
+    let mut lowest = 2.0 * ISO;
     ambient_occlusion((0..AO_SAMPLES).map(|k| {
         let d = sh.ao_step(k);
-        (ISO - field.value(p + n * d)) / (slope * d).min(ISO)
+        let f = field.value(p + n * d);
+        lowest = lowest.min(f);
+        (ISO - f) / (slope * d).min(ao_cap(lowest))
     }))
 }
 

@@ -287,9 +287,8 @@ impl Materials {
         let seen = |wavelength: f32| resolved(wavelength, footprint);
         let noise = |k: u32, q: Vec3| simplex(WEATHERING_SEED ^ k, q);
         let mottle = 0.5 * seen(3.0) * noise(1, p / 3.0) + 0.3 * seen(0.9) * noise(2, p / 0.9);
-        // Laminae within a bed, broken along it every ten metres or so (running on for
-        // thirty, blind judges read them as a texture smeared along the face).
-        let laminae = seen(0.7) * noise(3, Vec3::new(p.x / 12.0, p.y / 12.0, p.z / 0.7));
+        // Laminae within a bed, broken along it.
+        let laminae = seen(LAMINAE.1) * laminae(p);
         let (flake, crack) = flakes(p, n);
         let (flake, crack) = (seen(FLAKE.0) * flake, seen(FLAKE.0) * crack);
         // Streaks, continuous down the face and sparse: a stretched noise thresholded
@@ -306,6 +305,40 @@ impl Materials {
             * (1.0 - 0.25 * varnish)
             * (1.0 - 0.4 * crack);
         Vec3::splat(grey) * Vec3::ONE.lerp(Vec3::new(1.12, 0.96, 0.82), iron)
+    }
+
+    /// The normal that a geology's bare rock at `p`, with outward unit normal `n`, is lit
+    /// by seen `footprint` metres a pixel: `n` tilted by the relief of the face (a height
+    /// along `n` whose gradient on the face tilts it, a bump map). Hard rock stands out of
+    /// soft by [`RELIEF`]`.0` per unit of resistance, so each bed's edge catches the light
+    /// or shades as a ledge does, not as a stripe painted on; the laminae within a bed
+    /// step it by [`RELIEF`]`.1`, flat-topped (a step, not a wave: sandstone parts along
+    /// its laminae, a sill over a groove), in some beds only (every bed laminated read as
+    /// plywood). The gradient is taken over the pixel's
+    /// footprint (at least 5 cm), which filters what a pixel cannot show. `n` itself
+    /// without a geology.
+    pub fn relief(&self, p: Vec3, n: Vec3, footprint: f32) -> Vec3 {
+        let Some(g) = &self.geology else {
+            return n;
+        };
+        let e = footprint.clamp(0.05, 4.0);
+        let fine = RELIEF.1 * resolved(LAMINAE.1, footprint);
+        // Some beds are massive, others part along their laminae: which, by a noise
+        // over a few metres up the face and tens along it.
+        let parted = |q: Vec3| {
+            let bed = Vec3::new(q.x / 30.0, q.y / 30.0, q.z / 3.0);
+            smoothstep(0.0, 0.5, simplex(WEATHERING_SEED ^ 9, bed))
+        };
+        let height = |q: Vec3| {
+            RELIEF.0 * g.value(q) + fine * parted(q) * smoothstep(-0.25, 0.25, laminae(q))
+        };
+        let h = height(p);
+        let grad = Vec3::new(
+            height(p + e * Vec3::X) - h,
+            height(p + e * Vec3::Y) - h,
+            height(p + e * Vec3::Z) - h,
+        ) / e;
+        (n - (grad - n * grad.dot(n))).normalize_or(n)
     }
 
     /// Albedo of a point with this cover and `rock` the albedo of its bare rock.
@@ -338,6 +371,11 @@ impl Materials {
         };
         let albedo = self.albedo_of(&c, rock) * (1.0 + (1.0 - c.rock) * ground_grain(p, footprint));
         let stream = c.stream;
+        let n = if c.rock > 0.0 {
+            n.lerp(self.relief(p, n, footprint), c.rock).normalize_or(n)
+        } else {
+            n
+        };
         if c.scree > 0.0 && self.top.is_some() {
             let (f, tilt) = rubble(p, footprint);
             let normal = (n + c.scree * tilt.extend(0.0)).normalize_or(n);
@@ -372,6 +410,21 @@ pub const FLAKE_SEED: u32 = 0xf1a3_e5c0;
 
 /// The flakes' size (metres) along the beds and across them.
 pub const FLAKE: (f32, f32) = (1.6, 0.8);
+
+/// The laminae within a rock's beds: their length along the bed and their thickness
+/// across it, metres (broken every ten metres or so: running on for thirty, blind judges
+/// read them as a texture smeared along the face).
+pub const LAMINAE: (f32, f32) = (12.0, 0.7);
+
+/// The rock face's relief ([`Materials::relief`]): metres that hard rock (`ρ = 1`) stands
+/// out of the softest, and the laminae's step.
+pub const RELIEF: (f32, f32) = (0.8, 0.08);
+
+/// The laminae's noise at `p`, about `[−1, 1]` ([`LAMINAE`]).
+pub fn laminae(p: Vec3) -> f32 {
+    let q = Vec3::new(p.x / LAMINAE.0, p.y / LAMINAE.0, p.z / LAMINAE.1);
+    simplex(WEATHERING_SEED ^ 3, q)
+}
 
 /// How much of a feature `wavelength` metres across a pixel `footprint` metres wide
 /// shows, in `[0, 1]`: all while the pixel is under a quarter of it, none past a half (a

@@ -10,7 +10,8 @@
 //!   S fields are loose by varying factors, so their safe distances are not distances.
 //! * **Ambient occlusion** from the field: at `AO_SAMPLES` points `q_k = p + δ_k n` along
 //!   the normal, the field's drop `T − f(q_k)` is compared with the drop `|∇f(p)|·δ_k`
-//!   (capped at `T`, all a field in `[0, 2T]` can drop in the air) of open ground: over
+//!   (capped at `T − min_{j≤k} f(q_j)`, all the field drops in the air there,
+//!   [`ao_cap`]) of open ground: over
 //!   open ground the ratio is 1; a wall or a roof nearby keeps the field high and the
 //!   ratio low. Near samples weigh more
 //!   (the screen-space methods' weighting, here exact in the scene). The radius stays
@@ -358,6 +359,17 @@ pub fn ambient_occlusion(open: impl Iterator<Item = f32>) -> f32 {
         norm += w;
     }
     if norm > 0.0 { sum / norm } else { 1.0 }
+}
+
+/// The most an occlusion sample's field can drop below `T` in open air, when the lowest
+/// value the samples met so far is `lowest`: a field in `[0, 2T]` drops by `T` at most,
+/// and one that levels off above 0 (the skirt of a blend about rock, at 0.38 around
+/// the main job's fallen blocks) by `T − lowest`. Capped at `T` only, the skirt drew
+/// every block in it as an occluded black lump. At least 10⁻³: a point whose samples are
+/// all solid is closed.
+#[inline]
+pub fn ao_cap(lowest: f32) -> f32 {
+    (ISO - lowest).clamp(1e-3, ISO)
 }
 
 /// How much a cave-scale sample with field value `f` closes its direction: 0 in the
