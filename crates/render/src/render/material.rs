@@ -234,8 +234,10 @@ impl Materials {
         Cover {
             rock: (1.0 - flat).max(feature * (1.0 - talus.max(bed).max(floor))),
             // A gully's walls are grown over, as a humid slope's are; bare, their lit
-            // side reads as a ledge of rock standing out of the slope.
-            soil: (soil * (1.0 - 0.8 * gully)).max(sand),
+            // side reads as a ledge of rock standing out of the slope. Under a roof of
+            // rock (a shelter's floor) no rain falls and no grass grows: bare soil
+            // (blind judges saw grass under the main job's overhangs).
+            soil: (soil * (1.0 - 0.8 * gully)).max(sand).max(on.under),
             dry: smoothstep(-0.2, 0.5, patches),
             snow,
             scree: (scree * (1.0 - feature)).max(talus),

@@ -82,6 +82,9 @@ pub struct OnTop {
     pub stream: f32,
     /// On the top surface, in `[0, 1]` (0 on a cave's floor under it).
     pub top: f32,
+    /// Under the top surface, in `[0, 1]`: 1 more than [`ON_TOP`]`.1` below it (a rock
+    /// shelter's floor, a cave's), 0 on or over it and off the raster.
+    pub under: f32,
 }
 
 impl TopCover {
@@ -197,11 +200,13 @@ impl TopCover {
         if sum <= 0.0 {
             return OnTop::default();
         }
-        let on = 1.0 - smoothstep(ON_TOP.0, ON_TOP.1, (p.z - z / sum).abs());
+        let below = z / sum - p.z;
+        let on = 1.0 - smoothstep(ON_TOP.0, ON_TOP.1, below.abs());
         OnTop {
             talus: talus / sum * on,
             stream: stream / sum * on,
             top: on,
+            under: smoothstep(ON_TOP.0, ON_TOP.1, below),
         }
     }
 }
@@ -233,24 +238,35 @@ fn blur(v: &[f32], nx: usize, ny: usize) -> Vec<f32> {
 /// Worley 1996, in plan: an apron is gentle enough that plan cells do not stretch), each
 /// its own shade, rounded (its surface tilts away from its middle, so the sun lights one
 /// side and leaves the other in shade: flat facets, one tilt a block, read to blind
-/// judges as "a polygon pattern"), a little tipped, with shaded gaps between them; each
+/// judges as "a polygon pattern"; domed as far as the sun lit a rim round each, "popcorn"),
+/// tipped, with shaded gaps and some grit between them; each
 /// scale fades to its mean and level as a pixel grows past it.
 pub fn rubble(p: Vec3, footprint: f32) -> (f32, Vec2) {
     let (mut f, mut tilt) = (1.0, Vec2::ZERO);
-    for (k, size, lean) in [(1u32, 1.6f32, 0.9f32), (2, 0.5, 0.6)] {
+    for (k, size, lean) in [(1u32, 1.6f32, 0.45f32), (2, 0.5, 0.35)] {
         let seen = resolved(size, footprint);
         if seen <= 0.0 {
             continue;
         }
         let (id, gap, offset) = cellular(RUBBLE_SEED ^ k, p.truncate() / size);
         let u = |s: u32| unit(id, s);
-        let stone = (0.8 + 0.4 * u(3)) * (0.8 + 0.2 * smoothstep(0.0, 0.1, gap));
+        // A third of the cells hold grit between the stones: level, darker, no stone
+        // (every cell a stone, domed, read as "popcorn" and "a repeated cobble tile").
+        if u(6) < RUBBLE_GRIT {
+            f *= 1.0 - 0.12 * seen;
+            continue;
+        }
+        let stone = (0.8 + 0.4 * u(3)) * (0.7 + 0.3 * smoothstep(0.0, 0.12, gap));
         f *= 1.0 + seen * (stone - 0.97);
-        let tip = 0.25 * u(4) * Vec2::from_angle(std::f32::consts::TAU * u(5));
+        // Broken faces as much as rounded ones: each stone tipped its own way.
+        let tip = 0.5 * u(4) * Vec2::from_angle(std::f32::consts::TAU * u(5));
         tilt += seen * lean * (offset + tip);
     }
     (f, tilt)
 }
+
+/// The share of a talus apron's cells that hold grit, not a stone ([`rubble`]).
+pub const RUBBLE_GRIT: f32 = 0.35;
 
 #[cfg(test)]
 mod tests {
@@ -274,6 +290,12 @@ mod tests {
         let dry = vec![0.0; nx * ny];
         let d = TopCover::new(Vec2::ZERO, cell, (nx, ny), top, &dry).unwrap();
         let at = |x: f32, z: f32| d.at(Vec3::new(x, 20.0, z)).talus;
+        // Under the plateau's top (a shelter's floor) and not on the plain.
+        let under = |x: f32, z: f32| d.at(Vec3::new(x, 20.0, z)).under;
+        assert_eq!(
+            (under(110.0, 10.0), under(110.0, 30.0), under(50.0, 0.0)),
+            (1.0, 0.0, 0.0)
+        );
         assert!(at(96.0, 0.0) > 0.99, "{}", at(96.0, 0.0));
         assert!(at(86.0, 0.0) > 0.9, "{}", at(86.0, 0.0));
         let reach = 30.0 / REACH_ANGLE.to_radians().tan();
