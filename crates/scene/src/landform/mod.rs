@@ -30,7 +30,7 @@ use rayon::prelude::*;
 pub use arch::{ArchShape, Block as FinBlock, Fin};
 pub use caprock::{Apron, CliffLine, Fallen, JointBlock, REPOSE, Recess, Window};
 pub use coast::{Bed, Clear, CoastBlock, Notch, SeaCliff, Slab};
-pub use hoodoo::{GROOVES, Hoodoo, Terminal};
+pub use hoodoo::{Hoodoo, Terminal};
 pub use joints::JointGrid;
 
 use crate::dem::{Heightfield, Interpolation};
