@@ -18,6 +18,10 @@
 //! cover the ground too: scree where talus gathered, gravel along the channels and sand on
 //! the deposits, so the drainage the erosion carved reads in colour as well as in relief.
 //!
+//! Where a hard bed of the geology meets a slope steeper than about 20°, it crops out as
+//! bare rock ([`OUTCROP`]): the beds of a cliff line or an arch's fin run on through the
+//! hills about it.
+//!
 //! Where rock above a surface rises steeper than a cliff's apron reaches, the surface
 //! lies on talus ([`TopCover`]): it is scree, rubble of blocks and stones in the colour
 //! of the hard rock that shed it, on a feature's surface too (a canyon's floor). Where the
@@ -231,8 +235,17 @@ impl Materials {
         } else {
             0.0
         };
+        // A hard bed crops out where it meets a slope: the beds of an arch's fin or a
+        // cliff line run on through the hills about it, as ledges of bare rock along the
+        // contours (blind judges saw rock "placed" on hills that showed none of its beds).
+        let outcrop = self.geology.as_ref().map_or(0.0, |g| {
+            smoothstep(OUTCROP.0, OUTCROP.1, g.value(p) + 0.05 * wander)
+                * (1.0 - smoothstep(OUTCROP_SLOPE.0, OUTCROP_SLOPE.1, nz))
+        });
         Cover {
-            rock: (1.0 - flat).max(feature * (1.0 - talus.max(bed).max(floor))),
+            rock: (1.0 - flat)
+                .max(feature * (1.0 - talus.max(bed).max(floor)))
+                .max(outcrop * (1.0 - talus.max(bed))),
             // A gully's walls are grown over, as a humid slope's are; bare, their lit
             // side reads as a ledge of rock standing out of the slope. Under a roof of
             // rock (a shelter's floor) no rain falls and no grass grows: bare soil
@@ -413,6 +426,14 @@ pub const FLAKE_SEED: u32 = 0xf1a3_e5c0;
 /// The flakes' size (metres) along the beds and across them.
 pub const FLAKE: (f32, f32) = (1.6, 0.8);
 
+/// The resistance over which a geology's bed crops out on slopes as bare rock
+/// ([`Materials::cover`]): none below the first, all past the second.
+pub const OUTCROP: (f32, f32) = (0.75, 0.88);
+
+/// The normal `z` over which an outcrop fades out: bare on slopes steeper than about 35°,
+/// grown over on those gentler than 20° (a bed's top, a bench, holds soil).
+pub const OUTCROP_SLOPE: (f32, f32) = (0.82, 0.94);
+
 /// The laminae within a rock's beds: their length along the bed and their thickness
 /// across it, metres (broken every ten metres or so: running on for thirty, blind judges
 /// read them as a texture smeared along the face).
@@ -494,6 +515,26 @@ impl Albedo for Materials {
 mod tests {
     use super::*;
     use crate::geology::Geology;
+
+    /// A hard bed crops out on a slope of 38° as bare rock, a soft one does not, and
+    /// neither does on level ground.
+    #[test]
+    fn hard_beds_crop_out_on_slopes() {
+        let scene = Aabb::new(Vec3::ZERO, Vec3::splat(200.0));
+        let with = |rho: f32| {
+            let mut m = Materials::for_scene(&scene, None);
+            m.geology = Some(Arc::new(Geology::uniform(rho)));
+            m
+        };
+        let (hard, soft) = (with(0.95), with(0.3));
+        let p = |i: u32| Vec3::new(7.3 * i as f32 % 200.0, 3.1 * i as f32 % 200.0, 50.0);
+        let slope = Vec3::new(38f32.to_radians().sin(), 0.0, 38f32.to_radians().cos());
+        let rock =
+            |m: &Materials, n: Vec3| (0..400).map(|i| m.cover(p(i), n).rock).sum::<f32>() / 400.0;
+        assert!(rock(&hard, slope) > 0.8, "{}", rock(&hard, slope));
+        assert!(rock(&soft, slope) < 0.5, "{}", rock(&soft, slope));
+        assert!(rock(&hard, Vec3::Z) < 0.05, "{}", rock(&hard, Vec3::Z));
+    }
 
     /// The weathering varies the rock's albedo where a pixel resolves it, about a mean of
     /// 1 (beds keep their order of colour), fades to 1 where a pixel is wider than its
