@@ -316,13 +316,16 @@ fn an_arid_scene_lies_on_sand_and_scrub_a_temperate_one_on_grass() {
         .unwrap()
         .tree;
         let m = karstic::picture::materials(&scene, &tree, None);
-        // Flat ground far from the fin, at many places (patches of the second cover).
+        // Flat ground far from the fin, at many places (patches of the second cover), on
+        // the top surface (3 m under it, a point lies under a roof).
+        let top = m
+            .top
+            .as_ref()
+            .expect("the job's pictures find the top surface");
         let flat: Vec<glam::Vec3> = (0..200)
             .map(|k| {
-                m.albedo(
-                    glam::Vec3::new(-70.0 + 0.7 * k as f32, 30.0, 0.0),
-                    glam::Vec3::Z,
-                )
+                let xy = glam::Vec2::new(-70.0 + 0.7 * k as f32, 30.0);
+                m.albedo(xy.extend(top.height(xy).unwrap()), glam::Vec3::Z)
             })
             .collect();
         (flat, m.rock)

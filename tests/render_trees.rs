@@ -57,10 +57,11 @@ fn name(path: &Path) -> String {
 /// iteration budget, so the software adapter's values lose the carving there (a tape
 /// that skips far children, as the CPU's BVH does, is not built yet). And the bluff: its
 /// terrain's eroded amplification has no encoding, and its geology colours its rock,
-/// which the shader cannot.
+/// which the shader cannot; the hoodoo field's badland slope is amplified too.
 const CPU_ONLY: &[&str] = &[
     "elevation_valley",
     "fin_arch",
+    "hoodoo_field",
     "jacksboro_bluff",
     "jacksboro_canyon",
     "paper/fig4_fault",

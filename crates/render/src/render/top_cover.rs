@@ -50,6 +50,10 @@ pub const EXCESS: (f32, f32) = (1.5, 6.0);
 /// arch's underside beneath it does not.
 pub const ON_TOP: (f32, f32) = (1.0, 3.0);
 
+/// Metres under the top surface over which a point turns from on it to under a roof of
+/// rock ([`OnTop::under`]).
+pub const UNDER: (f32, f32) = (3.0, 6.0);
+
 /// Directions searched about each point.
 const DIRECTIONS: usize = 24;
 
@@ -82,8 +86,9 @@ pub struct OnTop {
     pub stream: f32,
     /// On the top surface, in `[0, 1]` (0 on a cave's floor under it).
     pub top: f32,
-    /// Under the top surface, in `[0, 1]`: 1 more than [`ON_TOP`]`.1` below it (a rock
-    /// shelter's floor, a cave's), 0 on or over it and off the raster.
+    /// Under the top surface, in `[0, 1]`: 1 more than [`UNDER`]`.1` below it (a rock
+    /// shelter's floor, a cave's), 0 nearer than [`UNDER`]`.0` (the raster's cells
+    /// interpolate a slope's surface within a few metres), over it and off the raster.
     pub under: f32,
 }
 
@@ -206,7 +211,7 @@ impl TopCover {
             talus: talus / sum * on,
             stream: stream / sum * on,
             top: on,
-            under: smoothstep(ON_TOP.0, ON_TOP.1, below),
+            under: smoothstep(UNDER.0, UNDER.1, below),
         }
     }
 }
