@@ -328,9 +328,9 @@ impl Materials {
     /// soft by [`RELIEF`]`.0` per unit of resistance, so each bed's edge catches the light
     /// or shades as a ledge does, not as a stripe painted on; the laminae within a bed
     /// step it by [`RELIEF`]`.1`, flat-topped (a step, not a wave: sandstone parts along
-    /// its laminae, a sill over a groove), in some beds only (every bed laminated read as
-    /// plywood). The gradient is taken over the pixel's
-    /// footprint (at least 5 cm), which filters what a pixel cannot show. `n` itself
+    /// its laminae, a sill over a groove), in some beds only (every bed laminated looked
+    /// like plywood in test renders). The gradient is taken over the pixel's footprint
+    /// (at least 5 cm), which filters what a pixel cannot show. `n` itself
     /// without a geology.
     pub fn relief(&self, p: Vec3, n: Vec3, footprint: f32) -> Vec3 {
         let Some(g) = &self.geology else {

@@ -202,8 +202,8 @@ impl HoodooSpec {
                 Symbol::C => {
                     // Most columns keep a cap (the hard bed that stopped their wearing
                     // down: Bryce Canyon's are capped by dolomite); with the grammar's
-                    // `1 − ρ/2`, two in three ended as spires, and the field read to blind
-                    // judges as "termite mounds" and "stalagmites".
+                    // `1 − ρ/2`, two in three ended as spires, and blind judges asked for
+                    // hoodoos with caprocks.
                     let p_c = 0.55 - 0.5 * rho;
                     if last {
                         (
