@@ -208,6 +208,16 @@ impl Materials {
 
     /// The cover at `p` with outward unit normal `n`.
     pub fn cover(&self, p: Vec3, n: Vec3) -> Cover {
+        self.cover_with(p, n, self.resistance(p))
+    }
+
+    /// The geology's resistance at `p`, `None` without a geology.
+    fn resistance(&self, p: Vec3) -> Option<f32> {
+        self.geology.as_ref().map(|g| g.value(p))
+    }
+
+    /// [`Self::cover`] with `rho` the geology's resistance at `p` ([`Self::resistance`]).
+    fn cover_with(&self, p: Vec3, n: Vec3, rho: Option<f32>) -> Cover {
         let wander = simplex(VARIATION_SEED, p / self.variation_wavelength);
         let nz = n.z + self.variation * wander;
         let flat = smoothstep(self.rock_slope.0, self.rock_slope.1, nz);
@@ -238,8 +248,8 @@ impl Materials {
         // A hard bed crops out where it meets a slope: the beds of an arch's fin or a
         // cliff line run on through the hills about it, as ledges of bare rock along the
         // contours (blind judges saw rock "placed" on hills that showed none of its beds).
-        let outcrop = self.geology.as_ref().map_or(0.0, |g| {
-            smoothstep(OUTCROP.0, OUTCROP.1, g.value(p) + 0.05 * wander)
+        let outcrop = rho.map_or(0.0, |rho| {
+            smoothstep(OUTCROP.0, OUTCROP.1, rho + 0.05 * wander)
                 * (1.0 - smoothstep(OUTCROP_SLOPE.0, OUTCROP_SLOPE.1, nz))
         });
         Cover {
@@ -281,10 +291,14 @@ impl Materials {
 
     /// Albedo of bare rock at `p`: by the geology's resistance there, else [`Self::rock`].
     pub fn rock_at(&self, p: Vec3) -> Vec3 {
-        match &self.geology {
-            Some(g) => self.strata_rock.0.lerp(self.strata_rock.1, g.value(p)),
-            None => self.rock,
-        }
+        self.rock_of(self.resistance(p))
+    }
+
+    /// Albedo of bare rock of resistance `rho` ([`Self::rock`] for `None`).
+    fn rock_of(&self, rho: Option<f32>) -> Vec3 {
+        rho.map_or(self.rock, |rho| {
+            self.strata_rock.0.lerp(self.strata_rock.1, rho)
+        })
     }
 
     /// The weathering of a geology's bare rock at `p` seen `footprint` metres a pixel: a
@@ -330,9 +344,9 @@ impl Materials {
     /// step it by [`RELIEF`]`.1`, flat-topped (a step, not a wave: sandstone parts along
     /// its laminae, a sill over a groove), in some beds only (every bed laminated looked
     /// like plywood in test renders). The gradient is taken over the pixel's footprint
-    /// (at least 5 cm), which filters what a pixel cannot show. `n` itself
-    /// without a geology.
-    pub fn relief(&self, p: Vec3, n: Vec3, footprint: f32) -> Vec3 {
+    /// (at least 5 cm), which filters what a pixel cannot show. `rho` is the geology's
+    /// resistance at `p` (the caller has it); `n` itself without a geology.
+    pub fn relief(&self, p: Vec3, n: Vec3, footprint: f32, rho: f32) -> Vec3 {
         let Some(g) = &self.geology else {
             return n;
         };
@@ -344,10 +358,9 @@ impl Materials {
             let bed = Vec3::new(q.x / 30.0, q.y / 30.0, q.z / 3.0);
             smoothstep(0.0, 0.5, simplex(WEATHERING_SEED ^ 9, bed))
         };
-        let height = |q: Vec3| {
-            RELIEF.0 * g.value(q) + fine * parted(q) * smoothstep(-0.25, 0.25, laminae(q))
-        };
-        let h = height(p);
+        let laminated = |q: Vec3| fine * parted(q) * smoothstep(-0.25, 0.25, laminae(q));
+        let height = |q: Vec3| RELIEF.0 * g.value(q) + laminated(q);
+        let h = RELIEF.0 * rho + laminated(p);
         let grad = Vec3::new(
             height(p + e * Vec3::X) - h,
             height(p + e * Vec3::Y) - h,
@@ -378,18 +391,20 @@ impl Materials {
     /// ground's grain at that scale), `n` tilted by the facets of a talus apron's blocks
     /// where one lies ([`rubble`]), and the stream over it ([`Cover::stream`]).
     pub fn seen(&self, p: Vec3, n: Vec3, footprint: f32) -> Look {
-        let c = self.cover(p, n);
+        let rho = self.resistance(p);
+        let c = self.cover_with(p, n, rho);
         let rock = if c.rock > 0.0 {
-            self.rock_at(p) * self.weathering(p, n, footprint)
+            self.rock_of(rho) * self.weathering(p, n, footprint)
         } else {
             self.rock
         };
         let albedo = self.albedo_of(&c, rock) * (1.0 + (1.0 - c.rock) * ground_grain(p, footprint));
         let stream = c.stream;
-        let n = if c.rock > 0.0 {
-            n.lerp(self.relief(p, n, footprint), c.rock).normalize_or(n)
-        } else {
-            n
+        let n = match rho {
+            Some(rho) if c.rock > 0.0 => n
+                .lerp(self.relief(p, n, footprint, rho), c.rock)
+                .normalize_or(n),
+            _ => n,
         };
         if c.scree > 0.0 && self.top.is_some() {
             let (f, tilt) = rubble(p, footprint);

@@ -158,9 +158,9 @@ impl TopCover {
         })
     }
 
-    /// The top surface's height over `xy` (bilinear between the samples), `None` off the
-    /// raster or where a column holds no solid.
-    pub fn height(&self, xy: Vec2) -> Option<f32> {
+    /// The four samples about `xy` with their bilinear weights (sample index, weight),
+    /// `None` off the raster.
+    fn corners(&self, xy: Vec2) -> Option<[(usize, f32); 4]> {
         let g = (xy - self.origin) / self.cell;
         if !(g.x >= 0.0 && g.y >= 0.0) {
             return None;
@@ -170,33 +170,38 @@ impl TopCover {
             return None;
         }
         let f = g - Vec2::new(i as f32, j as f32);
-        let t = |di: usize, dj: usize| self.top[i + di + (j + dj) * self.nx];
-        let z = (t(0, 0) * (1.0 - f.x) + t(1, 0) * f.x) * (1.0 - f.y)
-            + (t(0, 1) * (1.0 - f.x) + t(1, 1) * f.x) * f.y;
+        let k = i + j * self.nx;
+        Some([
+            (k, (1.0 - f.x) * (1.0 - f.y)),
+            (k + 1, f.x * (1.0 - f.y)),
+            (k + self.nx, (1.0 - f.x) * f.y),
+            (k + self.nx + 1, f.x * f.y),
+        ])
+    }
+
+    /// The top surface's height over `xy` (bilinear between the samples), `None` off the
+    /// raster or where a column holds no solid.
+    pub fn height(&self, xy: Vec2) -> Option<f32> {
+        let z: f32 = self
+            .corners(xy)?
+            .iter()
+            .map(|&(k, b)| b * self.top[k])
+            .sum();
         z.is_finite().then_some(z)
     }
 
     /// How much of `p` lies on a talus apron and in a stream's bed: the raster's weights
     /// there, faded off the top surface ([`ON_TOP`]); none off the raster.
     pub fn at(&self, p: Vec3) -> OnTop {
-        let g = (p.truncate() - self.origin) / self.cell;
-        if !(g.x >= 0.0 && g.y >= 0.0) {
+        let Some(corners) = self.corners(p.truncate()) else {
             return OnTop::default();
-        }
-        let (i, j) = (g.x as usize, g.y as usize);
-        if i + 1 >= self.nx || j + 1 >= self.ny {
-            return OnTop::default();
-        }
-        let f = g - Vec2::new(i as f32, j as f32);
-        let corners = [(0, 0), (1, 0), (0, 1), (1, 1)];
+        };
         let (mut talus, mut stream, mut z, mut sum) = (0.0, 0.0, 0.0, 0.0);
-        for (di, dj) in corners {
-            let k = i + di + (j + dj) * self.nx;
+        for (k, b) in corners {
             let t = self.top[k];
             if !t.is_finite() {
                 continue;
             }
-            let b = if di == 1 { f.x } else { 1.0 - f.x } * if dj == 1 { f.y } else { 1.0 - f.y };
             talus += b * self.talus[k];
             stream += b * self.stream[k];
             z += b * t;

@@ -733,8 +733,7 @@ impl Vegetation {
             * (1.0 - 0.45 * smoothstep(-0.1, -0.6, hollows));
         // The crown's own shade: its inside and its underside see less sky, but leaves
         // pass on light as well as cast shade (their transmittance is about their
-        // reflectance): from 0.2 under the crown, crowns in a cliff's shade drew as black
-        // blobs beside the grass in the same shade, and blind judges named them.
+        // reflectance), so the sky term stays above 0.4 even under the crown.
         let height = ((p.z - plant.crown_bottom()) / (plant.top - plant.crown_bottom()).max(1e-3))
             .clamp(0.0, 1.0);
         let ao = (0.4 + 0.45 * height.sqrt()) * (0.75 + 0.25 * n0.dot(n).max(0.0));
