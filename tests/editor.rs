@@ -740,3 +740,25 @@ fn editor_ctrl_s_says_the_file_is_saved() {
     );
     assert!(status.contains("a.ron"), "{status}");
 }
+
+/// Selecting a node leaves the viewport's size as it was, so its picture does not restart:
+/// the inspector's content scrolls rather than widening its panel (a node with wider
+/// fields narrowed the viewport, 963 → 983 → 956 px, and the image fell back to coarse
+/// blocks at each selection).
+#[test]
+fn editor_viewport_keeps_its_size_when_the_selection_changes() {
+    let (dir, _) = scene_dir(&[]);
+    let wide = TREE.replace(
+        "source: \"jacksboro_crop.asc\"",
+        "source: \"jacksboro_crop.asc\", detail: (noise: (amplitude: 4.0, wavelength: 60.0, octaves: 3, seed_offset: 12345678), steep: 0.5)",
+    );
+    let path = dir.path().join("a.ron");
+    std::fs::write(&path, wide).unwrap();
+    let mut h = harness(&path);
+    let before = h.state().viewport().expect("the viewport is drawn");
+    for name in ["dem", "blob", "grotto", "root", "dem"] {
+        select(&mut h, name);
+        let now = h.state().viewport().expect("the viewport is drawn");
+        assert_eq!(now, before, "selecting {name} moved the viewport");
+    }
+}

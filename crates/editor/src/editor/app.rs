@@ -280,7 +280,9 @@ impl Editor {
             .show(ui, |ui| {
                 ui.heading("Outline");
                 if let Some(scene) = &self.scene {
-                    super::outline::show(ui, scene, &mut self.selected);
+                    egui::ScrollArea::both()
+                        .auto_shrink([false, false])
+                        .show(ui, |ui| super::outline::show(ui, scene, &mut self.selected));
                 }
             });
         egui::Panel::right("inspector")
@@ -384,7 +386,11 @@ impl Editor {
             self.selected = None;
             return;
         };
-        let changes = egui::ScrollArea::vertical()
+        // The panel keeps its width whatever the node: its content scrolls rather than
+        // widening it (a wider inspector narrowed the viewport, whose picture restarted at
+        // its new size each time a node was selected).
+        let changes = egui::ScrollArea::both()
+            .auto_shrink([false, false])
             .show(ui, |ui| self.inspector.show(ui, node, &name))
             .inner;
         for change in changes {

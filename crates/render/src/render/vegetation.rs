@@ -24,7 +24,8 @@
 //! 45° above or below, or rock standing on it).
 //! Placement hashes the candidate's cell: the same plants at any number of threads.
 //!
-//! **How they look.** A crown is shaded by its lobe's normal bent by a leafy noise
+//! **How they look.** A woodland mixes four kinds of crown, spreading, round, narrow and
+//! conifer ([`Kind`]), each stand in its own proportions. A crown is shaded by its lobe's normal bent by a leafy noise
 //! (fading to the mean where a pixel is wider than a leaf cluster), darker inside and
 //! below (the crown's own shade), lit through the same sun, shadow rays and sky as the
 //! ground. Ground under a crown keeps half its sky light: a wood's floor is dark.
@@ -40,7 +41,7 @@ use crate::field::noise::{mix32, simplex};
 use crate::field::{Aabb, Field, ISO};
 
 /// Ellipsoids of a crown.
-pub const LOBES: usize = 7;
+pub const LOBES: usize = 9;
 
 /// The most candidate sites a region is searched at; larger regions are searched at a
 /// wider spacing (plants thin out rather than the memory budget running over).
@@ -79,6 +80,12 @@ pub const SIGHT_WIDTH: f32 = 10.0;
 /// Scale (metres) of the gaps between leaf clusters at a crown's rim.
 pub const LEAF_GAP: f32 = 0.6;
 
+/// How much of a lobe is gaps between leaf clusters where a pixel resolves them: a
+/// noise's level under which the foliage opens, `GAPS.0` where the ray meets the lobe
+/// square on and `GAPS.0 + GAPS.1` where it grazes it. A lobe whole but at its rim read,
+/// close up, as a smooth ball: a crown as "a bunch of balls".
+pub const GAPS: (f32, f32) = (0.22, 0.6);
+
 /// Seed of the placement hashes and noises.
 pub const SEED: u32 = 0x7ee5_0b1d;
 
@@ -92,8 +99,9 @@ pub const UNDER_CANOPY: f32 = 0.5;
 /// What grows between the rocks.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Flora {
-    /// A temperate woodland: broadleaf trees 11–22 m high, a quarter of them conifers,
-    /// in stands with clearings.
+    /// A temperate woodland: trees 11–22 m high of four kinds ([`Kind`]: spreading,
+    /// round and narrow broadleaf crowns, and conifers, a tenth to nearly half of a
+    /// stand), in stands with clearings.
     Woodland,
     /// Desert scrub: juniper and pinyon 2–5 m high, scattered.
     Scrub,
@@ -146,10 +154,10 @@ impl Lobe {
     }
 
     /// Whether `ray` passes through a gap in the foliage where it enters the lobe at `t`,
-    /// its pixel `footprint` metres wide there: gaps open where the ray grazes the lobe
-    /// (a crown's rim is ragged, its leaves against the sky) and where a pixel resolves
-    /// the leaf clusters ([`LEAF_GAP`]); none where a pixel is wider, so a far crown is
-    /// whole rather than speckled.
+    /// its pixel `footprint` metres wide there: gaps open where a pixel resolves the leaf
+    /// clusters ([`LEAF_GAP`]), some where the ray meets the lobe square on and most where
+    /// it grazes it ([`GAPS`]: a crown's rim is ragged, its leaves against the sky); none
+    /// where a pixel is wider, so a far crown is whole rather than speckled.
     #[inline]
     fn gap(&self, ray: &Ray, t: f32, footprint: f32) -> bool {
         let seen = 1.0 - smoothstep(0.25 * LEAF_GAP, LEAF_GAP, footprint);
@@ -159,7 +167,7 @@ impl Lobe {
         let p = ray.at(t);
         let rim = 1.0 - self.normal(p).dot(ray.dir).abs();
         let leaves = 0.5 + 0.5 * simplex(SEED ^ 5, p / LEAF_GAP);
-        leaves < 0.9 * seen * rim * rim.sqrt()
+        leaves < seen * (GAPS.0 + GAPS.1 * rim)
     }
 
     /// The outward unit normal at `p` on the lobe.
@@ -198,20 +206,101 @@ pub struct Plant {
 /// Albedo of bark.
 const BARK: Vec3 = Vec3::new(0.06, 0.045, 0.035);
 
+/// The kinds of tree a woodland mixes, by the shape and colour of their crowns (an
+/// oak–hickory–pine wood, as on the Cumberland Plateau): blind judges read one crown shape
+/// and one green repeated through a wood as "identical lollipops".
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    /// A broad, low-domed crown wider than half the tree's height (an oak).
+    Spreading,
+    /// A rounded crown (a hickory, a maple).
+    Round,
+    /// A narrow, tall crown of a paler, yellower green (a tulip poplar).
+    Narrow,
+    /// A dark spire of stacked, narrowing whorls (a pine, a hemlock).
+    Conifer,
+    /// Desert scrub: a low, broad shrub (a juniper, a pinyon).
+    Shrub,
+}
+
+impl Kind {
+    /// The kind of a tree of `flora` drawn by `u` in `[0, 1)`, its stand's mix `site` in
+    /// `[0, 1]`: stands differ in what they hold (conifers from a tenth of a stand to
+    /// nearly half), so a wood's tone changes from stand to stand.
+    fn of(flora: Flora, u: f32, site: f32) -> Kind {
+        if flora == Flora::Scrub {
+            return Kind::Shrub;
+        }
+        let conifer = 0.1 + 0.35 * site;
+        let rest = (u - conifer) / (1.0 - conifer);
+        if u < conifer {
+            Kind::Conifer
+        } else if rest < 0.45 - 0.2 * site {
+            Kind::Spreading
+        } else if rest < 0.78 {
+            Kind::Round
+        } else {
+            Kind::Narrow
+        }
+    }
+
+    /// The crown's width as a fraction of the tree's height, drawn by `u`.
+    fn width(self, u: f32) -> f32 {
+        match self {
+            Kind::Spreading => 0.36 + 0.12 * u,
+            Kind::Round => 0.27 + 0.1 * u,
+            Kind::Narrow => 0.17 + 0.07 * u,
+            Kind::Conifer => 0.2 + 0.08 * u,
+            Kind::Shrub => 0.45 + 0.25 * u,
+        }
+    }
+
+    /// The crown's envelope: where it starts up the tree (a fraction of its height) and
+    /// the squash of its lobes (their height over their width).
+    fn envelope(self) -> (f32, f32) {
+        match self {
+            Kind::Spreading => (0.28, 0.8),
+            Kind::Round => (0.3, 1.0),
+            Kind::Narrow => (0.32, 1.25),
+            Kind::Conifer => (0.3, 0.9),
+            Kind::Shrub => (0.1, 0.8),
+        }
+    }
+
+    /// The foliage's albedo (linear RGB).
+    fn green(self) -> Vec3 {
+        match self {
+            Kind::Spreading => Vec3::new(0.03, 0.043, 0.015),
+            Kind::Round => Vec3::new(0.04, 0.056, 0.014),
+            Kind::Narrow => Vec3::new(0.066, 0.082, 0.017),
+            Kind::Conifer => Vec3::new(0.02, 0.034, 0.02),
+            Kind::Shrub => Vec3::new(0.06, 0.068, 0.042),
+        }
+    }
+}
+
 impl Plant {
-    /// The plant of `flora` at `base`, drawn from the hash `h`.
-    fn grow(flora: Flora, base: Vec3, h: u32) -> Plant {
+    /// The plant of `flora` at `base`, drawn from the hash `h`, in a stand whose mix of
+    /// kinds is `site` in `[0, 1]` ([`Kind::of`]).
+    fn grow(flora: Flora, base: Vec3, h: u32, site: f32) -> Plant {
         let u = |k: u32| (mix32(h ^ mix32(k)) & 0xffff) as f32 / 65536.0;
         // A wood of all ages: a third young trees and saplings under the grown ones
         // (judges read trees all of one size as clones).
         let grown = u(8) > 0.33;
-        let (height, width, kind) = match flora {
-            Flora::Woodland if grown => (12.0 + 12.0 * u(1), 0.26 + 0.12 * u(2), u(3)),
-            Flora::Woodland => (4.0 + 7.0 * u(1), 0.3 + 0.15 * u(2), u(3)),
-            Flora::Scrub => (1.5 + 3.5 * u(1), 0.45 + 0.25 * u(2), u(3)),
+        let kind = Kind::of(flora, u(3), site);
+        let height = match flora {
+            Flora::Woodland if grown => 12.0 + 12.0 * u(1),
+            Flora::Woodland => 4.0 + 7.0 * u(1),
+            Flora::Scrub => 1.5 + 3.5 * u(1),
         };
-        let r = width * height;
-        let conifer = flora == Flora::Woodland && kind < 0.15;
+        // A spreading crown is on a shorter tree, a narrow one on a taller.
+        let height = match kind {
+            Kind::Spreading => 0.85 * height,
+            Kind::Narrow => 1.15 * height,
+            _ => height,
+        };
+        let r = kind.width(u(2)) * height;
+        let (low, squash) = kind.envelope();
         let turn = std::f32::consts::TAU * u(4);
         let mut lobes = [Lobe {
             c: base,
@@ -219,10 +308,9 @@ impl Plant {
             inv_squash: 1.0,
         }; LOBES];
         let trunk_top;
-        if conifer {
+        if kind == Kind::Conifer {
             // A spire of stacked, narrowing lobes.
-            let r = 0.75 * r;
-            trunk_top = base.z + 0.3 * height;
+            trunk_top = base.z + low * height;
             for (k, lobe) in lobes.iter_mut().enumerate() {
                 let f = k as f32 / LOBES as f32;
                 let rk = r * (1.0 - 0.78 * f) * (0.85 + 0.3 * u(30 + k as u32));
@@ -231,28 +319,29 @@ impl Plant {
                 *lobe = Lobe {
                     c: base + Vec3::new(a.cos() * off, a.sin() * off, (0.38 + 0.55 * f) * height),
                     r: rk,
-                    inv_squash: 1.0 / 0.9,
+                    inv_squash: 1.0 / squash,
                 };
             }
         } else {
             // Clumps of foliage scattered through the crown's envelope, an ellipsoid from
             // `low` to the top: no clump dominates, so the crown is irregular, as a broadleaf
             // tree's is, and hangs low enough to hide most of the trunk.
-            let (low, squash) = match flora {
-                Flora::Woodland => (0.3, 1.0),
-                Flora::Scrub => (0.1, 0.8),
-            };
             let mid = 0.5 * (low + 0.88);
             let half = 0.5 * (0.88 - low) * height;
             trunk_top = base.z + mid * height;
             for (k, lobe) in lobes.iter_mut().enumerate() {
                 let q = k as u32;
                 // A point of the envelope: up the axis by `v`, out by up to its width there.
-                let v = 0.85 * (2.0 * u(40 + q) - 1.0);
+                // The first clump is the crown's top.
+                let v = if k == 0 {
+                    0.55 + 0.3 * u(40 + q)
+                } else {
+                    0.85 * (2.0 * u(40 + q) - 1.0)
+                };
                 let a = turn + std::f32::consts::TAU * (k as f32 + 0.6 * u(10 + q)) / LOBES as f32;
                 let width = (1.0 - v * v).sqrt() * r;
                 let off = width * (0.25 + 0.45 * u(20 + q));
-                let rk = (0.38 + 0.2 * u(30 + q)) * r;
+                let rk = (0.33 + 0.18 * u(30 + q)) * r;
                 *lobe = Lobe {
                     c: base + Vec3::new(a.cos() * off, a.sin() * off, mid * height + v * half),
                     r: rk,
@@ -262,11 +351,7 @@ impl Plant {
         }
         let tint = 0.7 + 0.6 * u(5);
         let hue = Vec3::new(1.0 + 0.4 * (u(6) - 0.5), 1.0, 1.0 - 0.4 * (u(7) - 0.5));
-        let green = match (flora, conifer) {
-            (Flora::Woodland, false) => Vec3::new(0.038, 0.054, 0.014),
-            (Flora::Woodland, true) => Vec3::new(0.02, 0.034, 0.02),
-            (Flora::Scrub, _) => Vec3::new(0.06, 0.068, 0.042),
-        };
+        let green = kind.green();
         let reach = lobes
             .iter()
             .map(|l| (l.c - base).truncate().length() + l.r)
@@ -487,7 +572,9 @@ impl Vegetation {
                 if seen != Vec3::ZERO && materials.cover(p, seen).rock > 0.5 {
                     return None;
                 }
-                let plant = Plant::grow(flora, p, h);
+                // What the stand holds: a noise of half its wavelength.
+                let site = 0.5 + 0.5 * simplex(SEED ^ 11, p / (0.5 * flora.stands()));
+                let plant = Plant::grow(flora, p, h, site.clamp(0.0, 1.0));
                 let mid = (plant.crown_bottom() + plant.top) * 0.5;
                 // Ground under the crown's rim too: no tree leans out over a cliff's edge.
                 let rim = [Vec2::X, Vec2::Y, -Vec2::X, -Vec2::Y].map(|d| d * plant.reach);
@@ -803,7 +890,7 @@ mod tests {
                     10.0 + 20.0 * (k / 5) as f32,
                     0.0,
                 );
-                Plant::grow(Flora::Woodland, base, mix32(k))
+                Plant::grow(Flora::Woodland, base, mix32(k), k as f32 / 25.0)
             })
             .collect();
         Vegetation::index(plants, &region, 12.0)
