@@ -97,13 +97,6 @@ pub const STACK_TAPER: (f32, f32) = (0.3, 0.55);
 /// wore back unevenly from every side.
 const STACK_SHIFT: f32 = 0.14;
 
-/// How far (in joint spacings) the ledge a stack stands on reaches out from its foot, at
-/// most: the wave-cut rock about it, awash.
-const STACK_LEDGE: f32 = 0.35;
-
-/// Seed of the stacks' ledges.
-const LEDGE_SEED: u64 = 0x1ed9e;
-
 /// A joint block of the cliff or a stack, in the tree frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CoastBlock {
@@ -445,34 +438,6 @@ impl SeaCliffSpec {
                 let n = beds.len();
                 for bed in beds.iter_mut().skip(n.saturating_sub(2)) {
                     bed.inset += (0.1 + 0.2 * rng.unit()) * half.min_element();
-                }
-                // The ledge it stands on: what the waves planed off the rock about its foot,
-                // awash, in pieces a quarter of the joints long along each side, each
-                // reaching its own way out (a ragged edge). Without it stacks stood "straight
-                // in the water with no rock base", their notched feet read as "pinched" to
-                // blind judges.
-                // Drawn from its own stream, so the stacks and the rest are as they were.
-                let mut ledge = Rng::new(ground.seed ^ LEDGE_SEED ^ k as u64);
-                for side in [Vec2::X, -Vec2::X, Vec2::Y, -Vec2::Y] {
-                    let across = side.perp().abs();
-                    // Along the face and a little past its corners.
-                    let run = half.dot(across) + 0.25 * STACK_LEDGE * s;
-                    let n = (2.0 * run / (0.25 * s)).ceil().max(1.0);
-                    let length = 2.0 * run / n;
-                    for k in 0..n as usize {
-                        let along = -run + length * (k as f32 + 0.5);
-                        let reach = STACK_LEDGE * s * (0.5 + 0.5 * ledge.unit());
-                        // From half a metre under the stack's face out to its reach.
-                        let inner = half.dot(side.abs()) - 0.5;
-                        let q = side * (0.5 * (inner + inner + 0.5 + reach)) + across * along;
-                        let half_piece = side.abs() * (0.5 * (0.5 + reach))
-                            + across * (0.5 * length * (1.0 + 0.3 * ledge.unit()));
-                        slabs.push(Slab {
-                            center: center + grid.to_world(q),
-                            half: half_piece,
-                            z: Vec2::new(lowest.min(sea - 4.0) - 1.0, sea + 0.3 - 0.1 * reach),
-                        });
-                    }
                 }
                 blocks.push(CoastBlock {
                     center,
