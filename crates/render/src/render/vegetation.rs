@@ -41,7 +41,7 @@ use crate::field::noise::{mix32, simplex};
 use crate::field::{Aabb, Field, ISO};
 
 /// Ellipsoids of a crown.
-pub const LOBES: usize = 9;
+pub const LOBES: usize = 7;
 
 /// The most candidate sites a region is searched at; larger regions are searched at a
 /// wider spacing (plants thin out rather than the memory budget running over).
