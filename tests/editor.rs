@@ -10,6 +10,7 @@ use egui::accesskit::Role;
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use karstic::compile::edit;
+use karstic::editor::brush::Brush;
 use karstic::editor::preview::{
     COARSEST_DIVISOR, DRAG_BUDGET, FAST_DIVISOR, FIRST_DIVISOR, Quality, fast_size,
 };
@@ -467,17 +468,21 @@ fn tunnel_tree() -> String {
     )
 }
 
-/// Presses the primary button at `from`, moves to `to` in steps and releases there.
-fn drag(h: &mut Harness<'_, Editor>, from: egui::Pos2, to: egui::Pos2) {
-    let button = |pos, pressed| egui::Event::PointerButton {
+/// The primary button pressed (or released) at `pos`.
+fn primary(pos: egui::Pos2, pressed: bool) -> egui::Event {
+    egui::Event::PointerButton {
         pos,
         button: egui::PointerButton::Primary,
         pressed,
         modifiers: egui::Modifiers::NONE,
-    };
+    }
+}
+
+/// Presses the primary button at `from` and moves to `to` in steps, still pressed.
+fn press_and_move(h: &mut Harness<'_, Editor>, from: egui::Pos2, to: egui::Pos2) {
     h.event(egui::Event::PointerMoved(from));
     h.step();
-    h.event(button(from, true));
+    h.event(primary(from, true));
     h.step();
     for k in 1..=8 {
         h.event(egui::Event::PointerMoved(
@@ -485,10 +490,20 @@ fn drag(h: &mut Harness<'_, Editor>, from: egui::Pos2, to: egui::Pos2) {
         ));
         h.step();
     }
+}
+
+/// Releases the primary button at `to`.
+fn release(h: &mut Harness<'_, Editor>, to: egui::Pos2) {
     h.step();
-    h.event(button(to, false));
+    h.event(primary(to, false));
     h.step();
     h.run_steps(2);
+}
+
+/// Presses the primary button at `from`, moves to `to` in steps and releases there.
+fn drag(h: &mut Harness<'_, Editor>, from: egui::Pos2, to: egui::Pos2) {
+    press_and_move(h, from, to);
+    release(h, to);
 }
 
 #[test]
@@ -761,4 +776,351 @@ fn editor_viewport_keeps_its_size_when_the_selection_changes() {
         let now = h.state().viewport().expect("the viewport is drawn");
         assert_eq!(now, before, "selecting {name} moved the viewport");
     }
+}
+
+/// A headland of bedded rock standing 50 m out of a sea, a blind cave (a Feature Volume
+/// tunnel of the air, `Abs` points) inside it: the scene the sea-cave scenario authors in.
+const CLIFF_TREE: &str = r#"(
+    version: 1,
+    name: "sea_cave_editor",
+    job: (
+        region: (min: (-100, -250, -80), max: (700, 250, 120)),
+        cell: 4,
+        image: (320, 180),
+        camera: (eye: (800, -400, 90), target: (380, 20, 0)),
+        fov: 40,
+        vegetation: 0,
+        water_level: 0,
+    ),
+    root: Difference(
+        name: "root",
+        base: Blend(name: "land", children: [
+            // The headland: its sea face at x = 400.
+            Primitive(name: "headland", shape: Box(center: (150, 0, 0), half_size: (250, 200, 50)), falloff: 6),
+            Primitive(name: "seabed", shape: Box(center: (300, 0, -50), half_size: (400, 250, 20)), falloff: 6),
+        ]),
+        carves: [
+            FeatureVolume(
+                name: "cave",
+                curves: Inline(tunnels: [(
+                    path: [Abs(250, 0, 5), Abs(330, 20, 5)],
+                    width: Const(24),
+                    height: Const(16),
+                )]),
+                domain: ((150, -120, -40), (480, 140, 60)),
+                voxel: 4,
+                orientation: Air,
+            ),
+        ],
+    ),
+)
+"#;
+
+/// The cliff tree in a folder of its own, and the editor on it, settled.
+fn cliff_editor() -> (tempfile::TempDir, PathBuf, Harness<'static, Editor>) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cliff.ron");
+    std::fs::write(&path, CLIFF_TREE).unwrap();
+    // Frames of 50 ms, so that two clicks a frame apart are a double click (egui's
+    // limit is 0.3 s; the harness's default frame is 0.25 s).
+    let mut h = Harness::builder()
+        .with_size(egui::vec2(1000.0, 600.0))
+        .with_step_dt(0.05)
+        .build_ui_state(|ui, e: &mut Editor| e.ui(ui), Editor::open(&path));
+    settle(&mut h, Duration::from_secs(300)).unwrap();
+    (dir, path, h)
+}
+
+/// Where the world point `p` is in the editor's viewport, in points.
+fn on_screen(h: &Harness<'_, Editor>, p: glam::Vec3) -> egui::Pos2 {
+    let shown = h.state().shown().unwrap();
+    let rect = h.state().viewport().unwrap();
+    let (x, y) = karstic::editor::points::project(&shown.camera, p).unwrap();
+    rect.min
+        + egui::vec2(
+            x * rect.width() / shown.frame.width as f32,
+            y * rect.height() / shown.frame.height as f32,
+        )
+}
+
+/// The world point a drag of a handle at `world` must aim at to land `by` further, in the
+/// plane through it parallel to the image (where an `Abs` point moves).
+fn in_image_plane(h: &Harness<'_, Editor>, world: glam::Vec3, by: glam::Vec3) -> glam::Vec3 {
+    let cam = h.state().shown().unwrap().camera;
+    let forward = cam.basis().2;
+    world + by - forward * by.dot(forward)
+}
+
+/// `clicks` clicks of `button` at `pos`, one frame an event (two: a double click).
+fn click_at(
+    h: &mut Harness<'_, Editor>,
+    pos: egui::Pos2,
+    button: egui::PointerButton,
+    clicks: usize,
+) {
+    let press = |pressed| egui::Event::PointerButton {
+        pos,
+        button,
+        pressed,
+        modifiers: egui::Modifiers::NONE,
+    };
+    h.event(egui::Event::PointerMoved(pos));
+    for _ in 0..clicks {
+        h.event(press(true));
+        h.event(press(false));
+    }
+    h.step();
+    h.run_steps(2);
+}
+
+/// The handle of the `cave` volume at `slot` in the editor's latest image.
+fn cave_handle(
+    h: &Harness<'_, Editor>,
+    slot: karstic::editor::points::Slot,
+) -> karstic::editor::points::Handle {
+    let shown = h.state().shown().unwrap();
+    (shown.handles.iter())
+        .find(|x| x.volume == "cave" && x.slot == slot)
+        .unwrap_or_else(|| panic!("no handle {slot:?}"))
+        .clone()
+}
+
+/// The points of the cave's tunnel in the file.
+fn cave_path(path: &Path) -> Vec<karstic::voxel::spec::Point> {
+    let file = karstic::scene::load(path).unwrap();
+    let named = file.scene.named();
+    let Some(NodeSpec::FeatureVolume(v)) = named.get("cave") else {
+        panic!("no cave");
+    };
+    let karstic::voxel::spec::CurveSource::Inline(set) = &v.curves else {
+        panic!("the curves stay inline");
+    };
+    set.tunnels[0].path.clone()
+}
+
+#[test]
+fn editor_inserts_and_removes_curve_points_and_previews_a_drag() {
+    use karstic::editor::points::Slot;
+    use karstic::value::Finite;
+    use karstic::voxel::spec::Point;
+    let (_dir, path, mut h) = cliff_editor();
+    let original = cave_path(&path);
+    // A double click on the first point inserts one halfway to the second.
+    let first = cave_handle(&h, Slot::Tunnel(0, 0));
+    let at = on_screen(&h, first.world);
+    click_at(&mut h, at, egui::PointerButton::Primary, 2);
+    let three = cave_path(&path);
+    assert_eq!(three.len(), 3, "{}", h.state().status());
+    let f = Finite;
+    assert_eq!(three[1], Point::Abs(f(290.0), f(10.0), f(5.0)));
+    assert_eq!((three[0], three[2]), (original[0], original[1]));
+    assert_eq!(h.state().selected(), Some("cave"));
+    settle(&mut h, Duration::from_secs(300)).unwrap();
+    // A right click on it removes it.
+    let mid = cave_handle(&h, Slot::Tunnel(0, 1));
+    assert_eq!(mid.point, three[1]);
+    let at = on_screen(&h, mid.world);
+    click_at(&mut h, at, egui::PointerButton::Secondary, 1);
+    assert_eq!(cave_path(&path), original, "{}", h.state().status());
+    settle(&mut h, Duration::from_secs(300)).unwrap();
+    // A path keeps two points: the right click is refused, in words.
+    let before = std::fs::read(&path).unwrap();
+    let end = cave_handle(&h, Slot::Tunnel(0, 1));
+    let at = on_screen(&h, end.world);
+    click_at(&mut h, at, egui::PointerButton::Secondary, 1);
+    assert_eq!(std::fs::read(&path).unwrap(), before);
+    assert!(
+        h.state().status().contains("at least 2 points"),
+        "{}",
+        h.state().status()
+    );
+    // While a point is dragged the viewport previews the volume rebuilt with the point
+    // where it is, on a coarser grid, and the file is not written until the release.
+    let from = on_screen(&h, end.world);
+    let goal = in_image_plane(&h, end.world, glam::Vec3::new(60.0, 60.0, 0.0));
+    let to = on_screen(&h, goal);
+    press_and_move(&mut h, from, to);
+    let (preview, version) = h.state().previewing().expect("a preview while dragging");
+    let preview = preview.clone();
+    let named = preview.named();
+    let Some(NodeSpec::FeatureVolume(v)) = named.get("cave") else {
+        panic!("no cave in the preview");
+    };
+    // 330 × 260 × 100 m in at most 32³ voxels: 6.4 m, not the file's 4 m.
+    assert!((v.voxel.get() - 6.4).abs() < 0.05, "{}", v.voxel.get());
+    let karstic::voxel::spec::CurveSource::Inline(set) = &v.curves else {
+        panic!()
+    };
+    let Point::Abs(x, y, _) = set.tunnels[0].path[1] else {
+        panic!()
+    };
+    assert!(
+        glam::Vec2::new(x.0, y.0).distance(goal.truncate()) < 3.0,
+        "the preview's point ({}, {}) is under the pointer, at {goal}",
+        x.0,
+        y.0
+    );
+    assert_eq!(
+        std::fs::read(&path).unwrap(),
+        before,
+        "nothing written mid-drag"
+    );
+    // The preview is drawn.
+    let start = std::time::Instant::now();
+    while h.state().shown().unwrap().version != version {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "the preview was not drawn"
+        );
+        h.step();
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    release(&mut h, to);
+    let Point::Abs(x, ..) = cave_path(&path)[1] else {
+        panic!()
+    };
+    assert!((x.0 - goal.x).abs() < 3.0, "written on release: {x:?}");
+}
+
+#[test]
+fn editor_authors_a_sea_cave_with_brushes_and_a_dragged_tunnel() {
+    use karstic::editor::points::Slot;
+    let (_dir, path, mut h) = cliff_editor();
+    let mut actions = 0;
+    // 1. Drag the blind cave's inner end out through the sea face (x = 400).
+    let end = cave_handle(&h, Slot::Tunnel(0, 1));
+    let goal = in_image_plane(&h, end.world, glam::Vec3::new(110.0, 110.0, 0.0));
+    assert!(goal.x > 420.0, "{goal}");
+    let (from, to) = (on_screen(&h, end.world), on_screen(&h, goal));
+    drag(&mut h, from, to);
+    actions += 1;
+    settle(&mut h, Duration::from_secs(300)).unwrap();
+    // 2. The carve brush, made smaller with the wheel.
+    h.get_by_label("carve").click();
+    h.run_steps(2);
+    actions += 1;
+    let face = |y: f32| glam::Vec3::new(403.0, y, 6.0);
+    let over = on_screen(&h, face(-100.0));
+    h.event(egui::Event::PointerMoved(over));
+    h.event(egui::Event::MouseWheel {
+        unit: egui::MouseWheelUnit::Point,
+        delta: egui::vec2(0.0, -350.0),
+        phase: egui::TouchPhase::Move,
+        source: egui::MouseWheelSource::Unknown,
+        modifiers: egui::Modifiers::NONE,
+    });
+    h.run_steps(30);
+    actions += 1;
+    let radius = h.state().place_radius;
+    assert!(
+        (5.0..15.0).contains(&radius),
+        "the wheel sized the brush: {radius}"
+    );
+    // 3. A stroke along the sea face at the waterline: the wave-cut notch the cave opens
+    // from.
+    let (from, to) = (on_screen(&h, face(-150.0)), on_screen(&h, face(40.0)));
+    drag(&mut h, from, to);
+    actions += 1;
+    settle(&mut h, Duration::from_secs(300)).unwrap();
+    // 4. A raise stroke on the headland's top (the Blend "land" selected): a ridge.
+    h.get_by_label("land").click();
+    h.run_steps(2);
+    h.get_by_label("raise").click();
+    h.run_steps(2);
+    actions += 2;
+    assert_eq!(h.state().tool, Tool::Brush(Brush::Raise));
+    let top = |x: f32| glam::Vec3::new(x, -100.0, 53.0);
+    let (from, to) = (on_screen(&h, top(250.0)), on_screen(&h, top(370.0)));
+    let rect = h.state().viewport().unwrap();
+    assert!(
+        rect.contains(from) && rect.contains(to),
+        "{from:?} → {to:?} in {rect:?}"
+    );
+    drag(&mut h, from, to);
+    actions += 1;
+    assert_eq!(
+        h.state().selected(),
+        Some("raise_1"),
+        "{}",
+        h.state().status()
+    );
+    settle(&mut h, Duration::from_secs(300)).unwrap();
+    // 5. Save.
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    h.run_steps(2);
+    actions += 1;
+    assert!(
+        h.state().status().starts_with("saved"),
+        "{}",
+        h.state().status()
+    );
+    let picture = h.state().shown().unwrap().frame.clone();
+    let text = std::fs::read_to_string(&path).unwrap();
+    drop(h);
+
+    // The file holds what was authored.
+    let scene = karstic::scene::load(&path).unwrap().scene;
+    let named = scene.named();
+    let Some(NodeSpec::Difference(root)) = named.get("root") else {
+        panic!()
+    };
+    let carve = root
+        .carves
+        .iter()
+        .find(|c| c.name() == Some("carve_1"))
+        .expect("the carve stroke is a carve of the root");
+    let NodeSpec::Primitive(carve) = carve else {
+        panic!("{carve:?}")
+    };
+    let karstic::field::skeleton::SkeletonSpec::Polyline { points } = &carve.shape else {
+        panic!("a stroke is a polyline: {:?}", carve.shape)
+    };
+    assert!(points.0.len() >= 5, "{} points", points.0.len());
+    let Some(NodeSpec::Blend(land)) = named.get("land") else {
+        panic!()
+    };
+    assert!(land.children.iter().any(|c| c.name() == Some("raise_1")));
+    let Some(karstic::voxel::spec::Point::Abs(x, ..)) = cave_path(&path).get(1).copied() else {
+        panic!()
+    };
+    assert!(x.0 > 410.0, "the cave opens through the face: {x:?}");
+    // The field: the notch and the cave mouth are air, the ridge rock.
+    use karstic::field::Field;
+    let dir = path.parent().unwrap();
+    let c = karstic::compile::compile_scene(&scene, &path, dir).unwrap();
+    let iso = karstic::field::ISO;
+    let notch = points.0[points.0.len() / 2].0;
+    assert!(
+        c.tree.value(notch - glam::Vec3::X * 2.0) < iso,
+        "the notch at {notch} is carved"
+    );
+    assert!(
+        c.tree.value(glam::Vec3::new(398.0, 0.0, 30.0)) > iso,
+        "the face stands above it"
+    );
+    let karstic::voxel::spec::Point::Abs(_, y, z) = cave_path(&path)[1] else {
+        panic!()
+    };
+    // Where the tunnel's axis crosses the face, from (250, 0, 5) to its dragged end.
+    let t = (400.0 - 250.0) / (x.0 - 250.0);
+    let mouth = glam::Vec3::new(400.0, t * y.0, 5.0 + t * (z.0 - 5.0));
+    assert!(
+        c.tree.value(mouth) < iso,
+        "the cave's mouth at {mouth} is open"
+    );
+    let ridge = glam::Vec3::new(310.0, -100.0, 52.0 + radius * 0.5);
+    assert!(c.tree.value(ridge) > iso, "the ridge at {ridge} is rock");
+
+    // Reopened, the editor shows the same tree and the same picture.
+    let mut again = harness(&path);
+    settle(&mut again, Duration::from_secs(300)).unwrap();
+    assert_eq!(again.state().text(), text);
+    assert_eq!(again.state().scene(), Some(&scene));
+    assert_frames_match(
+        "the reopened editor's picture",
+        &again.state().shown().unwrap().frame,
+        &picture,
+    );
+    // The scenario's count, quoted in docs/editor.md.
+    assert_eq!(actions, 8);
 }

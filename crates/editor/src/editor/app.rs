@@ -7,17 +7,24 @@ use std::time::{Duration, Instant, SystemTime};
 
 use egui::{Key, KeyboardShortcut, Modifiers, Rect, Sense, TextureHandle, TextureOptions, Ui};
 
+use super::brush::{self, Brush, Stroke};
 use super::history::{Edit, History};
 use super::inspector::{Change, Inspector};
 use super::placement;
 use super::points::{self, Handle};
 use super::preview::{Backend, Look, Orbit, Preview, Quality, Rendered, Report, Request};
 use crate::compile::edit;
+use crate::render::Camera;
 use crate::scene::load::read_text;
 use crate::scene::{Scene, parse_scene};
+use crate::voxel::spec::Point;
 
 /// How far from a control point (points) a drag picks it.
 pub const HANDLE_REACH: f32 = 8.0;
+
+/// How the wheel scales a brush: by `exp(WHEEL_SIZE · scroll)`, scroll in points (a notch
+/// of 50 points: ±10%).
+pub const WHEEL_SIZE: f32 = 0.002;
 
 /// What a click in the viewport does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -28,6 +35,8 @@ pub enum Tool {
     Anchor,
     /// Adds a sphere `Primitive` centred on the surface point clicked.
     Sphere,
+    /// A brush: a stroke dragged over the surface raises or carves it ([`brush`]).
+    Brush(Brush),
 }
 
 /// The interactive editor of one tree file.
@@ -62,6 +71,8 @@ pub struct Editor {
     pub graph: bool,
     /// The control point being dragged and where it is now.
     point_drag: Option<(Handle, glam::Vec3)>,
+    /// The brush stroke being dragged.
+    stroke: Option<Stroke>,
     /// The texture shows the latest image in this look.
     texture_look: Option<Look>,
     preview: Preview,
@@ -128,6 +139,7 @@ impl Editor {
             look: Look::Shaded,
             graph: false,
             point_drag: None,
+            stroke: None,
             texture_look: None,
             preview,
             wake,
@@ -191,6 +203,11 @@ impl Editor {
         self.load_error.as_deref()
     }
 
+    /// Why the renderer drew nothing for the latest scene, if it failed.
+    pub fn render_error(&self) -> Option<&str> {
+        self.render_error.as_deref()
+    }
+
     /// The status line: the last edit, or why it failed.
     pub fn status(&self) -> &str {
         &self.status
@@ -221,6 +238,7 @@ impl Editor {
     pub fn settled(&self) -> bool {
         !self.dragging_view
             && self.point_drag.is_none()
+            && self.stroke.is_none()
             && self.preview_scene.is_none()
             && self
                 .shown
@@ -341,6 +359,11 @@ impl Editor {
             ui.selectable_value(&mut self.tool, Tool::View, "nothing");
             ui.selectable_value(&mut self.tool, Tool::Anchor, "anchor");
             ui.selectable_value(&mut self.tool, Tool::Sphere, "sphere");
+            ui.label("Brush:");
+            ui.selectable_value(&mut self.tool, Tool::Brush(Brush::Raise), "raise")
+                .on_hover_text("drag over the surface to add rock; the wheel sets the size");
+            ui.selectable_value(&mut self.tool, Tool::Brush(Brush::Carve), "carve")
+                .on_hover_text("drag over the surface to carve it; the wheel sets the size");
             ui.add(
                 egui::DragValue::new(&mut self.place_radius)
                     .range(0.1..=1e5)
@@ -372,7 +395,9 @@ impl Editor {
             "" => format!("viewport: {tracer}"),
             status => format!("{status} · viewport: {tracer}"),
         };
-        ui.label(line);
+        // One row whatever the status says (a long `tree add` wrapped, and the toolbar's
+        // height, hence the viewport's, swung between frames): elided, whole on hover.
+        ui.add(egui::Label::new(line).truncate());
     }
 
     fn inspector(&mut self, ui: &mut Ui) {
@@ -501,10 +526,19 @@ impl Editor {
             );
         }
         let dragging_point = self.drag_point(&response, rect);
+        let on_handle = response
+            .interact_pointer_pos()
+            .and_then(|pos| self.handle_at(rect, pos));
+        if let Some(h) = &on_handle {
+            self.edit_points(&response, h);
+        }
+        let painting = !dragging_point && self.paint(ui, &response, rect, on_handle.is_some());
         self.draw_handles(&painter, rect);
-        let moved = !dragging_point && self.navigate(ui, &response, rect);
+        self.draw_brush(ui, &painter, rect);
+        let moved = !dragging_point && !painting && self.navigate(ui, &response, rect);
         if response.clicked()
-            && self.tool != Tool::View
+            && on_handle.is_none()
+            && matches!(self.tool, Tool::Anchor | Tool::Sphere)
             && let Some(pos) = response.interact_pointer_pos()
         {
             self.place(rect, pos);
@@ -525,11 +559,25 @@ impl Editor {
         Some((u.x * f.width as f32, u.y * f.height as f32))
     }
 
+    /// The latest image's view at the viewport's full size: what points are projected
+    /// through and pointed at with. (A fast pass is a few dozen pixels wide and its aspect
+    /// rounded: its own camera misplaced points by several per cent of the view.)
+    fn view_camera(&self) -> Option<Camera> {
+        let r = self.shown.as_ref()?;
+        let (w, h) = self
+            .last_request
+            .map_or((r.frame.width, r.frame.height), |k| k.2);
+        if (w, h) == (r.camera.width, r.camera.height) {
+            return Some(r.camera);
+        }
+        Orbit::from_camera(&r.camera).camera(w, h)
+    }
+
     /// Where the world point `p` is in the viewport, in points.
     fn screen_pos(&self, rect: Rect, p: glam::Vec3) -> Option<egui::Pos2> {
-        let r = self.shown.as_ref()?;
-        let (x, y) = points::project(&r.camera, p)?;
-        let (w, h) = (r.frame.width as f32, r.frame.height as f32);
+        let cam = self.view_camera()?;
+        let (x, y) = points::project(&cam, p)?;
+        let (w, h) = (cam.width as f32, cam.height as f32);
         Some(rect.min + egui::vec2(x / w * rect.width(), y / h * rect.height()))
     }
 
@@ -560,10 +608,17 @@ impl Editor {
             return false;
         };
         let pos = r.interact_pointer_pos();
-        let dropped = pos
-            .and_then(|p| self.image_xy(rect, p))
-            .zip(self.shown.as_ref())
-            .and_then(|((x, y), s)| points::drop_at(&handle, &s.frame, &s.camera, x, y));
+        // A `Ground` point lands where the image's tracer hit; an `Abs` one is placed
+        // through the view's camera.
+        let dropped = pos.and_then(|p| match handle.point {
+            Point::Ground(..) => self.surface_at(rect, p),
+            Point::Abs(..) => {
+                let (s, cam) = (self.shown.as_ref()?, self.view_camera()?);
+                let u = (p - rect.min) / rect.size();
+                let (x, y) = (u.x * cam.width as f32, u.y * cam.height as f32);
+                points::drop_at(&handle, &s.frame, &cam, x, y)
+            }
+        });
         let at = dropped.unwrap_or(at);
         if r.drag_stopped() {
             self.point_drag = None;
@@ -575,9 +630,157 @@ impl Editor {
                 self.selected = Some(handle.volume.clone());
             }
         } else {
+            // Only a moving pointer asks for a new preview (the surface a `Ground` point
+            // lands on changes with the preview itself).
+            if r.drag_delta() != egui::Vec2::ZERO
+                && at != handle.world
+                && let Some(scene) = &self.scene
+                && let Some(s) = points::dragged_scene(scene, &handle, points::moved(&handle, at))
+            {
+                // The volume rebuilt on a coarse grid, as the point moves.
+                self.version += 1;
+                self.preview_scene = Some((Arc::new(s), self.version));
+            }
             self.point_drag = Some((handle, at));
         }
         true
+    }
+
+    /// Inserts a point after the control point `h` on a double click, removes it on a
+    /// secondary (right) click: each one edit of the volume's curves.
+    fn edit_points(&mut self, r: &egui::Response, h: &Handle) {
+        let Some(scene) = self.scene.clone() else {
+            return;
+        };
+        let edit = if r.double_clicked() {
+            points::inserted(&scene, h).ok_or_else(|| {
+                "only curves and tunnel paths take more points: drag this one".to_string()
+            })
+        } else if r.secondary_clicked() {
+            points::removed(&scene, h)
+        } else {
+            return;
+        };
+        match edit {
+            Ok(edit) => {
+                if self.apply(edit) {
+                    self.selected = Some(h.volume.clone());
+                }
+            }
+            Err(why) => {
+                self.status = why;
+                self.failed = true;
+            }
+        }
+    }
+
+    /// The surface point under the viewport point `pos`, as the latest image's tracer hit
+    /// it.
+    fn surface_at(&self, rect: Rect, pos: egui::Pos2) -> Option<glam::Vec3> {
+        let shown = self.shown.as_ref()?;
+        let (x, y) = self.image_xy(rect, pos)?;
+        if x < 0.0 || y < 0.0 {
+            return None;
+        }
+        placement::hit(&shown.frame, &shown.camera, x as u32, y as u32)
+    }
+
+    /// The brush tools: a primary drag over the surface strokes (a click dabs), the wheel
+    /// over the viewport sets the size; the stroke becomes one node on release. A click on
+    /// a control point (`on_handle`) does not dab. True while a stroke is dragged.
+    fn paint(&mut self, ui: &Ui, r: &egui::Response, rect: Rect, on_handle: bool) -> bool {
+        let Tool::Brush(brush) = self.tool else {
+            self.stroke = None;
+            return false;
+        };
+        if r.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            if scroll != 0.0 {
+                self.place_radius =
+                    (self.place_radius * (scroll * WHEEL_SIZE).exp()).clamp(0.1, 1e5);
+            }
+        }
+        let shift = ui.input(|i| i.modifiers.shift);
+        let pos = r.interact_pointer_pos();
+        let hit = pos.and_then(|p| self.surface_at(rect, p));
+        if r.clicked() {
+            if let Some(p) = hit.filter(|_| !on_handle) {
+                self.finish_stroke(Stroke::new(brush, self.place_radius, p));
+            }
+            return false;
+        }
+        if r.drag_started_by(egui::PointerButton::Primary) && !shift {
+            let start = r.ctx.input(|i| i.pointer.press_origin());
+            self.stroke = start
+                .and_then(|p| self.surface_at(rect, p))
+                .or(hit)
+                .map(|p| Stroke::new(brush, self.place_radius, p));
+        }
+        let Some(stroke) = &mut self.stroke else {
+            return false;
+        };
+        if let Some(p) = hit {
+            stroke.extend(p);
+        }
+        if r.drag_stopped() {
+            let stroke = self.stroke.take();
+            self.finish_stroke(stroke.expect("a stroke is under way"));
+        }
+        true
+    }
+
+    /// Writes `stroke` to the tree as a new node, named for its brush.
+    fn finish_stroke(&mut self, stroke: Stroke) {
+        let Some(scene) = self.scene.clone() else {
+            return;
+        };
+        match brush::target(&scene, self.selected.as_deref(), stroke.brush) {
+            Ok((parent, energy)) => {
+                let name = placement::fresh_name(&scene, stroke.brush.stem());
+                let node = stroke.node(&name, energy);
+                if self.apply(Edit::Add { parent, node }) {
+                    self.selected = Some(name);
+                }
+            }
+            Err(why) => {
+                self.status = why;
+                self.failed = true;
+            }
+        }
+    }
+
+    /// The stroke under way, and the brush's size around the pointer.
+    fn draw_brush(&self, ui: &Ui, painter: &egui::Painter, rect: Rect) {
+        let Tool::Brush(brush) = self.tool else {
+            return;
+        };
+        let colour = match brush {
+            Brush::Raise => egui::Color32::from_rgb(120, 220, 120),
+            Brush::Carve => egui::Color32::from_rgb(240, 120, 90),
+        };
+        let stroke = egui::Stroke::new(2.0, colour);
+        if let Some(s) = &self.stroke {
+            let line: Vec<egui::Pos2> = (s.points.iter())
+                .filter_map(|p| self.screen_pos(rect, *p))
+                .collect();
+            painter.add(egui::Shape::line(line, stroke));
+        }
+        let Some(pos) = ui
+            .input(|i| i.pointer.hover_pos())
+            .filter(|p| rect.contains(*p))
+        else {
+            return;
+        };
+        let Some((p, cam)) = self
+            .surface_at(rect, pos)
+            .zip(self.shown.as_ref().map(|s| s.camera))
+        else {
+            return;
+        };
+        let edge = p + cam.basis().0 * self.place_radius;
+        if let Some((a, b)) = self.screen_pos(rect, p).zip(self.screen_pos(rect, edge)) {
+            painter.circle_stroke(a, a.distance(b), stroke);
+        }
     }
 
     /// The control points over the image; the dragged one where it is now.
@@ -627,7 +830,8 @@ impl Editor {
         } else {
             orbit.turn(d.x, d.y);
         }
-        if r.hovered() {
+        // With a brush, the wheel sets its size ([`Editor::paint`]).
+        if r.hovered() && !matches!(self.tool, Tool::Brush(_)) {
             let scroll = ui.input(|i| i.smooth_scroll_delta.y);
             if scroll != 0.0 {
                 orbit.dolly(scroll);
@@ -697,6 +901,13 @@ impl Editor {
             coarse,
             normals,
         });
+    }
+
+    /// The scene the viewport previews while a value or a control point is dragged (the
+    /// file's scene edited in memory, not written).
+    /// With the version its images carry ([`Rendered::version`]).
+    pub fn previewing(&self) -> Option<(&Scene, u64)> {
+        self.preview_scene.as_ref().map(|(s, v)| (&**s, *v))
     }
 
     /// The scene as last read, if the loader accepted it.

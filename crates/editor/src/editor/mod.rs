@@ -15,11 +15,14 @@
 //! * [`preview`]: the orbit camera and the progressive background renderer (fast pass,
 //!   then the full image band by band; cost and normal views).
 //! * [`placement`]: the surface point under a pixel, and the nodes placed there.
-//! * [`points`]: Feature Curve control points shown and dragged in the viewport.
+//! * [`points`]: Feature Curve control points shown, dragged, inserted and removed in the
+//!   viewport.
+//! * [`brush`]: sculpting strokes that raise or carve the surface, each a new node.
 //! * [`palette`]: add, remove, duplicate, instance; mesh and picture exports, run in the
 //!   background ([`exports`]).
 
 pub mod app;
+pub mod brush;
 pub mod exports;
 pub mod graph;
 pub mod history;
@@ -141,11 +144,15 @@ pub fn settle(
         if let Some(e) = harness.state().load_error() {
             anyhow::bail!("{e}");
         }
-        anyhow::ensure!(
-            start.elapsed() < timeout,
-            "the viewport did not settle within {:.0} s",
-            timeout.as_secs_f64()
-        );
+        if start.elapsed() >= timeout {
+            let e = harness.state();
+            anyhow::bail!(
+                "the viewport did not settle within {:.0} s (status: {:?}; renderer: {:?})",
+                timeout.as_secs_f64(),
+                e.status(),
+                e.render_error().unwrap_or("no error"),
+            );
+        }
         std::thread::sleep(Duration::from_millis(10));
     }
 }

@@ -3,15 +3,17 @@
 //!
 //! A `Ground(x, y, offset)` point is dragged along the surface (its `x, y` become those
 //! of the surface point under the pointer, its offset kept); an `Abs(x, y, z)` point in
-//! the plane through it parallel to the image.
+//! the plane through it parallel to the image. While it moves, the viewport previews the
+//! volume rebuilt with the point where it is, on a coarser grid ([`dragged_scene`]).
+//! A point of a curve or a tunnel path can be inserted after another ([`inserted`]) or
+//! removed ([`removed`]), down to the two a path needs.
 
 use glam::Vec3;
 
 use super::history::Edit;
 use crate::dem::HeightfieldField;
 use crate::render::{Camera, Frame};
-use crate::scene::load::to_ron_text;
-use crate::scene::splice::without_attributes;
+use crate::scene::load::to_ron_line;
 use crate::scene::{NodeSpec, Scene};
 use crate::value::Finite;
 use crate::voxel::FeatureSet;
@@ -58,6 +60,20 @@ fn point_mut(set: &mut FeatureSet, slot: Slot) -> Option<&mut Point> {
         Slot::ArchTo(i) => Some(&mut set.arches.get_mut(i)?.to),
     }
 }
+
+/// The point list `slot` is in and its index there, for the points that can be inserted
+/// and removed (a curve's, a tunnel path's: a quad has four corners, a disc one centre,
+/// an arch two feet).
+fn list_mut(set: &mut FeatureSet, slot: Slot) -> Option<(&mut Vec<Point>, usize)> {
+    match slot {
+        Slot::Curve(i, k) => Some((&mut set.curves.get_mut(i)?.points, k)),
+        Slot::Tunnel(i, k) => Some((&mut set.tunnels.get_mut(i)?.path, k)),
+        _ => None,
+    }
+}
+
+/// The fewest points a curve or a tunnel path takes.
+pub const MIN_PATH_POINTS: usize = 2;
 
 /// Every point of `set`, with its slot.
 fn slots(set: &FeatureSet) -> Vec<(Slot, Point)> {
@@ -140,22 +156,104 @@ pub fn moved(handle: &Handle, world: Vec3) -> Point {
     }
 }
 
-/// The `tree set` that writes `point` in place of `handle`'s point in `scene`: the
-/// volume's whole `curves` value with that one point changed.
-pub fn edit(scene: &Scene, handle: &Handle, point: Point) -> Option<Edit> {
+/// The inline curves of the volume `handle` belongs to in `scene`.
+fn inline_set(scene: &Scene, handle: &Handle) -> Option<FeatureSet> {
     let named = scene.named();
     let NodeSpec::FeatureVolume(f) = named.get(handle.volume.as_str())? else {
         return None;
     };
-    let CurveSource::Inline(set) = &f.curves else {
+    match &f.curves {
+        CurveSource::Inline(set) => Some(set.clone()),
+        CurveSource::Path(_) => None,
+    }
+}
+
+/// The `tree set` that writes `set` as the curves of `handle`'s volume.
+fn set_edit(handle: &Handle, set: FeatureSet) -> Edit {
+    Edit::Set {
+        target: format!("{}.curves", handle.volume),
+        value: to_ron_line(&CurveSource::Inline(set)),
+    }
+}
+
+/// The `tree set` that writes `point` in place of `handle`'s point in `scene`: the
+/// volume's whole `curves` value with that one point changed.
+pub fn edit(scene: &Scene, handle: &Handle, point: Point) -> Option<Edit> {
+    let mut set = inline_set(scene, handle)?;
+    *point_mut(&mut set, handle.slot)? = point;
+    Some(set_edit(handle, set))
+}
+
+/// Halfway between `a` and `b`, written as `a` is: two `Ground` points give a `Ground`
+/// point (offsets averaged), two `Abs` points an `Abs` one; a mixed pair keeps `a`'s
+/// height (its `z`, or its offset) at the middle of their `x, y`.
+pub fn midpoint(a: Point, b: Point) -> Point {
+    let mid = |u: Finite, v: Finite| Finite(0.5 * (u.0 + v.0));
+    match (a, b) {
+        (Point::Abs(x, y, z), Point::Abs(u, v, w)) => Point::Abs(mid(x, u), mid(y, v), mid(z, w)),
+        (Point::Ground(x, y, h), Point::Ground(u, v, g)) => {
+            Point::Ground(mid(x, u), mid(y, v), mid(h, g))
+        }
+        (Point::Abs(x, y, z), Point::Ground(u, v, _)) => Point::Abs(mid(x, u), mid(y, v), z),
+        (Point::Ground(x, y, h), Point::Abs(u, v, _)) => Point::Ground(mid(x, u), mid(y, v), h),
+    }
+}
+
+/// The `tree set` that inserts a point after `handle`'s (before it for the last point of
+/// its path), halfway to its neighbour ([`midpoint`]); `None` for points that cannot be
+/// inserted after (quad corners, disc centres, arch feet).
+pub fn inserted(scene: &Scene, handle: &Handle) -> Option<Edit> {
+    let mut set = inline_set(scene, handle)?;
+    let (list, k) = list_mut(&mut set, handle.slot)?;
+    let (at, other) = match list.get(k + 1) {
+        Some(next) => (k + 1, *next),
+        None => (k, *list.get(k.checked_sub(1)?)?),
+    };
+    list.insert(at, midpoint(*list.get(k)?, other));
+    Some(set_edit(handle, set))
+}
+
+/// The `tree set` that removes `handle`'s point, or why it cannot be removed.
+pub fn removed(scene: &Scene, handle: &Handle) -> Result<Edit, String> {
+    let mut set = inline_set(scene, handle).ok_or("its curves are not in the tree file")?;
+    let (list, k) = list_mut(&mut set, handle.slot)
+        .ok_or("only points of curves and tunnel paths can be removed")?;
+    if list.len() <= MIN_PATH_POINTS {
+        return Err(format!(
+            "a path keeps at least {MIN_PATH_POINTS} points: this one has {}",
+            list.len()
+        ));
+    }
+    list.remove(k);
+    Ok(set_edit(handle, set))
+}
+
+/// The most voxels a dragged volume's preview grid holds (32³): the grid of its preview is
+/// coarsened to stay within it, so that a preview is built in a fraction of a second.
+pub const DRAG_VOXELS: f32 = 32_768.0;
+
+/// The preview of a point being dragged: `scene` with `handle`'s point at `point`, its
+/// volume's voxel made coarse enough that its domain holds at most [`DRAG_VOXELS`] of
+/// them (the file's voxel where it already does).
+pub fn dragged_scene(scene: &Scene, handle: &Handle, point: Point) -> Option<Scene> {
+    let mut s = scene.clone();
+    let path = std::path::Path::new("");
+    let Edit::Set { target, value } = edit(scene, handle, point)? else {
         return None;
     };
-    let mut set = set.clone();
-    *point_mut(&mut set, handle.slot)? = point;
-    Some(Edit::Set {
-        target: format!("{}.curves", handle.volume),
-        value: without_attributes(&to_ron_text(&CurveSource::Inline(set))).to_string(),
-    })
+    crate::compile::edit::set_in_scene(&mut s, path, &target, &value).ok()?;
+    let named = scene.named();
+    let NodeSpec::FeatureVolume(f) = named.get(handle.volume.as_str())? else {
+        return None;
+    };
+    let size = f.domain.1.0 - f.domain.0.0;
+    let coarse = (size.x * size.y * size.z).abs() / DRAG_VOXELS;
+    let voxel = f.voxel.get().max(coarse.cbrt());
+    if voxel > f.voxel.get() {
+        let target = format!("{}.voxel", handle.volume);
+        crate::compile::edit::set_in_scene(&mut s, path, &target, &format!("{voxel}")).ok()?;
+    }
+    Some(s)
 }
 
 /// Where `p` is in a picture drawn through `camera`, in pixels from its top-left corner
@@ -179,7 +277,8 @@ pub fn project(camera: &Camera, p: Vec3) -> Option<(f32, f32)> {
 /// Where a point dragged from `handle` lands under the pixel position `(x, y)` of
 /// `frame` (drawn through `camera`): for a `Ground` point the surface point the tracer
 /// hit there (`None` where the ray missed), else the point of the plane through the
-/// handle parallel to the image.
+/// handle parallel to the image (`frame` unused: `camera` may be the view at another
+/// size than the frame's, `x, y` in its pixels).
 pub fn drop_at(handle: &Handle, frame: &Frame, camera: &Camera, x: f32, y: f32) -> Option<Vec3> {
     match handle.point {
         Point::Ground(..) => {

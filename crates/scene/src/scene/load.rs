@@ -80,6 +80,39 @@ pub fn to_ron_text(value: &impl serde::Serialize) -> String {
     ron::ser::to_string_pretty(value, pretty).expect("scene types always serialize")
 }
 
+/// A scene value as one line of tree-file text, as an author writes one: no `#![enable]`
+/// attributes, every struct and list on the line, whole numbers without a `.0`
+/// (`Inline(tunnels: [(path: [Abs(250, 0, 5), Abs(330, 20, 5)], width: Const(24))])`).
+/// The editor writes the values it builds (a curve's points) this way, so that its edits
+/// read as the lines around them.
+pub fn to_ron_line(value: &impl serde::Serialize) -> String {
+    let config = ron::ser::PrettyConfig::new()
+        .struct_names(false)
+        .depth_limit(0)
+        .extensions(Extensions::IMPLICIT_SOME | Extensions::UNWRAP_VARIANT_NEWTYPES);
+    let text = ron::ser::to_string_pretty(value, config).expect("scene types always serialize");
+    let text = super::splice::without_attributes(&text);
+    // `250.0` → `250`, outside of strings.
+    let mut out = String::with_capacity(text.len());
+    let mut quoted = false;
+    let mut chars = text.char_indices().peekable();
+    while let Some((i, c)) = chars.next() {
+        out.push(c);
+        match c {
+            '"' if !text[..i].ends_with('\\') => quoted = !quoted,
+            '0'..='9' if !quoted && text[i + 1..].starts_with(".0") => {
+                let rest = &text[i + 3..];
+                if !rest.starts_with(|d: char| d.is_ascii_digit() || d == 'e' || d == 'E') {
+                    chars.next();
+                    chars.next();
+                }
+            }
+            _ => {}
+        }
+    }
+    out.trim().to_string()
+}
+
 /// A loaded tree file: the scene and where it came from.
 #[derive(Clone, Debug)]
 pub struct SceneFile {
@@ -264,6 +297,27 @@ pub fn load(path: impl AsRef<Path>) -> Result<SceneFile, SceneError> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn one_line_values_read_as_written() {
+        use crate::voxel::spec::{CurveSource, FeatureSet};
+        let text = "Inline(tunnels: [(path: [Abs(250, 0, 5), Abs(330.5, 20, -5)], \
+                    width: Const(24), height: Keys([(0, 16), (1, 10.25)]))])";
+        let set: CurveSource = crate::value::ron_options().from_str(text).unwrap();
+        assert_eq!(
+            to_ron_line(&set),
+            text.split_whitespace().collect::<Vec<_>>().join(" ")
+        );
+        let back: CurveSource = crate::value::ron_options()
+            .from_str(&to_ron_line(&set))
+            .unwrap();
+        assert_eq!(back, set);
+        let named = CurveSource::Inline(FeatureSet::default());
+        let empty: CurveSource = crate::value::ron_options()
+            .from_str(&to_ron_line(&named))
+            .unwrap();
+        assert_eq!(empty, named);
+    }
+
     use super::*;
 
     #[test]

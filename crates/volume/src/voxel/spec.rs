@@ -56,6 +56,11 @@ fn zero() -> NonNegative {
     NonNegative(0.0)
 }
 
+/// Whether `v` is the default 0 (not written back).
+fn is_zero(v: &NonNegative) -> bool {
+    v.0 == 0.0
+}
+
 /// A Constraint Point.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -67,10 +72,10 @@ pub struct ConstraintSpec {
     /// Right-hand bitangent.
     pub right: Bitangent,
     /// Noise amplitude α (metres).
-    #[serde(default = "zero")]
+    #[serde(default = "zero", skip_serializing_if = "is_zero")]
     pub amplitude: NonNegative,
     /// Noise roughness β: base frequency of the noise (1/m).
-    #[serde(default = "zero")]
+    #[serde(default = "zero", skip_serializing_if = "is_zero")]
     pub roughness: NonNegative,
 }
 
@@ -78,22 +83,27 @@ fn yes() -> bool {
     true
 }
 
+/// Whether `v` is the default `true` (not written back).
+fn is_yes(v: &bool) -> bool {
+    *v
+}
+
 /// A Feature Curve.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CurveSpec {
     /// A name for messages.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// Control vertices (at least two; the curve interpolates the first and the last).
     pub points: Vec<Point>,
     /// Constraint Points (at least one), sorted by `t`.
     pub constraints: Vec<ConstraintSpec>,
     /// Seed (the surface passes through it) or guidance (it only steers normals).
-    #[serde(default = "yes")]
+    #[serde(default = "yes", skip_serializing_if = "is_yes")]
     pub seed: bool,
     /// Ribbon width in metres (default: the volume's).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ribbon: Option<Positive>,
 }
 
@@ -104,13 +114,13 @@ pub struct QuadSpec {
     /// Corners in order.
     pub corners: [Point; 4],
     /// Seed or guidance.
-    #[serde(default = "yes")]
+    #[serde(default = "yes", skip_serializing_if = "is_yes")]
     pub seed: bool,
     /// Noise amplitude.
-    #[serde(default = "zero")]
+    #[serde(default = "zero", skip_serializing_if = "is_zero")]
     pub amplitude: NonNegative,
     /// Noise roughness.
-    #[serde(default = "zero")]
+    #[serde(default = "zero", skip_serializing_if = "is_zero")]
     pub roughness: NonNegative,
 }
 
@@ -125,13 +135,13 @@ pub struct DiscSpec {
     /// Radius.
     pub radius: Positive,
     /// Seed or guidance.
-    #[serde(default = "yes")]
+    #[serde(default = "yes", skip_serializing_if = "is_yes")]
     pub seed: bool,
     /// Noise amplitude.
-    #[serde(default = "zero")]
+    #[serde(default = "zero", skip_serializing_if = "is_zero")]
     pub amplitude: NonNegative,
     /// Noise roughness.
-    #[serde(default = "zero")]
+    #[serde(default = "zero", skip_serializing_if = "is_zero")]
     pub roughness: NonNegative,
 }
 
@@ -149,7 +159,7 @@ pub enum ProfileSpec {
 #[serde(deny_unknown_fields)]
 pub struct TunnelSpec {
     /// A name for messages.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
     /// The axis' control vertices.
     pub path: Vec<Point>,
@@ -158,10 +168,10 @@ pub struct TunnelSpec {
     /// Full height.
     pub height: ProfileSpec,
     /// Noise amplitude.
-    #[serde(default = "zero")]
+    #[serde(default = "zero", skip_serializing_if = "is_zero")]
     pub amplitude: NonNegative,
     /// Noise roughness.
-    #[serde(default = "zero")]
+    #[serde(default = "zero", skip_serializing_if = "is_zero")]
     pub roughness: NonNegative,
 }
 
@@ -178,24 +188,24 @@ pub struct ArchSpec {
     /// Thickness of the slab at the crown.
     pub thickness: Positive,
     /// Width of the slab at the crown, across the span (default: twice the thickness).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub width: Option<Positive>,
     /// Thickness at the feet (default: three times the crown's).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub abutment: Option<Positive>,
     /// Version-1 files: the slope in degrees of the flanks of the old two-curve beam. When
     /// `width` is absent it sets it: `thickness / tan(flank)`, the width at which flanks
     /// of that slope close the beam.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flank: Option<Finite>,
     /// Half-length of a ground curve under the apex, across the span (none by default).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ground: Option<Positive>,
     /// Noise amplitude.
-    #[serde(default = "zero")]
+    #[serde(default = "zero", skip_serializing_if = "is_zero")]
     pub amplitude: NonNegative,
     /// Noise roughness.
-    #[serde(default = "zero")]
+    #[serde(default = "zero", skip_serializing_if = "is_zero")]
     pub roughness: NonNegative,
 }
 
@@ -204,19 +214,19 @@ pub struct ArchSpec {
 #[serde(deny_unknown_fields)]
 pub struct FeatureSet {
     /// Feature Curves.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub curves: Vec<CurveSpec>,
     /// Quads.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub quads: Vec<QuadSpec>,
     /// Discs.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub discs: Vec<DiscSpec>,
     /// Tunnels.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub tunnels: Vec<TunnelSpec>,
     /// Arches.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub arches: Vec<ArchSpec>,
 }
 
