@@ -160,7 +160,7 @@ mod tests {
 
     #[test]
     fn a_long_stroke_keeps_its_ends_and_max_points() {
-        let mut s = Stroke::new(Brush::Carve, 2.0, Vec3::ZERO);
+        let mut s = Stroke::new(Brush::Carve, 1.0, Vec3::ZERO);
         for k in 1..=200 {
             s.extend(Vec3::new(k as f32 * 0.5, 0.0, 0.0));
             // Too close to the last point: skipped.
