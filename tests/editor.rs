@@ -1124,3 +1124,61 @@ fn editor_authors_a_sea_cave_with_brushes_and_a_dragged_tunnel() {
     // The scenario's count, quoted in docs/editor.md.
     assert_eq!(actions, 8);
 }
+
+/// Lists show as rows (a polyline's points): moved, removed and added, each one edit of
+/// the list; an invalid row is refused with the loader's message.
+#[test]
+fn editor_edits_lists_as_rows() {
+    let (_dir, paths) = scene_dir(&["a.ron"]);
+    let a = &paths[0];
+    let line = TREE.replace(
+        "shape: Sphere(center: (0, 0, 0), radius: 30),",
+        "shape: Polyline(points: [(0, 0, 0), (10, 0, 0), (20, 5, 0)]),",
+    );
+    std::fs::write(a, &line).unwrap();
+    let mut h = harness(a);
+    select(&mut h, "blob");
+    let points = |a: &Path| {
+        let scene = karstic::scene::load(a).unwrap().scene;
+        let named = scene.named();
+        let Some(NodeSpec::Primitive(p)) = named.get("blob") else {
+            panic!()
+        };
+        let karstic::field::skeleton::SkeletonSpec::Polyline { points } = &p.shape else {
+            panic!()
+        };
+        (points.0.iter())
+            .map(|p| p.0.to_array())
+            .collect::<Vec<_>>()
+    };
+    // The first row down: the first two points trade places.
+    eprintln!(
+        h.query_all_by_label("down").count(),
+        h.query_all_by_label("up").count()
+    );
+    h.get_all_by_label("down").next().unwrap().click();
+    h.run_steps(2);
+    let p = points(a);
+    assert_eq!(
+        p,
+        [[10.0, 0.0, 0.0], [0.0, 0.0, 0.0], [20.0, 5.0, 0.0]],
+        "{}",
+        h.state().status()
+    );
+    // The last row removed, then a copy of the (new) last added.
+    h.get_all_by_label("remove").nth(2).unwrap().click();
+    h.run_steps(2);
+    assert_eq!(points(a), [[10.0, 0.0, 0.0], [0.0, 0.0, 0.0]]);
+    h.get_by_label("add").click();
+    h.run_steps(2);
+    assert_eq!(
+        points(a),
+        [[10.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
+    );
+    // Every edit is one undo: three undos give the file back byte for byte.
+    for _ in 0..3 {
+        h.get_by_label("Undo").click();
+        h.run_steps(2);
+    }
+    assert_eq!(std::fs::read_to_string(a).unwrap(), line);
+}

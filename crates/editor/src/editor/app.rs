@@ -443,7 +443,9 @@ impl Editor {
                     target: target.clone(),
                     value,
                 }) {
-                    self.inspector.drafts.remove(&target);
+                    // The value's drafts, and its rows' when it is a list.
+                    let rows = format!("{target}[");
+                    (self.inspector.drafts).retain(|k, _| *k != target && !k.starts_with(&rows));
                     self.inspector.errors.remove(&target);
                     if renamed {
                         self.selected = Some(new_name);

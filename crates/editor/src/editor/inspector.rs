@@ -9,7 +9,7 @@ use egui::{ComboBox, DragValue, RichText, TextEdit, Ui};
 
 use crate::scene::NodeSpec;
 use crate::scene::load::to_ron_text;
-use crate::scene::splice::{named_fields, set_field};
+use crate::scene::splice::{list_items, named_fields, set_field};
 use crate::value::ron_options;
 
 /// Fields that hold child nodes: the outline edits those.
@@ -184,6 +184,8 @@ impl Inspector {
                 for r in &rs {
                     number_change(r, &target, value.clone(), changes);
                 }
+            } else if let Some(items) = list_items(current).filter(|v| !v.is_empty()) {
+                self.rows(ui, label, &target, &items, changes);
             } else if current == "true" || current == "false" {
                 let mut b = current == "true";
                 if ui.checkbox(&mut b, "").labelled_by(label).changed() {
@@ -241,6 +243,91 @@ impl Inspector {
             }
         });
         ui.end_row();
+    }
+}
+
+/// What a row's buttons do to a list.
+enum RowEdit {
+    /// Element `i` becomes the text.
+    Set(usize, String),
+    /// Element `i` trades places with the next.
+    Swap(usize),
+    /// Element `i` is removed.
+    Remove(usize),
+    /// A copy of the last element is appended.
+    Add,
+}
+
+/// An element of a list as one row of text: its lines joined.
+fn one_line(item: &str) -> String {
+    item.lines().map(str::trim).collect::<Vec<_>>().join(" ")
+}
+
+impl Inspector {
+    /// A list as rows: each element a line of text, moved up or down, removed; a copy of
+    /// the last added. Each change writes the whole list (`tree set` of `target`), every
+    /// element on one line.
+    fn rows(
+        &mut self,
+        ui: &mut Ui,
+        label: egui::Id,
+        target: &str,
+        items: &[&str],
+        changes: &mut Vec<Change>,
+    ) {
+        let n = items.len();
+        let mut edit = None;
+        for (i, item) in items.iter().enumerate() {
+            let draft = format!("{target}[{i}]");
+            // The buttons first, so that they stay in the panel; the text takes the rest.
+            ui.horizontal(|ui| {
+                let button = |ui: &mut Ui, on: bool, text: &str| {
+                    ui.add_enabled(on, egui::Button::new(text).small())
+                        .clicked()
+                };
+                if button(ui, i > 0, "up") {
+                    edit = Some(RowEdit::Swap(i - 1));
+                }
+                if button(ui, i + 1 < n, "down") {
+                    edit = Some(RowEdit::Swap(i));
+                }
+                if button(ui, n > 1, "remove") {
+                    edit = Some(RowEdit::Remove(i));
+                }
+                let mut s = (self.drafts.get(&draft).cloned()).unwrap_or_else(|| one_line(item));
+                let width = ui.available_width().clamp(80.0, 400.0);
+                let r = ui
+                    .add(TextEdit::singleline(&mut s).desired_width(width))
+                    .labelled_by(label);
+                if r.changed() {
+                    self.drafts.insert(draft.clone(), s.clone());
+                }
+                if r.lost_focus() && self.drafts.contains_key(&draft) {
+                    edit = Some(RowEdit::Set(i, s));
+                }
+            });
+        }
+        if ui
+            .button("add")
+            .on_hover_text("a copy of the last row")
+            .clicked()
+        {
+            edit = Some(RowEdit::Add);
+        }
+        let Some(edit) = edit else { return };
+        let mut list: Vec<String> = items.iter().map(|t| one_line(t)).collect();
+        match edit {
+            RowEdit::Set(i, s) => list[i] = s,
+            RowEdit::Swap(i) => list.swap(i, i + 1),
+            RowEdit::Remove(i) => {
+                list.remove(i);
+            }
+            RowEdit::Add => list.push(list[n - 1].clone()),
+        }
+        changes.push(Change::Commit {
+            target: target.to_string(),
+            value: format!("[{}]", list.join(", ")),
+        });
     }
 }
 

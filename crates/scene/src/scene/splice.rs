@@ -196,6 +196,32 @@ pub fn named_fields(text: &str) -> Option<(&str, Vec<(&str, &str)>)> {
     ))
 }
 
+/// The elements of the list `[a, b, …]` that `text` is (white space around it allowed), as
+/// written; `None` when it is not a list. What the editor's inspector shows as rows.
+pub fn list_items(text: &str) -> Option<Vec<&str>> {
+    let b = text.as_bytes();
+    let mut i = skip_blank(text, 0);
+    if b.get(i) != Some(&b'[') {
+        return None;
+    }
+    let mut items = Vec::new();
+    i += 1;
+    loop {
+        i = skip_blank(text, i);
+        match b.get(i) {
+            Some(b']') => return text[i + 1..].trim().is_empty().then_some(items),
+            None => return None,
+            _ => {}
+        }
+        let end = value_end(text, i);
+        items.push(&text[i..trim_end(text, i, end)]);
+        i = skip_blank(text, end);
+        if b.get(i) == Some(&b',') {
+            i += 1;
+        }
+    }
+}
+
 /// One `key: value` entry; `value` is its byte range.
 struct Field<'t> {
     key: &'t str,
@@ -362,6 +388,17 @@ fn string_end_char(b: &[u8], mut i: usize) -> usize {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn list_items_are_the_top_level_elements() {
+        assert_eq!(
+            list_items(" [(0, 1), Abs(2, \"a,]\", 3), // one\n [4, 5],\n]"),
+            Some(vec!["(0, 1)", "Abs(2, \"a,]\", 3)", "[4, 5]"])
+        );
+        assert_eq!(list_items("[]"), Some(vec![]));
+        assert_eq!(list_items("(1, 2)"), None);
+        assert_eq!(list_items("[1, 2] x"), None);
+    }
+
     use super::*;
 
     #[test]
