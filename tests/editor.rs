@@ -1152,10 +1152,6 @@ fn editor_edits_lists_as_rows() {
             .collect::<Vec<_>>()
     };
     // The first row down: the first two points trade places.
-    eprintln!(
-        h.query_all_by_label("down").count(),
-        h.query_all_by_label("up").count()
-    );
     h.get_all_by_label("down").next().unwrap().click();
     h.run_steps(2);
     let p = points(a);
