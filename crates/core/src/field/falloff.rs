@@ -17,6 +17,13 @@ use super::bounds::Interval;
 /// `f > T`, the surface at `f = T`. The papers' and the docs' formulas write it `T`.
 pub const ISO: f32 = 0.5;
 
+/// Where Wyvill's falloff crosses the iso-value, in units of `R`: `g(x) = T` at
+/// `x = √(1 − T^⅓)`, 0.454 for `T = ½`. How far beyond its skeleton the surface of a
+/// primitive of energy 1 stands, as a share of its falloff.
+pub fn iso_reach() -> f32 {
+    (1.0 - ISO.cbrt()).sqrt()
+}
+
 /// `max |g'(x)|` over `[0, 1]`, reached at `x = 1/√5`.
 pub const WYVILL_MAX_SLOPE: f32 = 1.717_300_8;
 /// Where `|g'|` peaks: `x = 1/√5`.
@@ -111,6 +118,11 @@ pub fn sigma_slope(xs: Interval, r: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn iso_reach_is_where_the_falloff_crosses_the_iso_value() {
+        assert!((wyvill(iso_reach()) - ISO).abs() < 1e-6);
+    }
 
     #[test]
     fn wyvill_shape() {

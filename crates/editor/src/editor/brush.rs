@@ -15,7 +15,7 @@
 
 use glam::Vec3;
 
-use crate::field::falloff::ISO;
+use crate::field::falloff::iso_reach;
 use crate::scene::{NodeSpec, Scene};
 
 /// The most skeleton points a stroke keeps: a longer one keeps evenly spaced ones.
@@ -41,12 +41,6 @@ impl Brush {
             Brush::Carve => "carve",
         }
     }
-}
-
-/// Where a skeletal primitive `energy · g(d / R)` (energy 1) crosses the iso-value, in units
-/// of `R`: `g(x) = (1 − x²)³ = T` at `x = √(1 − T^⅓)`, 0.454 for `T = ½`.
-pub fn iso_reach() -> f32 {
-    (1.0 - ISO.cbrt()).sqrt()
 }
 
 /// A stroke being dragged: the surface points under the pointer, spaced.
@@ -151,12 +145,6 @@ pub fn target(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::field::falloff::wyvill;
-
-    #[test]
-    fn the_tube_reaches_its_radius() {
-        assert!((wyvill(iso_reach()) - ISO).abs() < 1e-6);
-    }
 
     #[test]
     fn a_long_stroke_keeps_its_ends_and_max_points() {
