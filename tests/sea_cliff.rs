@@ -384,3 +384,53 @@ fn top_at(tree: &Tree, xy: Vec2, lo: f32, hi: f32) -> Option<f32> {
     }
     None
 }
+
+/// A stack's beds are rounded at their vertical edges (the sea and the weather attack a
+/// corner from two sides), not square: at the root bed's mid height, the corners of its
+/// footprint are air while its faces are rock.
+#[test]
+fn sea_stacks_wear_round_at_the_corners() {
+    let file = scene(|t| t);
+    let (c, _, _) = cliff(&file);
+    // The blocks' rocks alone, unwarped: each stack stands free of every other rock.
+    let mut bare = file.clone();
+    bare.scene.root = NodeSpec::Blend(karstic::scene::spec::Nary {
+        name: None,
+        children: c.block_rocks(10.0), // the scene's `joints: 10`
+    });
+    let rocks = bare.compile().unwrap().tree;
+    let (mut corners, mut faces) = (Vec::new(), Vec::new());
+    for b in c.blocks.iter().filter(|b| b.stack) {
+        let z = 0.5 * (b.beds[0].z.x + b.beds[0].z.y);
+        let at = |q: Vec2| {
+            solid(
+                &rocks,
+                c.grid.to_world(c.grid.to_frame(b.center) + q).extend(z),
+            )
+        };
+        let h = b.half;
+        let corner =
+            [(1., 1.), (1., -1.), (-1., 1.), (-1., -1.)].map(|(u, v)| at(h * Vec2::new(u, v)));
+        corners.extend(corner);
+        let inside = h - Vec2::splat(0.2);
+        faces.extend([
+            at(Vec2::new(inside.x, 0.0)),
+            at(Vec2::new(-inside.x, 0.0)),
+            at(Vec2::new(0.0, inside.y)),
+            at(Vec2::new(0.0, -inside.y)),
+        ]);
+    }
+    let share =
+        |v: &[bool], want: bool| v.iter().filter(|&&s| s == want).count() as f32 / v.len() as f32;
+    assert!(!corners.is_empty());
+    assert!(
+        share(&faces, true) > 0.9,
+        "faces rock: {}",
+        share(&faces, true)
+    );
+    assert!(
+        share(&corners, false) > 0.7,
+        "corners air: {}",
+        share(&corners, false)
+    );
+}
