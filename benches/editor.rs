@@ -124,6 +124,7 @@ fn editor(c: &mut Criterion<CpuTime>) {
                 &compiled,
                 &full,
                 &fast,
+                None,
                 &|| false,
                 &mut |_, _| {},
             )

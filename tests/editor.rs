@@ -1178,3 +1178,66 @@ fn editor_edits_lists_as_rows() {
     }
     assert_eq!(std::fs::read_to_string(a).unwrap(), line);
 }
+
+/// After an edit the editor refines the rows of the edited node first (`refine`'s
+/// `first`): the bands that meet them come before the others, and the picture is the same.
+#[test]
+fn editor_refines_the_edited_region_first() {
+    use karstic::editor::preview::{draw, refine};
+    let (_dir, paths) = scene_dir(&["a.ron"]);
+    let file = karstic::scene::load(&paths[0]).unwrap();
+    let compiled = file.compile().unwrap();
+    let look = |w, h| {
+        karstic::render::Camera::look_at(
+            glam::Vec3::new(5200.0, 3900.0, 1300.0),
+            glam::Vec3::new(4000.0, 5200.0, 600.0),
+            40.0,
+            w,
+            h,
+        )
+        .unwrap()
+    };
+    let (full, small) = (look(160, 90), look(10, 6));
+    let fast = draw(&file.scene, &compiled, &small, Quality::Fast);
+    let mut order = Vec::new();
+    let first = 60..70;
+    let focused = refine(
+        &file.scene,
+        &compiled,
+        &full,
+        &fast,
+        Some(first.clone()),
+        &|| false,
+        &mut |_, rows| order.push(rows),
+    )
+    .unwrap();
+    assert!(
+        order[0].start > 0 && order[0].start < first.end && first.start < order[0].end,
+        "{order:?}"
+    );
+    let covered: u32 = order.iter().map(|r| r.len() as u32).sum();
+    assert_eq!(covered, 90, "every row once: {order:?}");
+    let plain = refine(
+        &file.scene,
+        &compiled,
+        &full,
+        &fast,
+        None,
+        &|| false,
+        &mut |_, _| {},
+    )
+    .unwrap();
+    assert_eq!(focused.rgba, plain.rgba, "the same picture");
+    // The node an edit changes.
+    use karstic::editor::Edit;
+    let set = Edit::Set {
+        target: "grotto.offset".into(),
+        value: "-10".into(),
+    };
+    assert_eq!(set.node().as_deref(), Some("grotto"));
+    let add = Edit::Add {
+        parent: "root".into(),
+        node: "Primitive(name: \"carve_1\", shape: Point(center: (0, 0, 0)), falloff: 2)".into(),
+    };
+    assert_eq!(add.node().as_deref(), Some("carve_1"));
+}

@@ -73,6 +73,8 @@ pub struct Editor {
     point_drag: Option<(Handle, glam::Vec3)>,
     /// The brush stroke being dragged.
     stroke: Option<Stroke>,
+    /// The node the last edit changed: its region is refined first.
+    focus: Option<String>,
     /// The texture shows the latest image in this look.
     texture_look: Option<Look>,
     preview: Preview,
@@ -140,6 +142,7 @@ impl Editor {
             graph: false,
             point_drag: None,
             stroke: None,
+            focus: None,
             texture_look: None,
             preview,
             wake,
@@ -252,6 +255,7 @@ impl Editor {
     /// Applies `edit` to the file (recorded for undo) and reads the file back.
     pub fn apply(&mut self, edit: Edit) -> bool {
         let command = edit.command();
+        self.focus = edit.node();
         let done = self.history.apply(&self.path, edit);
         self.after(done.map(|_| Some(command)))
     }
@@ -902,6 +906,7 @@ impl Editor {
             size,
             coarse,
             normals,
+            focus: self.focus.clone(),
         });
     }
 

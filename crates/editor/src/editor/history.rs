@@ -43,6 +43,22 @@ impl Edit {
         }
     }
 
+    /// The node it changes, by name: the one set, the one added (its parent when the
+    /// node has no name); none for a removal (the node is gone).
+    pub fn node(&self) -> Option<String> {
+        match self {
+            Edit::Set { target, .. } => target.split_once('.').map(|(n, _)| n.to_string()),
+            Edit::Add { parent, node } => Some(
+                (crate::value::ron_options()
+                    .from_str::<crate::scene::NodeSpec>(node)
+                    .ok())
+                .and_then(|n| n.name().map(str::to_string))
+                .unwrap_or_else(|| parent.clone()),
+            ),
+            Edit::Remove { .. } => None,
+        }
+    }
+
     /// The edit as the command line that makes it.
     pub fn command(&self) -> String {
         match self {

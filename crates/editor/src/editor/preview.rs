@@ -28,6 +28,7 @@ use rayon::prelude::*;
 
 use super::points::{Handle, handles};
 use crate::compile::{Compiled, compile_scene};
+use crate::field::Aabb;
 use crate::render::cpu::{Bands, antialias, render_bands};
 use crate::render::gpu::GpuContext;
 use crate::render::trace::normal;
@@ -166,6 +167,9 @@ pub struct Request {
     pub coarse: bool,
     /// Whether the images should carry their normals' colours ([`Rendered::normals`]).
     pub normals: bool,
+    /// The node an edit just changed: the rows its support covers (before and after the
+    /// edit) are refined first.
+    pub focus: Option<String>,
 }
 
 /// A drawn image.
@@ -292,6 +296,8 @@ impl Preview {
 /// The scene compiled for a version, with its control points.
 struct Ready {
     version: u64,
+    /// The scene it was compiled from.
+    scene: Arc<Scene>,
     compiled: Compiled,
     handles: Arc<Vec<Handle>>,
     /// Its encoding for the GPU (built on the first GPU image), or why it has none.
@@ -373,6 +379,7 @@ impl Server {
                 let handles = Arc::new(handles(scene, compiled.ground.as_deref()));
                 self.ready = Some(Ready {
                     version,
+                    scene: Arc::new(scene.clone()),
                     compiled,
                     handles,
                     tape: None,
@@ -448,6 +455,11 @@ impl Server {
 
     fn draw_request(&mut self, id: u64, req: &Request) {
         let asked = Instant::now();
+        // Where the edited node was before the edit: redrawn first with where it is now.
+        let before = (req.focus.as_deref()).and_then(|name| {
+            let r = self.ready.as_ref().filter(|r| r.version != req.version)?;
+            support_of(&r.scene, &r.compiled, name)
+        });
         if !self.compile(&req.scene, req.version) {
             return;
         }
@@ -518,18 +530,23 @@ impl Server {
             .then(|| vec![0u8; full.width as usize * full.height as usize * 4]);
         let mut done = 0;
         let mut sent = Instant::now();
+        let first = (req.focus.as_deref())
+            .and_then(|name| support_of(&req.scene, &r.compiled, name))
+            .map(|b| b.union(before.unwrap_or(Aabb::EMPTY)))
+            .and_then(|b| rows_of(&full, &b));
         let refined = refine(
             &req.scene,
             &r.compiled,
             &full,
             &fast,
+            first,
             &stale,
             &mut |f, rows| {
                 if let Some(n) = &mut normals {
-                    normal_colours(&r.compiled.tree, f, &full, done..rows, n);
+                    normal_colours(&r.compiled.tree, f, &full, rows.clone(), n);
                 }
-                done = rows;
-                if rows < f.height && sent.elapsed() >= PARTIAL_EVERY {
+                done += rows.len() as u32;
+                if done < f.height && sent.elapsed() >= PARTIAL_EVERY {
                     sent = Instant::now();
                     self.send(image(
                         f.clone(),
@@ -550,21 +567,24 @@ impl Server {
 
 /// The editor's refinement of a view on the CPU: `fast` (its fast pass) enlarged to
 /// `camera`'s size, then the full image traced over it band by band, shaded as
-/// `karstic render` shades it, its edges supersampled last; `band_done(frame, rows)` after
-/// each band and after the supersampling. `None` when
+/// `karstic render` shades it, its edges supersampled last; the bands that meet the image
+/// rows `first` (an edited node's) before the others; `band_done(frame, rows)` after each
+/// band with the rows it traced, and after the supersampling with none. `None` when
 /// `stop` said so before the end.
 pub fn refine(
     scene: &Scene,
     compiled: &Compiled,
     camera: &Camera,
     fast: &Frame,
+    first: Option<std::ops::Range<u32>>,
     stop: &(dyn Fn() -> bool + Sync),
-    band_done: &mut dyn FnMut(&Frame, u32),
+    band_done: &mut dyn FnMut(&Frame, std::ops::Range<u32>),
 ) -> Option<Frame> {
     let mut frame = enlarge(fast, camera.width, camera.height);
     let settings = settings(scene, compiled, camera, Quality::Full);
     let bands = Bands {
         rows: 1,
+        first,
         progress: &ProgressBar::hidden(),
         stop,
     };
@@ -581,9 +601,44 @@ pub fn refine(
     // Its edges supersampled last, as `karstic render` draws them: the same picture.
     if settings.antialias {
         antialias(&compiled.tree, camera, &settings, &mut frame);
-        band_done(&frame, camera.height);
+        band_done(&frame, camera.height..camera.height);
     }
     Some(frame)
+}
+
+/// The support of the node named `name` in `compiled` (of `scene`): the box its field
+/// can change.
+fn support_of(scene: &Scene, compiled: &Compiled, name: &str) -> Option<Aabb> {
+    let mut specs = Vec::new();
+    let walked = compiled.expanded.as_ref().unwrap_or(scene);
+    walked
+        .root
+        .walk(&mut |n, _| specs.push(n.name() == Some(name)));
+    let k = specs.iter().position(|&hit| hit)?;
+    let &(_, id) = compiled.outline.get(k)?;
+    Some(compiled.tree.info(id).support)
+}
+
+/// The image rows (of `camera`'s image) that the box `b` covers; `None` when it reaches
+/// behind the eye (then it may cover any row).
+fn rows_of(camera: &Camera, b: &Aabb) -> Option<std::ops::Range<u32>> {
+    if b.is_empty() {
+        return None;
+    }
+    let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+    for k in 0..8 {
+        let pick = |bit: u32, a: f32, z: f32| if k & bit == 0 { a } else { z };
+        let p = Vec3::new(
+            pick(1, b.min.x, b.max.x),
+            pick(2, b.min.y, b.max.y),
+            pick(4, b.min.z, b.max.z),
+        );
+        let (_, y) = super::points::project(camera, p)?;
+        (lo, hi) = (lo.min(y), hi.max(y));
+    }
+    let h = camera.height as f32;
+    let (lo, hi) = (lo.clamp(0.0, h) as u32, hi.ceil().clamp(0.0, h) as u32);
+    (lo < hi).then_some(lo..hi)
 }
 
 /// `frame` enlarged to `width × height` by repeating its pixels.

@@ -91,6 +91,7 @@ pub fn render(
     );
     let bands = Bands {
         rows: camera.height.div_ceil(TILE),
+        first: None,
         progress,
         stop: &|| false,
     };
@@ -195,11 +196,14 @@ pub fn antialias(field: &dyn Field, camera: &Camera, settings: &RenderSettings, 
 }
 
 /// How [`render_bands`] goes through the image: bands of `rows` rows of tiles, top to
-/// bottom; `progress` advances by one per tile; `stop` is asked before each tile (true:
-/// the rest of the image is not wanted).
+/// bottom (those that meet `first` before the others); `progress` advances by one per
+/// tile; `stop` is asked before each tile (true: the rest of the image is not wanted).
 pub struct Bands<'a> {
     /// Rows of tiles per band (at least 1).
     pub rows: u32,
+    /// Image rows (pixels) to trace first: where an edit changed the picture, in the
+    /// editor. `None`: from the top.
+    pub first: Option<std::ops::Range<u32>>,
     /// Advanced by one per tile.
     pub progress: &'a ProgressBar,
     /// True when the image is no longer wanted.
@@ -208,22 +212,32 @@ pub struct Bands<'a> {
 
 /// Renders `field` through `camera` into `frame` (of the camera's size) band by band, as
 /// [`render`] does, calling `band_done(frame, rows)` after each band with the image rows
-/// filled so far (`rows` from the top; the rows below keep what `frame` held, e.g. an
-/// enlarged coarse image). Returns false when `bands.stop` ended it early.
+/// it filled (the rows not yet traced keep what `frame` held, e.g. an enlarged coarse
+/// image). Returns false when `bands.stop` ended it early.
 pub fn render_bands(
     field: &dyn Field,
     camera: &Camera,
     settings: &RenderSettings,
     frame: &mut Frame,
     bands: &Bands<'_>,
-    band_done: &mut dyn FnMut(&Frame, u32),
+    band_done: &mut dyn FnMut(&Frame, std::ops::Range<u32>),
 ) -> bool {
     let (w, h) = (camera.width, camera.height);
     debug_assert_eq!((frame.width, frame.height), (w, h));
     let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
     let support = field.support();
     let per_band = bands.rows.max(1);
-    for band in (0..ty).step_by(per_band as usize) {
+    // The image rows of the band of tile rows from `band`.
+    let pixels = |band: u32| band * TILE..((band + per_band).min(ty) * TILE).min(h);
+    let mut order: Vec<u32> = (0..ty).step_by(per_band as usize).collect();
+    if let Some(first) = &bands.first {
+        // Stable: the bands that meet `first` from the top, then the others.
+        order.sort_by_key(|&band| {
+            let r = pixels(band);
+            !(r.start < first.end && first.start < r.end)
+        });
+    }
+    for band in order {
         let rows = band..(band + per_band).min(ty);
         let tiles: Vec<Option<Vec<Pixel>>> = (rows.start * tx..rows.end * tx)
             .into_par_iter()
@@ -256,7 +270,7 @@ pub fn render_bands(
                 frame.steps[at] = px.trace.steps;
             }
         }
-        band_done(frame, (rows.end * TILE).min(h));
+        band_done(frame, pixels(band));
     }
     true
 }
