@@ -1241,3 +1241,35 @@ fn editor_refines_the_edited_region_first() {
     };
     assert_eq!(add.node().as_deref(), Some("carve_1"));
 }
+
+/// An option is a toggle: switched on it takes the first value the loader accepts there,
+/// switched off it is `None`; each one edit, undone byte for byte.
+#[test]
+fn editor_toggles_options() {
+    let (dir, _) = scene_dir(&[]);
+    let a = dir.path().join("a.ron");
+    std::fs::write(&a, tunnel_tree()).unwrap();
+    let original = std::fs::read(&a).unwrap();
+    let mut h = harness(&a);
+    select(&mut h, "cave");
+    let falloff = |a: &Path| {
+        let scene = karstic::scene::load(a).unwrap().scene;
+        let named = scene.named();
+        let Some(NodeSpec::FeatureVolume(v)) = named.get("cave") else {
+            panic!()
+        };
+        v.falloff.map(|f| f.get())
+    };
+    assert_eq!(falloff(&a), None);
+    h.get_by_role_and_label(Role::CheckBox, "falloff").click();
+    h.run_steps(2);
+    assert_eq!(falloff(&a), Some(1.0), "{}", h.state().status());
+    h.get_by_role_and_label(Role::CheckBox, "falloff").click();
+    h.run_steps(2);
+    assert_eq!(falloff(&a), None, "{}", h.state().status());
+    for _ in 0..2 {
+        h.get_by_label("Undo").click();
+        h.run_steps(2);
+    }
+    assert_eq!(std::fs::read(&a).unwrap(), original);
+}

@@ -43,6 +43,8 @@ pub struct Inspector {
     pub errors: HashMap<String, String>,
     /// The variants of enumerations, by node kind and field path.
     variants: HashMap<String, Option<Vec<String>>>,
+    /// Whether the value at a field path of a node kind may be `None`.
+    optional: HashMap<String, bool>,
 }
 
 /// The unit of a parameter, by its key.
@@ -126,6 +128,16 @@ impl Inspector {
             .clone()
     }
 
+    /// Whether the value at `path` of `node` (whose text is `text`) may be `None`: asked of
+    /// the parser.
+    fn is_optional(&mut self, node: &NodeSpec, text: &str, path: &[&str]) -> bool {
+        let key = format!("{}.{}", node.kind(), path.join("."));
+        *self.optional.entry(key).or_insert_with(|| {
+            set_field(text, path, "None")
+                .is_ok_and(|probe| ron_options().from_str::<NodeSpec>(&probe).is_ok())
+        })
+    }
+
     #[allow(clippy::too_many_arguments)]
     fn field(
         &mut self,
@@ -156,6 +168,31 @@ impl Inspector {
         let label = ui.label(key).id;
         ui.vertical(|ui| {
             let u = unit(key);
+            // (A name stays: an unnamed node cannot be addressed.)
+            if key != "name" && self.is_optional(node, text, path) {
+                // An option: a toggle; set, its value's widget under it.
+                let mut on = current != "None";
+                let toggle = ui.checkbox(&mut on, "set").labelled_by(label);
+                if toggle.changed() {
+                    let value = match on {
+                        true => first_value(text, path),
+                        false => Some("None".to_string()),
+                    };
+                    match value {
+                        Some(value) => changes.push(Change::Commit {
+                            target: target.clone(),
+                            value,
+                        }),
+                        None => {
+                            (self.errors)
+                                .insert(target.clone(), format!("type a value for `{key}`"));
+                        }
+                    }
+                }
+                if !on && !self.errors.contains_key(&target) {
+                    return;
+                }
+            }
             if is_whole(value)
                 && let Ok(mut n) = current.parse::<i64>()
             {
@@ -329,6 +366,21 @@ impl Inspector {
             value: format!("[{}]", list.join(", ")),
         });
     }
+}
+
+/// The values an option switched on starts from, the first the loader accepts: a number,
+/// a point, a flag, a unit.
+const FIRST_VALUES: [&str; 6] = ["1", "0", "(0, 0, 0)", "(0, 0)", "true", "()"];
+
+/// The value an option at `path` of the node text `text` takes when switched on: the
+/// first of [`FIRST_VALUES`] the loader accepts there (`None`: it needs typing).
+fn first_value(text: &str, path: &[&str]) -> Option<String> {
+    FIRST_VALUES
+        .iter()
+        .find(|v| {
+            set_field(text, path, v).is_ok_and(|t| ron_options().from_str::<NodeSpec>(&t).is_ok())
+        })
+        .map(|v| v.to_string())
 }
 
 /// Drag speed for a value of magnitude `v`: about a hundredth of it per point.
