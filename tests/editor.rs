@@ -1019,7 +1019,15 @@ fn editor_authors_a_sea_cave_with_brushes_and_a_dragged_tunnel() {
     // 3. A stroke along the sea face at the waterline: the wave-cut notch the cave opens
     // from.
     let (from, to) = (on_screen(&h, face(-150.0)), on_screen(&h, face(40.0)));
-    drag(&mut h, from, to);
+    press_and_move(&mut h, from, to);
+    // While it is drawn, the viewport previews the stroke's node, nothing written yet.
+    let (preview, _) = h.state().previewing().expect("a stroke is previewed");
+    let Some(NodeSpec::Difference(root)) = preview.named().get("root").copied().cloned() else {
+        panic!()
+    };
+    assert!(root.carves.iter().any(|c| c.name() == Some("carve_1")));
+    assert!(!std::fs::read_to_string(&path).unwrap().contains("carve_1"));
+    release(&mut h, to);
     actions += 1;
     settle(&mut h, Duration::from_secs(300)).unwrap();
     // 4. A raise stroke on the headland's top (the Blend "land" selected): a ridge.

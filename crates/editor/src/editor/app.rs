@@ -725,14 +725,40 @@ impl Editor {
         let Some(stroke) = &mut self.stroke else {
             return false;
         };
+        let before = stroke.points.len();
         if let Some(p) = hit {
             stroke.extend(p);
+        }
+        if stroke.points.len() != before || r.drag_started() {
+            self.preview_stroke();
         }
         if r.drag_stopped() {
             let stroke = self.stroke.take();
             self.finish_stroke(stroke.expect("a stroke is under way"));
         }
         true
+    }
+
+    /// Previews the stroke under way: the scene with its node added in memory, drawn in
+    /// fast passes.
+    fn preview_stroke(&mut self) {
+        let (Some(scene), Some(stroke)) = (&self.scene, &self.stroke) else {
+            return;
+        };
+        let Ok((parent, energy)) = brush::target(scene, self.selected.as_deref(), stroke.brush)
+        else {
+            return;
+        };
+        let name = placement::fresh_name(scene, stroke.brush.stem());
+        let text = stroke.node(&name, energy);
+        let Ok(node) = crate::value::ron_options().from_str(&text) else {
+            return;
+        };
+        let mut s = (**scene).clone();
+        if edit::add_in_scene(&mut s, &self.path, &parent, node).is_ok() {
+            self.version += 1;
+            self.preview_scene = Some((Arc::new(s), self.version));
+        }
     }
 
     /// Writes `stroke` to the tree as a new node, named for its brush.
@@ -751,6 +777,7 @@ impl Editor {
             Err(why) => {
                 self.status = why;
                 self.failed = true;
+                self.preview_scene = None;
             }
         }
     }

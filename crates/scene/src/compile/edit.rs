@@ -206,20 +206,7 @@ pub fn add_node(path: &Path, parent: &str, node_ron: &str) -> Result<(), SceneEr
             col: e.span.start.col,
             message: e.code.to_string(),
         })?;
-    let change = |scene: &mut Scene| {
-        let p = scene_find_mut(scene, parent)
-            .ok_or_else(|| edit_error(path, format!("no node named {parent:?}")))?;
-        let kind = p.kind();
-        p.child_list_mut()
-            .ok_or_else(|| {
-                edit_error(
-                    path,
-                    format!("node {parent:?} ({kind}) cannot take more children"),
-                )
-            })?
-            .push(node);
-        Ok(())
-    };
+    let change = |scene: &mut Scene| add_in_scene(scene, path, parent, node);
     edit_file(path, change, |text| {
         let at = find_named(text, parent)?;
         let node = node_ron.trim();
@@ -227,6 +214,28 @@ pub fn add_node(path: &Path, parent: &str, node_ron: &str) -> Result<(), SceneEr
             .iter()
             .find_map(|key| append_element(text, at, key, node))
     })
+}
+
+/// The change of [`add_node`] made to a scene in memory, without validating or writing it
+/// (the editor's preview of a brush stroke); `path` only names the file in errors.
+pub fn add_in_scene(
+    scene: &mut Scene,
+    path: &Path,
+    parent: &str,
+    node: NodeSpec,
+) -> Result<(), SceneError> {
+    let p = scene_find_mut(scene, parent)
+        .ok_or_else(|| edit_error(path, format!("no node named {parent:?}")))?;
+    let kind = p.kind();
+    p.child_list_mut()
+        .ok_or_else(|| {
+            edit_error(
+                path,
+                format!("node {parent:?} ({kind}) cannot take more children"),
+            )
+        })?
+        .push(node);
+    Ok(())
 }
 
 /// `karstic tree rm FILE NAME`: removes the node named `NAME` from its parent's children.
