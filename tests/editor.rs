@@ -1179,6 +1179,25 @@ fn editor_edits_lists_as_rows() {
         points(a),
         [[10.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]
     );
+    // A row the loader refuses (a point needs three numbers) writes nothing; its message
+    // shows under the list.
+    let before = std::fs::read(a).unwrap();
+    let row = h
+        .get_all_by_role_and_label(Role::TextInput, "points")
+        .next()
+        .unwrap();
+    row.focus();
+    row.type_text(", 9");
+    h.run_steps(2);
+    h.key_press(egui::Key::Enter);
+    h.run_steps(2);
+    assert_eq!(std::fs::read(a).unwrap(), before, "{}", h.state().status());
+    let message = h.state().status().to_string();
+    assert!(message.contains("points"), "{message}");
+    assert!(
+        h.query_all_by_label(&message).count() > 0,
+        "{message} not shown"
+    );
     // Every edit is one undo: three undos give the file back byte for byte.
     for _ in 0..3 {
         h.get_by_label("Undo").click();

@@ -73,7 +73,8 @@ pub struct Editor {
     point_drag: Option<(Handle, glam::Vec3)>,
     /// The brush stroke being dragged.
     stroke: Option<Stroke>,
-    /// The node the last edit changed: its region is refined first.
+    /// The node the last edit (or undo, or redo) changed: the first request of the file's
+    /// new version refines its region first.
     focus: Option<String>,
     /// The texture shows the latest image in this look.
     texture_look: Option<Look>,
@@ -263,12 +264,14 @@ impl Editor {
     /// Undoes the last edit.
     pub fn undo(&mut self) -> bool {
         let r = self.history.undo(&self.path);
+        self.focus = r.as_ref().ok().and_then(|e| e.as_ref()?.node());
         self.after(r.map(|e| e.map(|e| format!("undid {}", e.command()))))
     }
 
     /// Redoes the last undone edit.
     pub fn redo(&mut self) -> bool {
         let r = self.history.redo(&self.path);
+        self.focus = r.as_ref().ok().and_then(|e| e.as_ref()?.node());
         self.after(r.map(|e| e.map(|e| format!("redid {}", e.command()))))
     }
 
@@ -739,18 +742,25 @@ impl Editor {
         true
     }
 
+    /// Where `stroke` goes in the file's scene and what it adds: its node's name, its
+    /// parent's and its text; else why it cannot go anywhere.
+    fn stroke_node(&self, stroke: &Stroke) -> Result<(String, String, String), String> {
+        let scene = self.scene.as_ref().ok_or("the file does not load")?;
+        let (parent, energy) = brush::target(scene, self.selected.as_deref(), stroke.brush)?;
+        let name = placement::fresh_name(scene, stroke.brush.stem());
+        let text = stroke.node(&name, energy);
+        Ok((name, parent, text))
+    }
+
     /// Previews the stroke under way: the scene with its node added in memory, drawn in
     /// fast passes.
     fn preview_stroke(&mut self) {
         let (Some(scene), Some(stroke)) = (&self.scene, &self.stroke) else {
             return;
         };
-        let Ok((parent, energy)) = brush::target(scene, self.selected.as_deref(), stroke.brush)
-        else {
+        let Ok((_, parent, text)) = self.stroke_node(stroke) else {
             return;
         };
-        let name = placement::fresh_name(scene, stroke.brush.stem());
-        let text = stroke.node(&name, energy);
         let Ok(node) = crate::value::ron_options().from_str(&text) else {
             return;
         };
@@ -763,13 +773,8 @@ impl Editor {
 
     /// Writes `stroke` to the tree as a new node, named for its brush.
     fn finish_stroke(&mut self, stroke: Stroke) {
-        let Some(scene) = self.scene.clone() else {
-            return;
-        };
-        match brush::target(&scene, self.selected.as_deref(), stroke.brush) {
-            Ok((parent, energy)) => {
-                let name = placement::fresh_name(&scene, stroke.brush.stem());
-                let node = stroke.node(&name, energy);
+        match self.stroke_node(&stroke) {
+            Ok((name, parent, node)) => {
                 if self.apply(Edit::Add { parent, node }) {
                     self.selected = Some(name);
                 }
@@ -933,13 +938,18 @@ impl Editor {
             size,
             coarse,
             normals,
-            focus: self.focus.clone(),
+            // Only the picture of the edit: a later view starts from the top.
+            focus: if version == self.file_version {
+                self.focus.take()
+            } else {
+                None
+            },
         });
     }
 
-    /// The scene the viewport previews while a value or a control point is dragged (the
-    /// file's scene edited in memory, not written).
-    /// With the version its images carry ([`Rendered::version`]).
+    /// The scene the viewport previews while a value, a control point or a stroke is
+    /// dragged (the file's scene edited in memory, not written), and the version its
+    /// images carry ([`Rendered::version`]).
     pub fn previewing(&self) -> Option<(&Scene, u64)> {
         self.preview_scene.as_ref().map(|(s, v)| (&**s, *v))
     }

@@ -132,10 +132,9 @@ impl Inspector {
     /// the parser.
     fn is_optional(&mut self, node: &NodeSpec, text: &str, path: &[&str]) -> bool {
         let key = format!("{}.{}", node.kind(), path.join("."));
-        *self.optional.entry(key).or_insert_with(|| {
-            set_field(text, path, "None")
-                .is_ok_and(|probe| ron_options().from_str::<NodeSpec>(&probe).is_ok())
-        })
+        *(self.optional)
+            .entry(key)
+            .or_insert_with(|| accepts(text, path, "None"))
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -375,12 +374,14 @@ const FIRST_VALUES: [&str; 6] = ["1", "0", "(0, 0, 0)", "(0, 0)", "true", "()"];
 /// The value an option at `path` of the node text `text` takes when switched on: the
 /// first of [`FIRST_VALUES`] the loader accepts there (`None`: it needs typing).
 fn first_value(text: &str, path: &[&str]) -> Option<String> {
-    FIRST_VALUES
-        .iter()
-        .find(|v| {
-            set_field(text, path, v).is_ok_and(|t| ron_options().from_str::<NodeSpec>(&t).is_ok())
-        })
+    (FIRST_VALUES.iter())
+        .find(|v| accepts(text, path, v))
         .map(|v| v.to_string())
+}
+
+/// Whether the loader takes the node text `text` with `value` at `path`.
+fn accepts(text: &str, path: &[&str], value: &str) -> bool {
+    set_field(text, path, value).is_ok_and(|t| ron_options().from_str::<NodeSpec>(&t).is_ok())
 }
 
 /// Drag speed for a value of magnitude `v`: about a hundredth of it per point.

@@ -11,11 +11,12 @@
 use glam::Vec3;
 
 use super::history::Edit;
+use crate::compile::edit::scene_find_mut;
 use crate::dem::HeightfieldField;
 use crate::render::{Camera, Frame};
 use crate::scene::load::to_ron_line;
 use crate::scene::{NodeSpec, Scene};
-use crate::value::Finite;
+use crate::value::{Finite, Positive};
 use crate::voxel::FeatureSet;
 use crate::voxel::spec::{CurveSource, Point};
 
@@ -237,22 +238,16 @@ pub const DRAG_VOXELS: f32 = 32_768.0;
 /// them (the file's voxel where it already does).
 pub fn dragged_scene(scene: &Scene, handle: &Handle, point: Point) -> Option<Scene> {
     let mut s = scene.clone();
-    let path = std::path::Path::new("");
-    let Edit::Set { target, value } = edit(scene, handle, point)? else {
+    let NodeSpec::FeatureVolume(f) = scene_find_mut(&mut s, &handle.volume)? else {
         return None;
     };
-    crate::compile::edit::set_in_scene(&mut s, path, &target, &value).ok()?;
-    let named = scene.named();
-    let NodeSpec::FeatureVolume(f) = named.get(handle.volume.as_str())? else {
+    let CurveSource::Inline(set) = &mut f.curves else {
         return None;
     };
+    *point_mut(set, handle.slot)? = point;
     let size = f.domain.1.0 - f.domain.0.0;
-    let coarse = (size.x * size.y * size.z).abs() / DRAG_VOXELS;
-    let voxel = f.voxel.get().max(coarse.cbrt());
-    if voxel > f.voxel.get() {
-        let target = format!("{}.voxel", handle.volume);
-        crate::compile::edit::set_in_scene(&mut s, path, &target, &format!("{voxel}")).ok()?;
-    }
+    let coarse = ((size.x * size.y * size.z).abs() / DRAG_VOXELS).cbrt();
+    f.voxel = Positive(f.voxel.get().max(coarse));
     Some(s)
 }
 

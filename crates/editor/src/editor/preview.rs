@@ -296,7 +296,7 @@ impl Preview {
 /// The scene compiled for a version, with its control points.
 struct Ready {
     version: u64,
-    /// The scene it was compiled from.
+    /// The scene it was compiled from (where an edited node was, for the next version).
     scene: Arc<Scene>,
     compiled: Compiled,
     handles: Arc<Vec<Handle>>,
@@ -364,7 +364,7 @@ impl Server {
     }
 
     /// The compiled scene of `version`, compiled now if it is not yet.
-    fn compile(&mut self, scene: &Scene, version: u64) -> bool {
+    fn compile(&mut self, scene: &Arc<Scene>, version: u64) -> bool {
         if self.ready.as_ref().map(|r| r.version) == Some(version) {
             return true;
         }
@@ -379,7 +379,7 @@ impl Server {
                 let handles = Arc::new(handles(scene, compiled.ground.as_deref()));
                 self.ready = Some(Ready {
                     version,
-                    scene: Arc::new(scene.clone()),
+                    scene: scene.clone(),
                     compiled,
                     handles,
                     tape: None,
@@ -458,7 +458,7 @@ impl Server {
         // Where the edited node was before the edit: redrawn first with where it is now.
         let before = (req.focus.as_deref()).and_then(|name| {
             let r = self.ready.as_ref().filter(|r| r.version != req.version)?;
-            support_of(&r.scene, &r.compiled, name)
+            r.compiled.support_of(&r.scene, name)
         });
         if !self.compile(&req.scene, req.version) {
             return;
@@ -531,7 +531,7 @@ impl Server {
         let mut done = 0;
         let mut sent = Instant::now();
         let first = (req.focus.as_deref())
-            .and_then(|name| support_of(&req.scene, &r.compiled, name))
+            .and_then(|name| r.compiled.support_of(&req.scene, name))
             .map(|b| b.union(before.unwrap_or(Aabb::EMPTY)))
             .and_then(|b| rows_of(&full, &b));
         let refined = refine(
@@ -606,19 +606,6 @@ pub fn refine(
     Some(frame)
 }
 
-/// The support of the node named `name` in `compiled` (of `scene`): the box its field
-/// can change.
-fn support_of(scene: &Scene, compiled: &Compiled, name: &str) -> Option<Aabb> {
-    let mut specs = Vec::new();
-    let walked = compiled.expanded.as_ref().unwrap_or(scene);
-    walked
-        .root
-        .walk(&mut |n, _| specs.push(n.name() == Some(name)));
-    let k = specs.iter().position(|&hit| hit)?;
-    let &(_, id) = compiled.outline.get(k)?;
-    Some(compiled.tree.info(id).support)
-}
-
 /// The image rows (of `camera`'s image) that the box `b` covers; `None` when it reaches
 /// behind the eye (then it may cover any row).
 fn rows_of(camera: &Camera, b: &Aabb) -> Option<std::ops::Range<u32>> {
@@ -626,13 +613,7 @@ fn rows_of(camera: &Camera, b: &Aabb) -> Option<std::ops::Range<u32>> {
         return None;
     }
     let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-    for k in 0..8 {
-        let pick = |bit: u32, a: f32, z: f32| if k & bit == 0 { a } else { z };
-        let p = Vec3::new(
-            pick(1, b.min.x, b.max.x),
-            pick(2, b.min.y, b.max.y),
-            pick(4, b.min.z, b.max.z),
-        );
+    for p in b.corners() {
         let (_, y) = super::points::project(camera, p)?;
         (lo, hi) = (lo.min(y), hi.max(y));
     }

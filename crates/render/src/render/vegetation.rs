@@ -16,10 +16,10 @@
 //! its habitat: the ground's cover there ([`Materials::cover`]) — nothing on bare rock
 //! (features' surfaces but a carved valley's level floor), scree or snow, less on channel
 //! gravel — times the ground's slope (fewer on steep ground, [`STEEP`]) times a
-//! low-frequency noise of stands and clearings (a woodland is not a plantation), and only where the scene's
-//! field has solid ground under the foot and under the crown's rim (no tree leans out
-//! over a cliff's edge) and air where the crown and each of its clumps stand (not inside
-//! a rock that stands over it), and above the water; a quarter as many
+//! low-frequency noise of stands and clearings (a woodland is not a plantation), and only
+//! where the scene's field has solid ground under the foot and under the crown's rim (no
+//! tree leans out over a cliff's edge) and air where the crown and each of its clumps
+//! stand (not inside a rock that stands over it), and above the water; a quarter as many
 //! within two crowns' reach of a cliff's edge or a rock face (the ground there more than
 //! 45° above or below, or rock standing on it).
 //! Placement hashes the candidate's cell: the same plants at any number of threads.

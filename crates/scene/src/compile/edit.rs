@@ -116,7 +116,8 @@ fn find_mut<'a>(node: &'a mut NodeSpec, name: &str) -> Option<&'a mut NodeSpec> 
         .find_map(|c| find_mut(c, name))
 }
 
-fn scene_find_mut<'a>(scene: &'a mut Scene, name: &str) -> Option<&'a mut NodeSpec> {
+/// The node named `name` in `scene` (its `defs`, then its tree), to change in memory.
+pub fn scene_find_mut<'a>(scene: &'a mut Scene, name: &str) -> Option<&'a mut NodeSpec> {
     scene
         .defs
         .iter_mut()

@@ -629,6 +629,22 @@ fn label(node: &NodeSpec) -> String {
         .map_or_else(|| node.kind().to_string(), |n| format!("{n:?}"))
 }
 
+impl Compiled {
+    /// The support of the node named `name` (of `scene`, the scene compiled): the box its
+    /// field can change. The outline lists the scene's nodes in pre-order, after its
+    /// `Landform` nodes are expanded.
+    pub fn support_of(&self, scene: &Scene, name: &str) -> Option<Aabb> {
+        let mut hits = Vec::new();
+        let walked = self.expanded.as_ref().unwrap_or(scene);
+        walked
+            .root
+            .walk(&mut |n, _| hits.push(n.name() == Some(name)));
+        let k = hits.iter().position(|&hit| hit)?;
+        let &(_, id) = self.outline.get(k)?;
+        Some(self.tree.info(id).support)
+    }
+}
+
 /// Compiles `scene` within the default memory budget; asset paths are relative to
 /// `base_dir`, `path` names the file in errors.
 pub fn compile_scene(scene: &Scene, path: &Path, base_dir: &Path) -> Result<Compiled, SceneError> {

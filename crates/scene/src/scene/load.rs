@@ -95,7 +95,7 @@ pub fn to_ron_line(value: &impl serde::Serialize) -> String {
     // `250.0` → `250`, outside of strings.
     let mut out = String::with_capacity(text.len());
     let mut quoted = false;
-    let mut chars = text.char_indices().peekable();
+    let mut chars = text.char_indices();
     while let Some((i, c)) = chars.next() {
         out.push(c);
         match c {
@@ -297,6 +297,8 @@ pub fn load(path: impl AsRef<Path>) -> Result<SceneFile, SceneError> {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     #[test]
     fn one_line_values_read_as_written() {
         use crate::voxel::spec::{CurveSource, FeatureSet};
@@ -317,8 +319,6 @@ mod tests {
             .unwrap();
         assert_eq!(empty, named);
     }
-
-    use super::*;
 
     #[test]
     fn positions_are_one_based() {
